@@ -1,0 +1,143 @@
+#include "core/config.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+
+namespace flowplan {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
+
+enum class Mode { kFast, kSlow };
+inline const config::EnumNames<Mode>& EnumEntries(Mode) {
+  static const config::EnumNames<Mode> names = {{Mode::kFast, "fast"}, {Mode::kSlow, "slow"}};
+  return names;
+}
+
+struct Inner {
+  std::vector<int> dims = {32, 64};
+  double lr = 2e-4;
+  template <class V>
+  void Visit(V& v) {
+    v.Field("dims", dims, "channel widths", config::Positive());
+    v.Field("lr", lr, "learning rate", config::Positive());
+  }
+};
+
+struct Outer {
+  int steps = 10;
+  Mode mode = Mode::kFast;
+  std::string name = "run";
+  bool verbose = false;
+  std::array<double, 3> point{0.5, 0.0, 0.2};
+  Inner trainer;
+  template <class V>
+  void Visit(V& v) {
+    v.Field("steps", steps, "optimizer steps", config::Positive());
+    v.Field("mode", mode, "mode");
+    v.Field("name", name, "run name");
+    v.Field("verbose", verbose, "log more");
+    v.Field("point", point, "a 3-D point");
+    v.Field("trainer", trainer, "training");
+  }
+};
+
+std::string WriteTemp(const std::string& text) {
+  std::string path = ::testing::TempDir() + "/config_test.yaml";
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(ConfigTest, DefaultsThenFileThenOverrides) {
+  const std::string path = WriteTemp("steps: 20\ntrainer:\n  lr: 0.001\n");
+  const Outer c = config::Load<Outer>(path, {"trainer.dims=[8, 16, 32]", "mode=slow"});
+  EXPECT_EQ(c.steps, 20);
+  EXPECT_DOUBLE_EQ(c.trainer.lr, 0.001);
+  EXPECT_EQ(c.trainer.dims, (std::vector<int>{8, 16, 32}));
+  EXPECT_EQ(c.mode, Mode::kSlow);
+  EXPECT_EQ(c.name, "run");  // untouched default
+}
+
+TEST(ConfigTest, OverrideBeatsFile) {
+  const std::string path = WriteTemp("steps: 20\n");
+  EXPECT_EQ(config::Load<Outer>(path, {"steps=30"}).steps, 30);
+}
+
+TEST(ConfigTest, YamlRoundTripIsExact) {
+  Outer c;
+  c.trainer.lr = 0.1 + 0.2;  // not representable in few digits
+  c.point = {1e-300, -3.5, 7.0};
+  c.name = "with: colon";
+  Outer back;
+  config::Apply(config::ParseYamlText(config::ToYaml(c), "round trip"), back, "round trip");
+  EXPECT_EQ(back.trainer.lr, c.trainer.lr);
+  EXPECT_EQ(back.point, c.point);
+  EXPECT_EQ(back.name, c.name);
+  EXPECT_EQ(config::ToYaml(back), config::ToYaml(c));
+}
+
+TEST(ConfigTest, UnknownKeyNamesFileLineAndKey) {
+  const std::string path = WriteTemp("steps: 20\ntrainer:\n  bach_size: 3\n");
+  EXPECT_THAT([&] { config::Load<Outer>(path, {}); },
+              ThrowsMessage<Error>(AllOf(HasSubstr(path + ":3"), HasSubstr("trainer.bach_size"),
+                                         HasSubstr("unknown key"))));
+}
+
+TEST(ConfigTest, WrongTypeNamesKeyAndValue) {
+  const std::string path = WriteTemp("steps: abc\n");
+  EXPECT_THAT([&] { config::Load<Outer>(path, {}); },
+              ThrowsMessage<Error>(AllOf(HasSubstr(path + ":1: steps"), HasSubstr("expected an integer"),
+                                         HasSubstr("\"abc\""))));
+}
+
+TEST(ConfigTest, OutOfBoundsValueIsRejected) {
+  EXPECT_THAT([] { config::Load<Outer>("", {"steps=0"}); },
+              ThrowsMessage<Error>(AllOf(HasSubstr("command line: steps"), HasSubstr("positive"))));
+  EXPECT_THAT([] { config::Load<Outer>("", {"trainer.dims=[4, -1]"}); },
+              ThrowsMessage<Error>(HasSubstr("trainer.dims[1]")));
+  EXPECT_THAT([] { config::Load<Outer>("", {"trainer.lr=nan"}); },
+              ThrowsMessage<Error>(HasSubstr("trainer.lr")));
+}
+
+TEST(ConfigTest, EnumListsChoices) {
+  EXPECT_THAT([] { config::Load<Outer>("", {"mode=medium"}); },
+              ThrowsMessage<Error>(AllOf(HasSubstr("mode"), HasSubstr("one of fast, slow"),
+                                         HasSubstr("\"medium\""))));
+}
+
+TEST(ConfigTest, FixedSizeListNeedsExactLength) {
+  EXPECT_THAT([] { config::Load<Outer>("", {"point=[1, 2]"}); },
+              ThrowsMessage<Error>(AllOf(HasSubstr("point"), HasSubstr("list of 3 values"))));
+}
+
+TEST(ConfigTest, MalformedOverrideAndMissingFile) {
+  EXPECT_THAT([] { config::Load<Outer>("", {"steps"}); },
+              ThrowsMessage<Error>(HasSubstr("key.sub=value")));
+  EXPECT_THAT([] { config::Load<Outer>("/nonexistent/x.yaml", {}); },
+              ThrowsMessage<Error>(HasSubstr("/nonexistent/x.yaml")));
+  const std::string path = WriteTemp("steps: [1\n");
+  EXPECT_THAT([&] { config::Load<Outer>(path, {}); },
+              ThrowsMessage<Error>(AllOf(HasSubstr(path), HasSubstr("not valid YAML"))));
+}
+
+TEST(ConfigTest, EmptyFileKeepsDefaults) {
+  const std::string path = WriteTemp("");
+  EXPECT_EQ(config::Load<Outer>(path, {}).steps, 10);
+}
+
+TEST(ConfigTest, KeyListingShowsEveryLeafWithDefault) {
+  const auto keys = config::ListKeys(Outer{});
+  ASSERT_EQ(keys.size(), 7u);
+  EXPECT_EQ(keys[0].key, "steps");
+  EXPECT_EQ(keys[0].default_value, "10");
+  EXPECT_EQ(keys[5].key, "trainer.dims");
+  EXPECT_EQ(keys[5].default_value, "[32, 64]");
+  EXPECT_THAT(keys[1].help, HasSubstr("fast, slow"));
+}
+
+}  // namespace
+}  // namespace flowplan

@@ -1,0 +1,117 @@
+#include "datasets/trajectory_dataset.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace flowplan::datasets {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
+
+TrajectoryDataset SmallDataset() {
+  TrajectoryDataset d;
+  d.env = "particle";
+  d.dt = 0.05;
+  d.state_labels = {"x", "y", "vx", "vy"};
+  d.num_episodes = 3;
+  d.horizon = 5;
+  d.state_dim = 4;
+  for (int i = 0; i < 3 * 5 * 4; ++i) d.states.push_back(0.25f * static_cast<float>(i) - 3.0f);
+  d.point_dim = 2;
+  d.commanded_start = {0, 0, 0, 1, 0, 0};
+  d.commanded_goal = {1, 1, 1, 0, 1, 1};
+  d.family = {0, 1, 0};
+  d.extras["tcp"] = {{3, 5, 3}, std::vector<float>(45, 0.5f)};
+  d.train_pairs = {{1, 2, 3, 4}, {5, 6, 7, 8}, {"(0,0)->(1,1)"}};
+  d.test_pairs = {{1, 2, 3, 4, 9, 9, 9, 9}, {5, 6, 7, 8, 0, 0, 0, 0}, {"a->b", "c->d"}};
+  d.config_yaml = "seed: 3\n";
+  d.seed = 3;
+  d.rejected_episodes = 2;
+  d.simulator_warnings = 7;
+  return d;
+}
+
+std::string TempPath(const std::string& name) { return ::testing::TempDir() + "/" + name; }
+
+TEST(TrajectoryDatasetTest, RoundTripKeepsEverything) {
+  const TrajectoryDataset d = SmallDataset();
+  const std::string path = TempPath("round_trip.h5");
+  WriteDataset(path, d);
+  const TrajectoryDataset back = ReadDataset(path);
+  EXPECT_EQ(back.env, d.env);
+  EXPECT_EQ(back.dt, d.dt);
+  EXPECT_EQ(back.state_labels, d.state_labels);
+  EXPECT_EQ(back.num_episodes, 3);
+  EXPECT_EQ(back.horizon, 5);
+  EXPECT_EQ(back.state_dim, 4);
+  EXPECT_EQ(back.states, d.states);
+  EXPECT_EQ(back.commanded_start, d.commanded_start);
+  EXPECT_EQ(back.commanded_goal, d.commanded_goal);
+  EXPECT_EQ(back.family, d.family);
+  ASSERT_EQ(back.extras.count("tcp"), 1u);
+  EXPECT_EQ(back.extras.at("tcp").shape, (std::vector<int64_t>{3, 5, 3}));
+  EXPECT_EQ(back.train_pairs.start, d.train_pairs.start);
+  EXPECT_EQ(back.test_pairs.goal, d.test_pairs.goal);
+  EXPECT_EQ(back.test_pairs.names, d.test_pairs.names);
+  EXPECT_EQ(back.config_yaml, d.config_yaml);
+  EXPECT_EQ(back.seed, 3u);
+  EXPECT_EQ(back.rejected_episodes, 2);
+  EXPECT_EQ(back.simulator_warnings, 7);
+}
+
+TEST(TrajectoryDatasetTest, SameContentSameBytes) {
+  WriteDataset(TempPath("bytes_a.h5"), SmallDataset());
+  WriteDataset(TempPath("bytes_b.h5"), SmallDataset());
+  EXPECT_EQ(ReadFile(TempPath("bytes_a.h5")), ReadFile(TempPath("bytes_b.h5")));
+}
+
+TEST(TrajectoryDatasetTest, MissingFileIsNamed) {
+  EXPECT_THAT([] { ReadDataset("/nonexistent/data.h5"); },
+              ThrowsMessage<Error>(AllOf(HasSubstr("/nonexistent/data.h5"), HasSubstr("no such file"))));
+}
+
+TEST(TrajectoryDatasetTest, ForeignAndTruncatedFilesAreRejected) {
+  const std::string text = TempPath("not_hdf5.h5");
+  std::ofstream(text) << "hello";
+  EXPECT_THAT([&] { ReadDataset(text); }, ThrowsMessage<Error>(AllOf(HasSubstr(text), HasSubstr("not an HDF5 file"))));
+
+  const std::string good = TempPath("to_truncate.h5");
+  WriteDataset(good, SmallDataset());
+  const std::string bytes = ReadFile(good);
+  const std::string cut = TempPath("truncated.h5");
+  std::ofstream(cut, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  EXPECT_THROW(ReadDataset(cut), Error);
+}
+
+TEST(TrajectoryDatasetTest, InconsistentDatasetIsNotWritten) {
+  TrajectoryDataset d = SmallDataset();
+  d.states.pop_back();
+  const std::string path = TempPath("inconsistent.h5");
+  std::remove(path.c_str());
+  EXPECT_THAT([&] { WriteDataset(path, d); }, ThrowsMessage<Error>(HasSubstr("states")));
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+TEST(TrajectoryDatasetTest, MergeConcatenatesAndChecksCompatibility) {
+  const TrajectoryDataset a = SmallDataset();
+  const TrajectoryDataset merged = MergeDatasets({a, a}, {"a.h5", "b.h5"});
+  EXPECT_EQ(merged.num_episodes, 6);
+  EXPECT_EQ(merged.states.size(), 2 * a.states.size());
+  EXPECT_EQ(merged.extras.at("tcp").shape[0], 6);
+  EXPECT_EQ(merged.rejected_episodes, 4);
+  TrajectoryDataset other = a;
+  other.seed = 4;
+  EXPECT_THAT([&] { MergeDatasets({a, other}, {"a.h5", "c.h5"}); },
+              ThrowsMessage<Error>(AllOf(HasSubstr("c.h5"), HasSubstr("seed"))));
+}
+
+}  // namespace
+}  // namespace flowplan::datasets
