@@ -1,0 +1,136 @@
+#pragma once
+
+// Rollouts of the Franka under the operational-space controller, with the
+// augmentation schemes of the data sets, recorded at a fixed rate.
+
+#include <mujoco/mujoco.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "core/random.h"
+#include "sim/franka_controller.h"
+#include "sim/franka_model.h"
+
+namespace flowplan::sim {
+
+/// How episodes are made to differ from each other.
+enum class Augmentation {
+  kPerJointNoise,   // Gaussian torque noise drawn independently per joint and physics step
+  kSameNoise,       // one standard-normal draw per physics step shared by all joints (× σ_j)
+  kNone,            // no randomness: every episode of a family is the same
+  kRandomPosition,  // no torque noise; start and goal jittered around the commanded points
+  kRandomForce,     // external force on the hand, random direction and magnitude, re-drawn at random intervals
+};
+
+inline const config::EnumNames<Augmentation>& EnumEntries(Augmentation) {
+  static const config::EnumNames<Augmentation> names = {
+      {Augmentation::kPerJointNoise, "per_joint_noise"}, {Augmentation::kSameNoise, "same_noise"},
+      {Augmentation::kNone, "none"},                     {Augmentation::kRandomPosition, "random_position"},
+      {Augmentation::kRandomForce, "random_force"}};
+  return names;
+}
+
+struct AugmentationConfig {
+  Augmentation scheme = Augmentation::kPerJointNoise;
+  std::array<double, kFrankaJoints> torque_noise_sigma = {1.0, 1.0, 1.0, 1.0, 0.1, 0.1, 0.1};  // N·m
+  double noise_scale = 1.0;                        // multiplies torque_noise_sigma
+  double position_jitter = 0.05;                   // m, std per axis of start/goal jitter
+  std::array<double, 2> force_range = {15.0, 20.0};  // N, [min, max] force magnitude
+  std::array<double, 2> force_interval = {0.3, 0.5};  // s, [min, max] time between re-draws
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("scheme", scheme, "augmentation scheme");
+    v.Field("torque_noise_sigma", torque_noise_sigma,
+            "per-joint std of the torque noise (N m), per_joint_noise and same_noise",
+            config::NonNegative());
+    v.Field("noise_scale", noise_scale, "global factor on torque_noise_sigma", config::NonNegative());
+    v.Field("position_jitter", position_jitter, "std of the start/goal jitter per axis (m), random_position",
+            config::NonNegative());
+    v.Field("force_range", force_range, "[min, max] external force magnitude (N), random_force",
+            config::NonNegative());
+    v.Field("force_interval", force_interval, "[min, max] seconds between force re-draws, random_force",
+            config::Positive());
+  }
+};
+
+/// Physics, control and recording of a rollout. The recorded rate is
+/// control_hz / record_every; an episode records `horizon` states, the first at
+/// t = 0, so it simulates (horizon - 1) · record_every control steps.
+struct FrankaRolloutConfig {
+  int control_hz = 30;        // controller updates per second
+  int physics_substeps = 2;   // physics steps per control step: timestep 1 / (control_hz · substeps)
+  int record_every = 2;       // control steps between recorded states
+  int horizon = 64;           // recorded states per episode, T
+  Integrator integrator = Integrator::kEuler;
+  double reject_velocity_factor = 2.0;  // reject an episode once |q̇_j| > factor · limit_j
+  OscConfig controller;
+  AugmentationConfig augmentation;
+
+  double physics_timestep() const { return 1.0 / (control_hz * physics_substeps); }
+  double record_dt() const { return static_cast<double>(record_every) / control_hz; }
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("control_hz", control_hz, "controller rate (Hz)", config::Positive());
+    v.Field("physics_substeps", physics_substeps, "physics steps per control step", config::Positive());
+    v.Field("record_every", record_every, "control steps between recorded states", config::Positive());
+    v.Field("horizon", horizon, "recorded states per episode", config::AtLeast(2));
+    v.Field("integrator", integrator, "physics integrator");
+    v.Field("reject_velocity_factor", reject_velocity_factor,
+            "reject an episode once a joint speed exceeds this many times its limit", config::Positive());
+    v.Field("controller", controller, "operational-space controller");
+    v.Field("augmentation", augmentation, "how episodes are randomized");
+  }
+
+  /// Checks relations between fields; `where` is the config key of this struct.
+  /// @throws flowplan::Error, e.g. "generate.franka.augmentation.force_range:
+  ///   expected min <= max, got [20, 15]".
+  void Validate(const std::string& where, const FrankaLimits& limits) const;
+};
+
+/// One recorded episode; arrays are row-major.
+struct FrankaEpisode {
+  std::vector<double> states;          // (T, 14): q (rad), q̇ (rad/s)
+  std::vector<double> tcp;             // (T, 3), m, TCP position
+  std::vector<double> torques;         // (T, 7), N·m, applied in the physics step after each state
+  std::vector<double> external_force;  // (T, 3), N, on the hand after each state (zero unless random_force)
+  int64_t warnings = 0;                // MuJoCo warnings during the episode
+  int64_t physics_steps = 0;
+  bool rejected = false;
+  std::string reject_reason;
+};
+
+/// A per-thread simulator: owns its mjData, controller and buffers. The model
+/// must have been configured with SetPhysics(config.physics_timestep(), config.integrator).
+class FrankaSimulator {
+ public:
+  FrankaSimulator(const FrankaModel& model, const FrankaRolloutConfig& config);
+
+  /// Rolls out from `q0` at rest, commanding the TCP to `goal` (m) with the
+  /// gripper pointing down. `scheme` picks the disturbances simulated here
+  /// (torque noise, external force; kNone and kRandomPosition add none), drawn
+  /// from `rng`. Unstable episodes (MuJoCo instability warnings, non-finite
+  /// states, joint speeds beyond reject_velocity_factor × limit) stop early
+  /// with rejected = true and a reason.
+  void Rollout(const JointVector& q0, const Eigen::Vector3d& goal, Augmentation scheme, Rng& rng,
+               FrankaEpisode* episode);
+
+  mjData& data() { return *data_; }
+
+ private:
+  bool Reject(FrankaEpisode* episode, const std::string& reason);
+  void CheckState(FrankaEpisode* episode);
+
+  const FrankaModel& model_;
+  FrankaRolloutConfig config_;
+  MjDataPtr data_;
+  OperationalSpaceController controller_;
+  JointVector sigma_;
+};
+
+}  // namespace flowplan::sim
