@@ -6,15 +6,18 @@
 
 #include "core/config.h"
 #include "datasets/episode_task.h"
+#include "datasets/franka_task.h"
 #include "sim/particle.h"
 
 namespace flowplan::datasets {
 
 /// Which dataset `flowplan generate` builds.
-enum class DatasetKind { kParticleCross };
+enum class DatasetKind { kParticleCross, kFrankaCross, kFrankaReach };
 
 inline const config::EnumNames<DatasetKind>& EnumEntries(DatasetKind) {
-  static const config::EnumNames<DatasetKind> names = {{DatasetKind::kParticleCross, "particle_cross"}};
+  static const config::EnumNames<DatasetKind> names = {{DatasetKind::kParticleCross, "particle_cross"},
+                                                       {DatasetKind::kFrankaCross, "franka_cross"},
+                                                       {DatasetKind::kFrankaReach, "franka_reach"}};
   return names;
 }
 
@@ -24,6 +27,7 @@ struct GenerateConfig {
   int64_t episodes = 10000;
   std::string out = "data/particle_cross.h5";
   sim::ParticleConfig particle;
+  FrankaTaskConfig franka;
 
   template <class V>
   void Visit(V& v) {
@@ -31,6 +35,7 @@ struct GenerateConfig {
     v.Field("episodes", episodes, "number of episodes", config::Positive());
     v.Field("out", out, "output HDF5 file");
     v.Field("particle", particle, "2-D particle dynamics");
+    v.Field("franka", franka, "Franka Panda simulation, controller and augmentation");
   }
 };
 

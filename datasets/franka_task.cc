@@ -1,0 +1,184 @@
+#include "datasets/franka_task.h"
+
+#include <cstdio>
+
+#include "core/error.h"
+#include "core/random.h"
+#include "sim/franka_ik.h"
+
+namespace flowplan::datasets {
+namespace {
+
+using sim::Augmentation;
+using sim::JointVector;
+
+constexpr double kCrossX = 0.5;  // m, the plane of the cross
+
+Family CrossFamily(double y0, double z0, double y1, double z1, const char* name) {
+  return {name, {kCrossX, y0, z0}, {kCrossX, y1, z1}};
+}
+
+Eigen::Vector3d Point(const std::vector<double>& p) { return {p[0], p[1], p[2]}; }
+
+class FrankaWorker : public EpisodeWorker {
+ public:
+  FrankaWorker(std::shared_ptr<const sim::FrankaModel> model, const FrankaTaskConfig& config,
+               FrankaGoals goals, std::vector<Family> families, std::vector<JointVector> family_start_q)
+      : model_(std::move(model)),
+        config_(config),
+        goals_(goals),
+        families_(std::move(families)),
+        family_start_q_(std::move(family_start_q)),
+        simulator_(*model_, config.rollout),
+        scratch_(sim::MakeData(model_->mj())) {
+    ik_.posture = Eigen::Map<const JointVector>(config.rollout.controller.posture.data());
+  }
+
+  EpisodeRecord Run(int64_t index, uint64_t seed) override {
+    Rng rng(seed);
+    const Augmentation scheme = config_.rollout.augmentation.scheme;
+    EpisodeRecord record;
+    Eigen::Vector3d start, goal;
+    JointVector q0;
+    std::string failure;
+    if (goals_ == FrankaGoals::kCross) {
+      const int family = static_cast<int>(index % static_cast<int64_t>(families_.size()));
+      record.family = family;
+      start = Point(families_[family].start);
+      goal = Point(families_[family].goal);
+      q0 = family_start_q_[family];
+      if (scheme == Augmentation::kRandomPosition) {
+        const double jitter = config_.rollout.augmentation.position_jitter;
+        for (int i = 0; i < 3; ++i) start[i] += jitter * rng.Normal();
+        for (int i = 0; i < 3; ++i) goal[i] += jitter * rng.Normal();
+        const sim::IkResult ik = sim::SolveTcpIk(*model_, *scratch_, start, q0, ik_);
+        q0 = ik.q;
+        if (!ik.converged) failure = "jittered start " + sim::FormatPoint(start) + " is unreachable";
+      }
+    } else {
+      if (!DrawReachable(rng, &start, &q0) || !DrawReachable(rng, &goal, nullptr)) {
+        failure = "no reachable point in " + std::to_string(config_.reach_max_draws) + " draws";
+      }
+    }
+    record.commanded_start.assign(start.data(), start.data() + 3);
+    record.commanded_goal.assign(goal.data(), goal.data() + 3);
+    if (!failure.empty()) {
+      // Keep the record's shape; the generator drops rejected episodes.
+      simulator_.Rollout(q0, goal, Augmentation::kNone, rng, &episode_);
+      Fill(&record);
+      record.rejected = true;
+      record.reject_reason = failure;
+      return record;
+    }
+    simulator_.Rollout(q0, goal, scheme, rng, &episode_);
+    Fill(&record);
+    return record;
+  }
+
+  EpisodeRecord RunNominal(int family) override {
+    Rng unused(0);
+    EpisodeRecord record;
+    record.family = family;
+    record.commanded_start = families_[family].start;
+    record.commanded_goal = families_[family].goal;
+    simulator_.Rollout(family_start_q_[family], Point(families_[family].goal), Augmentation::kNone, unused,
+                       &episode_);
+    Fill(&record);
+    return record;
+  }
+
+ private:
+  // Draws a point uniformly in the reach box until the IK reaches it with the
+  // gripper pointing down; `q` (if not null) receives the configuration.
+  bool DrawReachable(Rng& rng, Eigen::Vector3d* point, JointVector* q) {
+    for (int draw = 0; draw < config_.reach_max_draws; ++draw) {
+      for (int i = 0; i < 3; ++i) (*point)[i] = rng.Uniform(config_.reach_lower[i], config_.reach_upper[i]);
+      const sim::IkResult ik = sim::SolveTcpIk(*model_, *scratch_, *point, ik_.posture, ik_);
+      if (ik.converged) {
+        if (q != nullptr) *q = ik.q;
+        return true;
+      }
+    }
+    if (q != nullptr) *q = ik_.posture;
+    return false;
+  }
+
+  void Fill(EpisodeRecord* record) const {
+    record->states = episode_.states;
+    record->extras["tcp"] = episode_.tcp;
+    record->extras["torques"] = episode_.torques;
+    if (config_.rollout.augmentation.scheme == Augmentation::kRandomForce) {
+      record->extras["external_force"] = episode_.external_force;
+    }
+    record->simulator_warnings = episode_.warnings;
+    record->rejected = episode_.rejected;
+    record->reject_reason = episode_.reject_reason;
+  }
+
+  std::shared_ptr<const sim::FrankaModel> model_;
+  const FrankaTaskConfig config_;
+  const FrankaGoals goals_;
+  const std::vector<Family> families_;
+  const std::vector<JointVector> family_start_q_;
+  sim::FrankaSimulator simulator_;
+  sim::MjDataPtr scratch_;  // for IK
+  sim::IkOptions ik_;
+  sim::FrankaEpisode episode_;
+};
+
+std::string Number(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.4g", v);
+  return buffer;
+}
+
+}  // namespace
+
+FrankaTask::FrankaTask(FrankaGoals goals, const FrankaTaskConfig& config, const std::string& where)
+    : goals_(goals), config_(config) {
+  auto model = std::make_shared<sim::FrankaModel>(sim::LoadFrankaModel());
+  model->SetPhysics(config.rollout.physics_timestep(), config.rollout.integrator);
+  config.rollout.Validate(where, model->limits());
+  for (int i = 0; i < 3; ++i) {
+    if (config.reach_lower[i] > config.reach_upper[i]) {
+      throw Error(where + ".reach_lower[" + std::to_string(i) + "]: expected at most reach_upper[" +
+                  std::to_string(i) + "] = " + Number(config.reach_upper[i]) + ", got " +
+                  Number(config.reach_lower[i]));
+    }
+  }
+  model_ = std::move(model);
+
+  if (goals_ == FrankaGoals::kCross) {
+    families_ = {CrossFamily(-0.3, 0.2, 0.3, 0.6, "(-0.3,0.2)->(0.3,0.6)"),
+                 CrossFamily(-0.3, 0.6, 0.3, 0.2, "(-0.3,0.6)->(0.3,0.2)")};
+  }
+  sim::IkOptions ik;
+  ik.posture = Eigen::Map<const JointVector>(config.rollout.controller.posture.data());
+  sim::MjDataPtr scratch = sim::MakeData(model_->mj());
+  for (const Family& family : families_) {
+    family_start_q_.push_back(
+        sim::SolveTcpIkOrThrow(*model_, *scratch, Point(family.start), ik.posture, ik));
+  }
+}
+
+EpisodeLayout FrankaTask::Layout() const {
+  EpisodeLayout layout;
+  layout.env = "franka";
+  layout.dt = config_.rollout.record_dt();
+  layout.horizon = config_.rollout.horizon;
+  for (int j = 1; j <= sim::kFrankaJoints; ++j) layout.state_labels.push_back("q" + std::to_string(j));
+  for (int j = 1; j <= sim::kFrankaJoints; ++j) layout.state_labels.push_back("dq" + std::to_string(j));
+  layout.point_dim = 3;
+  layout.extras["tcp"] = 3;
+  layout.extras["torques"] = sim::kFrankaJoints;
+  if (config_.rollout.augmentation.scheme == Augmentation::kRandomForce) layout.extras["external_force"] = 3;
+  return layout;
+}
+
+std::vector<Family> FrankaTask::Families() const { return families_; }
+
+std::unique_ptr<EpisodeWorker> FrankaTask::MakeWorker() const {
+  return std::make_unique<FrankaWorker>(model_, config_, goals_, families_, family_start_q_);
+}
+
+}  // namespace flowplan::datasets

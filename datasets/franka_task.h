@@ -1,0 +1,69 @@
+#pragma once
+
+// Franka Panda data sets (SPEC section 3): rollouts of the operational-space
+// controller in MuJoCo from an IK start configuration to a commanded TCP goal.
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "datasets/episode_task.h"
+#include "sim/franka_model.h"
+#include "sim/franka_rollout.h"
+
+namespace flowplan::datasets {
+
+/// The `generate.franka` config section: the rollout settings of
+/// sim::FrankaRolloutConfig (physics, controller, augmentation) plus the
+/// sampling box of franka_reach.
+struct FrankaTaskConfig {
+  sim::FrankaRolloutConfig rollout;
+  std::array<double, 3> reach_lower = {0.35, -0.5, 0.15};  // m, TCP box of franka_reach
+  std::array<double, 3> reach_upper = {0.75, 0.5, 0.75};   // m
+  int reach_max_draws = 100;  // draws per point before an episode is given up as unreachable
+
+  template <class V>
+  void Visit(V& v) {
+    rollout.Visit(v);
+    v.Field("reach_lower", reach_lower, "franka_reach: lower corner of the start/goal box (m)");
+    v.Field("reach_upper", reach_upper, "franka_reach: upper corner of the start/goal box (m)");
+    v.Field("reach_max_draws", reach_max_draws,
+            "franka_reach: draws of a start or goal until one is reachable with the gripper down",
+            config::Positive());
+  }
+};
+
+/// Where the starts and goals of a Franka data set come from.
+enum class FrankaGoals {
+  kCross,  // franka_cross: the two diagonals of the y-z plane at x = 0.5, episode i in family i mod 2
+  kReach,  // franka_reach: start and goal uniform in the reach box (reachable part)
+};
+
+/// Episodes of the Franka: state [q (7, rad), q̇ (7, rad/s)] at 15 Hz by
+/// default, P = 3 (commanded TCP start and goal, m), extras "tcp" (T, 3) m,
+/// "torques" (T, 7) N·m applied in the physics step after each state and,
+/// for the random_force scheme, "external_force" (T, 3) N on the hand.
+class FrankaTask : public EpisodeTask {
+ public:
+  /// Loads the built-in model, checks `config` (`where` is its config key, for
+  /// messages) and solves the IK of every family's start.
+  /// @throws flowplan::Error naming the key of a bad value or the unreachable target.
+  FrankaTask(FrankaGoals goals, const FrankaTaskConfig& config, const std::string& where = "generate.franka");
+
+  EpisodeLayout Layout() const override;
+  std::vector<Family> Families() const override;
+  std::unique_ptr<EpisodeWorker> MakeWorker() const override;
+
+  const sim::FrankaModel& model() const { return *model_; }
+
+ private:
+  FrankaGoals goals_;
+  FrankaTaskConfig config_;
+  std::shared_ptr<const sim::FrankaModel> model_;
+  std::vector<Family> families_;
+  std::vector<sim::JointVector> family_start_q_;  // IK of each family's start
+};
+
+}  // namespace flowplan::datasets

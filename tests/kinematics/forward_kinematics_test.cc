@@ -1,0 +1,140 @@
+#include "kinematics/forward_kinematics.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/error.h"
+#include "sim/franka_model.h"
+
+namespace flowplan::kinematics {
+namespace {
+
+using ::testing::HasSubstr;
+
+class ForwardKinematicsTest : public ::testing::Test {
+ protected:
+  // Random configurations within the joint limits, (B, 7) float64.
+  torch::Tensor RandomQ(int64_t batch, uint64_t seed) {
+    torch::manual_seed(seed);
+    const auto& limits = model_.limits();
+    const torch::Tensor lower = torch::from_blob(const_cast<double*>(limits.q_lower.data()), {7}, torch::kFloat64);
+    const torch::Tensor upper = torch::from_blob(const_cast<double*>(limits.q_upper.data()), {7}, torch::kFloat64);
+    return lower + (upper - lower) * torch::rand({batch, 7}, torch::kFloat64);
+  }
+
+  sim::FrankaModel model_ = sim::LoadFrankaModel();
+  ForwardKinematics fk_{model_.description()};
+};
+
+TEST_F(ForwardKinematicsTest, MatchesMujocoInFloat64) {
+  const torch::Tensor q = RandomQ(32, 1);
+  const FkResult result = fk_.Forward(q);
+  ASSERT_EQ(result.link_frames.sizes(), (std::vector<int64_t>{32, 11, 4, 4}));
+  ASSERT_EQ(result.tcp_position.sizes(), (std::vector<int64_t>{32, 3}));
+  ASSERT_EQ(result.sphere_centres.sizes(), (std::vector<int64_t>{32, fk_.num_spheres(), 3}));
+  const mjModel& m = model_.mj();
+  sim::MjDataPtr d = sim::MakeData(m);
+  const auto& spheres = model_.description().spheres;
+  for (int64_t b = 0; b < q.size(0); ++b) {
+    for (int j = 0; j < 7; ++j) d->qpos[j] = q[b][j].item<double>();
+    mj_kinematics(&m, d.get());
+    for (int64_t l = 0; l < fk_.num_links(); ++l) {
+      const int body = static_cast<int>(l) + 1;
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(result.link_frames[b][l][i][3].item<double>(), d->xpos[3 * body + i], 1e-6);
+        for (int k = 0; k < 3; ++k) {
+          EXPECT_NEAR(result.link_frames[b][l][i][k].item<double>(), d->xmat[9 * body + 3 * i + k], 1e-6);
+        }
+      }
+    }
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(result.tcp_position[b][i].item<double>(), d->site_xpos[3 * model_.tcp_site() + i], 1e-6);
+    }
+    // The end spheres of each capsule sit on its segment's end points, as MuJoCo places the geom.
+    for (int g = 0; g < m.ngeom; ++g) {
+      if (m.geom_type[g] != mjGEOM_CAPSULE) continue;
+      const std::string name = mj_id2name(&m, mjOBJ_GEOM, g);
+      int first = -1, last = -1;
+      for (size_t s = 0; s < spheres.size(); ++s) {
+        if (spheres[s].geom != name) continue;
+        if (first < 0) first = static_cast<int>(s);
+        last = static_cast<int>(s);
+      }
+      ASSERT_GE(first, 0) << name;
+      const double h = m.geom_size[3 * g + 1];
+      for (int i = 0; i < 3; ++i) {
+        const double axis = d->geom_xmat[9 * g + 3 * i + 2];
+        EXPECT_NEAR(result.sphere_centres[b][first][i].item<double>(), d->geom_xpos[3 * g + i] - h * axis, 1e-6);
+        EXPECT_NEAR(result.sphere_centres[b][last][i].item<double>(), d->geom_xpos[3 * g + i] + h * axis, 1e-6);
+      }
+    }
+  }
+  const torch::Tensor radii = fk_.SphereRadii();
+  ASSERT_EQ(radii.sizes(), (std::vector<int64_t>{fk_.num_spheres()}));
+  for (int64_t s = 0; s < fk_.num_spheres(); ++s) EXPECT_EQ(radii[s].item<double>(), spheres[s].radius);
+}
+
+TEST_F(ForwardKinematicsTest, KnownPosesThroughTorch) {
+  const torch::Tensor ready =
+      torch::tensor({0.0, -M_PI / 4, 0.0, -3 * M_PI / 4, 0.0, M_PI / 2, M_PI / 4}, torch::kFloat64).view({1, 7});
+  const torch::Tensor tcp = fk_.TcpPosition(ready);
+  EXPECT_NEAR(tcp[0][0].item<double>(), 0.306890566, 1e-9);
+  EXPECT_NEAR(tcp[0][1].item<double>(), 0.0, 1e-9);
+  EXPECT_NEAR(tcp[0][2].item<double>(), 0.590282052 - 0.107, 1e-9);
+  // Robotics Toolbox pose: hand frame moved 0.103 m along its z axis.
+  const torch::Tensor q = torch::tensor({1.4, 0.2, 1.8, 0.7, 0.1, 3.1, 2.9}, torch::kFloat64).view({1, 7});
+  const torch::Tensor hand = fk_.Forward(q).link_frames[0][8];
+  const torch::Tensor p = hand.index({torch::indexing::Slice(0, 3), 3}) +
+                          0.103 * hand.index({torch::indexing::Slice(0, 3), 2});
+  EXPECT_NEAR(p[0].item<double>(), 0.44682295, 1e-8);
+  EXPECT_NEAR(p[1].item<double>(), 0.16168396, 1e-8);
+  EXPECT_NEAR(p[2].item<double>(), 0.96798113, 1e-8);
+}
+
+TEST_F(ForwardKinematicsTest, Float32AgreesWithFloat64) {
+  const torch::Tensor q = RandomQ(16, 2);
+  const FkResult a = fk_.Forward(q);
+  const FkResult b = fk_.Forward(q.to(torch::kFloat32));
+  EXPECT_EQ(b.tcp_position.scalar_type(), torch::kFloat32);
+  EXPECT_LT((a.sphere_centres - b.sphere_centres.to(torch::kFloat64)).abs().max().item<double>(), 1e-5);
+  EXPECT_LT((a.link_frames - b.link_frames.to(torch::kFloat64)).abs().max().item<double>(), 1e-5);
+}
+
+TEST_F(ForwardKinematicsTest, AutogradMatchesCentralDifferences) {
+  const torch::Tensor q0 = RandomQ(4, 3);
+  torch::manual_seed(4);
+  const torch::Tensor w_tcp = torch::randn({4, 3}, torch::kFloat64);
+  const torch::Tensor w_spheres = torch::randn({4, fk_.num_spheres(), 3}, torch::kFloat64);
+  auto cost = [&](const torch::Tensor& q) {
+    const FkResult r = fk_.Forward(q);
+    return (r.tcp_position * w_tcp).sum() + (r.sphere_centres * w_spheres).sum() +
+           r.link_frames.pow(2).sum();
+  };
+  const torch::Tensor q = q0.clone().requires_grad_(true);
+  const torch::Tensor gradient = torch::autograd::grad({cost(q)}, {q})[0];
+  const double h = 1e-6;
+  for (int64_t b = 0; b < 4; ++b) {
+    for (int64_t j = 0; j < 7; ++j) {
+      torch::Tensor plus = q0.clone(), minus = q0.clone();
+      plus[b][j] += h;
+      minus[b][j] -= h;
+      const double numeric = (cost(plus).item<double>() - cost(minus).item<double>()) / (2 * h);
+      EXPECT_NEAR(gradient[b][j].item<double>(), numeric, 1e-6 * std::max(1.0, std::abs(numeric)))
+          << "b " << b << " j " << j;
+    }
+  }
+}
+
+TEST_F(ForwardKinematicsTest, ShapesAndTypesAreCheckedAtEntry) {
+  EXPECT_THAT([&] { fk_.Forward(torch::zeros({3, 6}, torch::kFloat64)); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("kinematics: q: expected (B, 7), got (3, 6)")));
+  EXPECT_THAT([&] { fk_.TcpPosition(torch::zeros({7}, torch::kFloat64)); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("expected (B, 7), got (7)")));
+  EXPECT_THAT([&] { fk_.Forward(torch::zeros({2, 7}, torch::kInt64)); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("expected float32 or float64")));
+}
+
+}  // namespace
+}  // namespace flowplan::kinematics

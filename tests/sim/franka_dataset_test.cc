@@ -1,0 +1,137 @@
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "core/atomic_file.h"
+#include "core/config.h"
+#include "core/error.h"
+#include "datasets/franka_task.h"
+#include "datasets/generate_config.h"
+#include "datasets/generator.h"
+#include "datasets/trajectory_dataset.h"
+
+namespace flowplan::datasets {
+namespace {
+
+using ::testing::HasSubstr;
+
+GenerateOptions Options(int64_t episodes, int threads) {
+  GenerateOptions o;
+  o.episodes = episodes;
+  o.seed = 23;
+  o.threads = threads;
+  o.config_yaml = "test\n";
+  o.show_progress = false;
+  return o;
+}
+
+TEST(FrankaDatasetTest, ThreadCountDoesNotChangeTheBytes) {
+  FrankaTask task(FrankaGoals::kCross, FrankaTaskConfig{});
+  const std::string one = ::testing::TempDir() + "/franka_1_thread.h5";
+  const std::string two = ::testing::TempDir() + "/franka_2_threads.h5";
+  WriteDataset(one, GenerateDataset(task, Options(16, 1)));
+  WriteDataset(two, GenerateDataset(task, Options(16, 2)));
+  EXPECT_EQ(ReadFile(one), ReadFile(two));
+}
+
+TEST(FrankaDatasetTest, MergedShardsEqualTheWholeFile) {
+  FrankaTaskConfig config;
+  config.rollout.augmentation.scheme = sim::Augmentation::kRandomPosition;  // IK per episode
+  FrankaTask task(FrankaGoals::kCross, config);
+  std::vector<TrajectoryDataset> shards;
+  for (int k = 0; k < 3; ++k) {
+    GenerateOptions o = Options(12, 2);
+    o.shard_index = k;
+    o.shard_count = 3;
+    shards.push_back(GenerateDataset(task, o));
+  }
+  const std::string whole = ::testing::TempDir() + "/franka_whole.h5";
+  const std::string merged = ::testing::TempDir() + "/franka_merged.h5";
+  WriteDataset(whole, GenerateDataset(task, Options(12, 1)));
+  WriteDataset(merged, MergeDatasets(shards, {"s0", "s1", "s2"}));
+  EXPECT_EQ(ReadFile(whole), ReadFile(merged));
+}
+
+TEST(FrankaDatasetTest, CrossLayoutFamiliesAndEvaluationPairs) {
+  FrankaTask task(FrankaGoals::kCross, FrankaTaskConfig{});
+  const TrajectoryDataset d = GenerateDataset(task, Options(8, 2));
+  EXPECT_EQ(d.env, "franka");
+  EXPECT_DOUBLE_EQ(d.dt, 1.0 / 15.0);
+  ASSERT_EQ(d.num_episodes, 8);
+  ASSERT_EQ(d.horizon, 64);
+  ASSERT_EQ(d.state_dim, 14);
+  EXPECT_EQ(d.state_labels.front(), "q1");
+  EXPECT_EQ(d.state_labels.back(), "dq7");
+  ASSERT_EQ(d.point_dim, 3);
+  EXPECT_EQ(d.extras.count("tcp"), 1u);
+  EXPECT_EQ(d.extras.count("torques"), 1u);
+  EXPECT_EQ(d.extras.count("external_force"), 0u);
+  EXPECT_EQ(d.extras.at("torques").shape, (std::vector<int64_t>{8, 64, 7}));
+  const auto& tcp = d.extras.at("tcp").values;
+  for (int64_t i = 0; i < d.num_episodes; ++i) {
+    EXPECT_EQ(d.family[i], i % 2);
+    EXPECT_EQ(d.commanded_start[3 * i], 0.5);
+    EXPECT_EQ(d.commanded_start[3 * i + 1], -0.3);
+    const size_t last = static_cast<size_t>((i * 64 + 63) * 3);
+    const Eigen::Vector3d end(tcp[last], tcp[last + 1], tcp[last + 2]);
+    const Eigen::Vector3d goal(d.commanded_goal[3 * i], d.commanded_goal[3 * i + 1], d.commanded_goal[3 * i + 2]);
+    EXPECT_LT((end - goal).norm(), 0.03) << "episode " << i;
+  }
+  ASSERT_EQ(d.train_pairs.count(), 2);
+  ASSERT_EQ(d.test_pairs.count(), 2);
+  EXPECT_EQ(d.train_pairs.names[0], "(-0.3,0.2)->(0.3,0.6)");
+  EXPECT_EQ(d.test_pairs.names[0], "(-0.3,0.2)->(0.3,0.2)");
+  EXPECT_EQ(d.test_pairs.names[1], "(-0.3,0.6)->(0.3,0.6)");
+  // Pair states start at rest.
+  for (int j = 7; j < 14; ++j) EXPECT_EQ(d.test_pairs.start[j], 0.0f);
+}
+
+TEST(FrankaDatasetTest, ReachDrawsReachablePointsInTheBox) {
+  FrankaTaskConfig config;
+  config.rollout.augmentation.scheme = sim::Augmentation::kRandomForce;
+  FrankaTask task(FrankaGoals::kReach, config);
+  EXPECT_TRUE(task.Families().empty());
+  const TrajectoryDataset d = GenerateDataset(task, Options(6, 2));
+  EXPECT_EQ(d.extras.count("external_force"), 1u);
+  EXPECT_EQ(d.train_pairs.count(), 0);
+  for (int64_t i = 0; i < d.num_episodes; ++i) {
+    EXPECT_EQ(d.family[i], -1);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_GE(d.commanded_goal[3 * i + k], config.reach_lower[k]);
+      EXPECT_LE(d.commanded_goal[3 * i + k], config.reach_upper[k]);
+    }
+  }
+}
+
+TEST(FrankaDatasetTest, BadConfigValuesNameTheirKey) {
+  GenerateConfig config;
+  const YAML::Node yaml = config::ParseYamlText(
+      "dataset: franka_cross\nfranka:\n  augmentation:\n    torque_noise_sigma: [1, 1, 1, -1, 0.1, 0.1, 0.1]\n",
+      "configs/bad.yaml");
+  EXPECT_THAT([&] { config::Apply(yaml, config, "configs/bad.yaml"); },
+              ::testing::ThrowsMessage<Error>(
+                  HasSubstr("configs/bad.yaml:4: franka.augmentation.torque_noise_sigma[3]: expected a "
+                            "non-negative value, got \"-1\"")));
+  const YAML::Node scheme = config::ParseYamlText("franka:\n  augmentation:\n    scheme: loud\n", "x.yaml");
+  EXPECT_THAT([&] { config::Apply(scheme, config, "x.yaml"); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("franka.augmentation.scheme: expected one of per_joint_noise")));
+
+  GenerateConfig reversed;
+  reversed.dataset = DatasetKind::kFrankaReach;
+  reversed.franka.reach_lower[2] = 0.9;
+  EXPECT_THAT([&] { MakeTask(reversed); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("generate.franka.reach_lower[2]: expected at most")));
+}
+
+TEST(FrankaDatasetTest, ConfigRoundTripsThroughYaml) {
+  GenerateConfig config;
+  config.dataset = DatasetKind::kFrankaCross;
+  config.franka.rollout.augmentation.scheme = sim::Augmentation::kSameNoise;
+  config.franka.rollout.controller.max_speed = std::numeric_limits<double>::infinity();
+  GenerateConfig back;
+  config::Apply(config::ParseYamlText(config::ToYaml(config), "round"), back, "round");
+  EXPECT_EQ(config::ToYaml(back), config::ToYaml(config));
+  EXPECT_EQ(back.franka.rollout.augmentation.scheme, sim::Augmentation::kSameNoise);
+}
+
+}  // namespace
+}  // namespace flowplan::datasets
