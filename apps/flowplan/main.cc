@@ -1,0 +1,166 @@
+// flowplan: generate datasets, train, evaluate and export flow-matching planners.
+// Parses flags and calls one experiment::Run… function per subcommand.
+
+#include <CLI/CLI.hpp>
+#include <c10/util/Exception.h>
+#include <spdlog/spdlog.h>
+
+#include <iostream>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "core/atomic_file.h"
+#include "core/config.h"
+#include "core/error.h"
+#include "core/interrupt.h"
+#include "core/logging.h"
+#include "experiment/commands.h"
+#include "experiment/experiment_config.h"
+
+namespace {
+
+using flowplan::experiment::ExperimentConfig;
+
+constexpr const char* kOverrideHelp =
+    "config overrides key.sub=value, applied after the file (see `flowplan config keys`)";
+
+void ParseShard(const std::string& text, flowplan::experiment::GenerateRequest& request) {
+  static const std::regex pattern(R"((\d+)/(\d+))");
+  std::smatch match;
+  if (!std::regex_match(text, match, pattern)) {
+    throw flowplan::Error("--shard: expected k/n (e.g. 0/4), got \"" + text + "\"");
+  }
+  request.shard_index = std::stoi(match[1].str());
+  request.shard_count = std::stoi(match[2].str());
+  if (request.shard_count < 1 || request.shard_index >= request.shard_count) {
+    throw flowplan::Error("--shard: expected k/n with 0 <= k < n, got \"" + text + "\"");
+  }
+}
+
+int Main(int argc, char** argv) {
+  CLI::App app{"flowplan: flow-matching trajectory planners that stitch, from data to TorchScript"};
+  app.require_subcommand(1);
+  app.option_defaults()->always_capture_default();
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level, "debug, info, warn, error or off");
+
+  std::string config_path;
+  std::vector<std::string> overrides;
+  auto add_config = [&](CLI::App* command, bool required) {
+    auto* option = command->add_option("--config", config_path, "experiment config (YAML)");
+    if (required) option->required()->check(CLI::ExistingFile);
+    command->add_option("overrides", overrides, kOverrideHelp);
+  };
+
+  // generate
+  auto* generate = app.add_subcommand("generate", "roll out a dataset and write it as HDF5 (generate.*)");
+  add_config(generate, true);
+  std::string shard = "0/1";
+  std::string generate_out;
+  generate->add_option("--shard", shard, "generate part k of n (episodes [kN/n, (k+1)N/n))");
+  generate->add_option("--out", generate_out, "output file (default: generate.out)");
+
+  // merge
+  auto* merge = app.add_subcommand("merge", "join dataset shards written with --shard");
+  std::vector<std::string> merge_inputs;
+  std::string merge_out;
+  merge->add_option("inputs", merge_inputs, "shard files in order")->required()->check(CLI::ExistingFile);
+  merge->add_option("--out", merge_out, "merged file")->required();
+
+  // train
+  auto* train = app.add_subcommand("train", "train a planner (train.*, model.*, flow.*) or resume a run");
+  add_config(train, false);
+  std::string resume_dir;
+  int64_t until_step = 0;
+  train->add_option("--resume", resume_dir, "continue the run in this folder from its newest checkpoint");
+  train->add_option("--until", until_step, "stop with a checkpoint at this step (0: train.steps)");
+
+  // eval
+  auto* eval = app.add_subcommand("eval", "evaluate a trained planner");
+  eval->require_subcommand(1);
+  auto* stitching = eval->add_subcommand("stitching", "stitching error on the dataset's test and training pairs");
+  flowplan::experiment::EvalRequest eval_request;
+  stitching->add_option("--ckpt", eval_request.ckpt, "checkpoint file, or a run folder (its newest checkpoint)")
+      ->required();
+  stitching->add_option("--out", eval_request.out, "JSON report (default: RUN_DIR/eval_stitching.json)");
+  stitching->add_option("--config", eval_request.overlay_path, "YAML applied over the checkpoint's config")
+      ->check(CLI::ExistingFile);
+  stitching->add_option("overrides", eval_request.overrides, kOverrideHelp);
+
+  // export
+  auto* export_command = app.add_subcommand("export", "write the self-contained TorchScript planner");
+  flowplan::experiment::EvalRequest export_request;
+  export_command->add_option("--ckpt", export_request.ckpt, "checkpoint file, or a run folder")->required();
+  export_command->add_option("--out", export_request.out, "output file (default: RUN_DIR/planner.pt)");
+  export_command->add_option("--config", export_request.overlay_path, "YAML applied over the checkpoint's config")
+      ->check(CLI::ExistingFile);
+  export_command->add_option("overrides", export_request.overrides, kOverrideHelp);
+
+  // config
+  auto* config_command = app.add_subcommand("config", "show the resolved config or list every key");
+  config_command->require_subcommand(1);
+  auto* show = config_command->add_subcommand("show", "print the resolved config as YAML");
+  add_config(show, false);
+  auto* keys = config_command->add_subcommand("keys", "list every config key with its default and meaning");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  flowplan::SetUpLogging(log_level);
+  flowplan::InstallInterruptHandler();
+
+  if (generate->parsed()) {
+    flowplan::experiment::GenerateRequest request;
+    ParseShard(shard, request);
+    request.out = generate_out;
+    flowplan::experiment::RunGenerate(flowplan::experiment::LoadExperiment(config_path, overrides), request);
+  } else if (merge->parsed()) {
+    flowplan::experiment::RunMerge(merge_inputs, merge_out);
+  } else if (train->parsed()) {
+    flowplan::experiment::TrainRequest request;
+    request.until_step = until_step;
+    if (!resume_dir.empty()) {
+      if (!config_path.empty()) throw flowplan::Error("train: give either --config or --resume, not both");
+      request.resume = true;
+      const std::string stored = resume_dir + "/config.yaml";
+      ExperimentConfig config = flowplan::experiment::LoadExperimentText(
+          flowplan::ReadFile(stored), stored, "", overrides);
+      config.run_dir = resume_dir;
+      flowplan::experiment::RunTrain(config, request);
+    } else {
+      if (config_path.empty()) throw flowplan::Error("train: expected --config FILE or --resume RUN_DIR");
+      flowplan::experiment::RunTrain(flowplan::experiment::LoadExperiment(config_path, overrides), request);
+    }
+  } else if (stitching->parsed()) {
+    flowplan::experiment::RunEvalStitching(eval_request);
+  } else if (export_command->parsed()) {
+    flowplan::experiment::RunExport(export_request);
+  } else if (show->parsed()) {
+    std::cout << flowplan::experiment::ToYaml(flowplan::experiment::LoadExperiment(config_path, overrides));
+  } else if (keys->parsed()) {
+    std::cout << flowplan::config::FormatKeys(flowplan::config::ListKeys(ExperimentConfig{}));
+  }
+  return 0;
+}
+
+std::string FirstLine(const std::string& text) { return text.substr(0, text.find('\n')); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return Main(argc, argv);
+  } catch (const flowplan::Error& e) {
+    spdlog::error("{}", e.what());
+  } catch (const c10::Error& e) {
+    spdlog::error("LibTorch: {}", FirstLine(e.what_without_backtrace()));
+  } catch (const flowplan::InternalError& e) {
+    spdlog::critical("{} (this is a bug in flowplan)", e.what());
+  } catch (const std::exception& e) {
+    spdlog::error("{}", FirstLine(e.what()));
+  }
+  return 1;
+}

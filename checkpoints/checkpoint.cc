@@ -1,0 +1,130 @@
+#include "checkpoints/checkpoint.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace flowplan::checkpoints {
+namespace {
+
+using torch::serialize::InputArchive;
+using torch::serialize::OutputArchive;
+
+std::string FirstLine(const std::string& text) { return text.substr(0, text.find('\n')); }
+
+InputArchive OpenArchive(const std::string& path) {
+  {
+    std::FILE* probe = std::fopen(path.c_str(), "rb");
+    if (probe == nullptr) throw Error(path + ": cannot open checkpoint: no such file or not readable");
+    std::fclose(probe);
+  }
+  InputArchive archive;
+  try {
+    archive.load_from(path);
+  } catch (const c10::Error& e) {
+    throw Error(path + ": not a readable checkpoint (truncated or foreign file): " +
+                FirstLine(e.what_without_backtrace()));
+  }
+  c10::IValue format;
+  if (!archive.try_read("format", format) || !format.isString() || format.toStringRef() != kCheckpointFormatName) {
+    throw Error(path + ": not a flowplan checkpoint (no \"format\": \"" + kCheckpointFormatName + "\" entry)");
+  }
+  c10::IValue version;
+  if (!archive.try_read("format_version", version) || !version.isInt() ||
+      version.toInt() != kCheckpointFormatVersion) {
+    throw Error(path + ": checkpoint format_version " + (version.isInt() ? std::to_string(version.toInt()) : "?") +
+                " is not supported (this build reads version " + std::to_string(kCheckpointFormatVersion) + ")");
+  }
+  return archive;
+}
+
+c10::IValue Read(InputArchive& archive, const std::string& path, const std::string& key) {
+  c10::IValue value;
+  if (!archive.try_read(key, value)) throw Error(path + ": checkpoint has no entry \"" + key + "\"");
+  return value;
+}
+
+torch::Tensor ReadTensor(InputArchive& archive, const std::string& path, const std::string& key) {
+  torch::Tensor value;
+  if (!archive.try_read(key, value)) throw Error(path + ": checkpoint has no tensor \"" + key + "\"");
+  return value;
+}
+
+}  // namespace
+
+void SaveCheckpoint(const std::string& path, const CheckpointHeader& header, const CheckpointModules& modules) {
+  OutputArchive archive;
+  archive.write("format", c10::IValue(std::string(kCheckpointFormatName)));
+  archive.write("format_version", c10::IValue(kCheckpointFormatVersion));
+  archive.write("step", c10::IValue(header.step));
+  archive.write("config", c10::IValue(header.config_yaml));
+  archive.write("env", c10::IValue(header.env));
+  archive.write("dt", c10::IValue(header.dt));
+  archive.write("horizon", c10::IValue(header.horizon));
+  c10::List<std::string> labels;
+  for (const auto& label : header.state_labels) labels.push_back(label);
+  archive.write("state_labels", c10::IValue(labels));
+  archive.write("normalizer_lo", header.normalizer.lo());
+  archive.write("normalizer_hi", header.normalizer.hi());
+  archive.write("rng_state", header.rng_state);
+  auto write_module = [&](const char* key, const torch::nn::Module* module) {
+    if (module == nullptr) return;
+    OutputArchive sub;
+    module->save(sub);
+    archive.write(key, sub);
+  };
+  write_module("model", modules.model);
+  write_module("ema", modules.ema);
+  if (modules.optimizer != nullptr) {
+    OutputArchive sub;
+    modules.optimizer->save(sub);
+    archive.write("optimizer", sub);
+  }
+  AtomicFile file(path);
+  try {
+    archive.save_to(file.temp_path());
+  } catch (const c10::Error& e) {
+    throw Error(path + ": cannot write checkpoint: " + FirstLine(e.what_without_backtrace()));
+  }
+  file.Commit();
+}
+
+CheckpointHeader ReadCheckpointHeader(const std::string& path) {
+  InputArchive archive = OpenArchive(path);
+  CheckpointHeader header;
+  try {
+    header.step = Read(archive, path, "step").toInt();
+    header.config_yaml = Read(archive, path, "config").toStringRef();
+    header.env = Read(archive, path, "env").toStringRef();
+    header.dt = Read(archive, path, "dt").toDouble();
+    header.horizon = Read(archive, path, "horizon").toInt();
+    for (const auto& label : Read(archive, path, "state_labels").toListRef()) {
+      header.state_labels.push_back(label.toStringRef());
+    }
+    header.normalizer = models::MinMaxNormalizer(ReadTensor(archive, path, "normalizer_lo"),
+                                                 ReadTensor(archive, path, "normalizer_hi"));
+    header.rng_state = ReadTensor(archive, path, "rng_state");
+  } catch (const c10::Error& e) {
+    throw Error(path + ": malformed checkpoint entry: " + FirstLine(e.what_without_backtrace()));
+  }
+  return header;
+}
+
+void LoadCheckpointWeights(const std::string& path, const CheckpointModules& modules) {
+  InputArchive archive = OpenArchive(path);
+  auto load = [&](const char* key, auto* target) {
+    if (target == nullptr) return;
+    InputArchive sub;
+    if (!archive.try_read(key, sub)) throw Error(path + ": checkpoint has no \"" + std::string(key) + "\" weights");
+    try {
+      target->load(sub);
+    } catch (const c10::Error& e) {
+      throw Error(path + ": \"" + std::string(key) + "\" weights do not fit this model (was the config changed?): " +
+                  FirstLine(e.what_without_backtrace()));
+    }
+  };
+  load("model", modules.model);
+  load("ema", modules.ema);
+  load("optimizer", modules.optimizer);
+}
+
+}  // namespace flowplan::checkpoints

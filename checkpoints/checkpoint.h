@@ -1,0 +1,49 @@
+#pragma once
+
+#include <torch/torch.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "models/normalizer.h"
+
+namespace flowplan::checkpoints {
+
+inline constexpr const char* kCheckpointFormatName = "flowplan.checkpoint";
+inline constexpr int64_t kCheckpointFormatVersion = 1;
+
+/// Everything in a checkpoint besides module and optimizer weights.
+struct CheckpointHeader {
+  int64_t step = 0;                       // optimizer steps taken
+  std::string config_yaml;                // the run's resolved config
+  models::MinMaxNormalizer normalizer;    // fitted on the training split
+  torch::Tensor rng_state;                // state of the run's torch::Generator (uint8)
+  std::string env;                        // dataset env ("particle", "franka")
+  double dt = 0.0;                        // s between states
+  std::vector<std::string> state_labels;  // (D,)
+  int64_t horizon = 0;                    // T the network is trained for
+};
+
+/// The trainable pieces a checkpoint stores; any may be null when loading.
+struct CheckpointModules {
+  torch::nn::Module* model = nullptr;           // online weights
+  torch::nn::Module* ema = nullptr;             // EMA weights (used for evaluation and export)
+  torch::optim::Optimizer* optimizer = nullptr;  // moments and per-parameter state
+};
+
+/// Writes a self-describing checkpoint atomically (temporary name, then rename).
+/// @throws flowplan::Error if it cannot be written.
+void SaveCheckpoint(const std::string& path, const CheckpointHeader& header, const CheckpointModules& modules);
+
+/// Reads the header of a checkpoint.
+/// @throws flowplan::Error naming the file for missing, truncated or foreign
+///         files and for other format versions.
+CheckpointHeader ReadCheckpointHeader(const std::string& path);
+
+/// Loads the weights into the non-null members of `modules`, which must have the
+/// architecture the checkpoint was written from.
+/// @throws flowplan::Error naming the file and the part that does not fit.
+void LoadCheckpointWeights(const std::string& path, const CheckpointModules& modules);
+
+}  // namespace flowplan::checkpoints

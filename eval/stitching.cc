@@ -1,0 +1,52 @@
+#include "eval/stitching.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace flowplan::eval {
+
+torch::Tensor StitchingErrors(const torch::Tensor& plans, const torch::Tensor& start, const torch::Tensor& goal) {
+  const int64_t T = plans.size(1), positions = plans.size(2) / 2;
+  const torch::Tensor first = plans.select(1, 1).slice(1, 0, positions);
+  const torch::Tensor last = plans.select(1, T - 2).slice(1, 0, positions);
+  return 0.5 * ((first - start.slice(1, 0, positions)).norm(2, 1) + (last - goal.slice(1, 0, positions)).norm(2, 1));
+}
+
+StitchingResult EvaluateStitching(const planning::FlowPlanner& planner, const datasets::EvalPairTensors& pairs,
+                                  const std::string& label, const EvalConfig& config) {
+  const int64_t P = pairs.start.defined() ? pairs.start.size(0) : 0;
+  if (P == 0) throw Error("stitching evaluation: the dataset defines no " + label + " pairs");
+  const torch::Tensor pair_index = torch::arange(config.num_plans, torch::kInt64) % P;
+  const torch::Tensor start = pairs.start.index_select(0, pair_index);
+  const torch::Tensor goal = pairs.goal.index_select(0, pair_index);
+  auto generator = at::make_generator<at::CPUGeneratorImpl>(static_cast<uint64_t>(config.seed));
+  StitchingResult result;
+  result.pairs = label;
+  result.plans = planner.Sample(start, goal, generator);
+  result.pair_index = pair_index;
+  const torch::Tensor errors = StitchingErrors(result.plans, start, goal).to(torch::kFloat64);
+  result.mean = errors.mean().item<double>();
+  result.std = config.num_plans > 1 ? errors.std(/*unbiased=*/false).item<double>() : 0.0;
+  for (int64_t p = 0; p < P; ++p) {
+    result.pair_names.push_back(p < static_cast<int64_t>(pairs.names.size()) ? pairs.names[p] : std::to_string(p));
+    const torch::Tensor mask = pair_index == p;
+    result.pair_means.push_back(mask.any().item<bool>() ? errors.index({mask}).mean().item<double>() : NAN);
+  }
+  return result;
+}
+
+std::string ToJson(const StitchingResult& result) {
+  std::ostringstream out;
+  out.precision(6);
+  out << "{\"pairs\": \"" << result.pairs << "\", \"mean\": " << result.mean << ", \"std\": " << result.std
+      << ", \"num_plans\": " << (result.plans.defined() ? result.plans.size(0) : 0) << ", \"per_pair\": {";
+  for (size_t i = 0; i < result.pair_names.size(); ++i) {
+    out << (i ? ", " : "") << "\"" << result.pair_names[i] << "\": " << result.pair_means[i];
+  }
+  out << "}}";
+  return out.str();
+}
+
+}  // namespace flowplan::eval

@@ -1,0 +1,50 @@
+#pragma once
+
+#include <torch/torch.h>
+
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "datasets/trajectory_loader.h"
+#include "planning/flow_planner.h"
+
+namespace flowplan::eval {
+
+/// The `eval` section of an experiment config.
+struct EvalConfig {
+  int num_plans = 64;     // plans per pair set; plan i goes to pair i mod P
+  int64_t seed = 1234;    // noise of the evaluation plans (fixed, so evaluations are comparable)
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("num_plans", num_plans, "plans per evaluation (plan i targets pair i mod P)", config::Positive());
+    v.Field("seed", seed, "seed of the evaluation noise", config::NonNegative());
+  }
+};
+
+/// Stitching error of one start/goal pair set (SPEC section 4): per plan,
+/// 0.5 * (|x_1 - start| + |x_{T-2} - goal|) over the position part of the state
+/// (the first D/2 dimensions: x, y for the particle, q for the Franka).
+struct StitchingResult {
+  std::string pairs;                  // "test" or "train"
+  double mean = 0.0;
+  double std = 0.0;
+  std::vector<std::string> pair_names;  // (P,)
+  std::vector<double> pair_means;       // (P,)
+  torch::Tensor plans;                  // (num_plans, T, D) raw
+  torch::Tensor pair_index;             // (num_plans,) which pair each plan targets
+};
+
+/// Per-plan stitching errors. plans: (N, T, D); start, goal: (N, D) raw -> (N,).
+torch::Tensor StitchingErrors(const torch::Tensor& plans, const torch::Tensor& start, const torch::Tensor& goal);
+
+/// Plans `config.num_plans` times between the pairs and scores them.
+/// @throws flowplan::Error if there are no pairs.
+StitchingResult EvaluateStitching(const planning::FlowPlanner& planner, const datasets::EvalPairTensors& pairs,
+                                  const std::string& label, const EvalConfig& config);
+
+/// {"pairs": "test", "mean": …, "std": …, "per_pair": {"name": mean, …}}
+std::string ToJson(const StitchingResult& result);
+
+}  // namespace flowplan::eval

@@ -1,0 +1,186 @@
+#include "experiment/commands.h"
+
+#include <spdlog/spdlog.h>
+#include <torch/torch.h>
+
+#include <filesystem>
+
+#include "checkpoints/checkpoint.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/parallel.h"
+#include "datasets/generator.h"
+#include "datasets/h5.h"
+#include "datasets/trajectory_dataset.h"
+#include "eval/stitching.h"
+#include "planning/export.h"
+#include "trainer/run_dir.h"
+#include "trainer/trainer.h"
+
+namespace flowplan::experiment {
+namespace fs = std::filesystem;
+
+int ApplyThreadCount(const ExperimentConfig& config) {
+  const int threads = ResolveThreadCount(config.threads);
+  at::set_num_threads(threads);
+  return threads;
+}
+
+namespace {
+
+void EnsureParentFolder(const std::string& path) {
+  const fs::path parent = fs::path(path).parent_path();
+  if (!parent.empty()) MakeDirectories(parent.string());
+}
+
+/// The run folder a checkpoint belongs to: RUN/checkpoints/step_N.pt -> RUN.
+std::string RunFolderOf(const std::string& checkpoint) {
+  const fs::path folder = fs::path(checkpoint).parent_path();
+  if (folder.filename() == "checkpoints") return folder.parent_path().string();
+  return folder.empty() ? std::string(".") : folder.string();
+}
+
+void WritePlans(const std::string& path, const eval::StitchingResult& test, const eval::StitchingResult& train) {
+  AtomicFile target(path);
+  {
+    auto file = datasets::h5::File::Create(target.temp_path());
+    for (const eval::StitchingResult* result : {&test, &train}) {
+      if (!result->plans.defined()) continue;
+      const torch::Tensor plans = result->plans.contiguous();
+      const torch::Tensor index = result->pair_index.to(torch::kInt32).contiguous();
+      file.CreateGroup("/" + result->pairs);
+      file.WriteFloat32("/" + result->pairs + "/plans", plans.sizes().vec(), plans.data_ptr<float>());
+      file.WriteInt32("/" + result->pairs + "/pair_index", index.sizes().vec(), index.data_ptr<int32_t>());
+    }
+    file.Close();
+  }
+  target.Commit();
+}
+
+}  // namespace
+
+void RunGenerate(const ExperimentConfig& config, const GenerateRequest& request) {
+  const int threads = ResolveThreadCount(config.threads);
+  const std::string out = request.out.empty() ? config.generate.out : request.out;
+  EnsureParentFolder(out);
+  AtomicFile probe(out);  // fails early, before any rollout, if the file cannot be written
+  const auto task = datasets::MakeTask(config.generate);
+  datasets::GenerateOptions options;
+  options.episodes = config.generate.episodes;
+  options.seed = static_cast<uint64_t>(config.seed);
+  options.threads = threads;
+  options.shard_index = request.shard_index;
+  options.shard_count = request.shard_count;
+  options.config_yaml = DatasetConfigYaml(config);
+  spdlog::info("generating {} episodes of {} on {} threads{}", config.generate.episodes,
+               config::internal::EnumName(config.generate.dataset), threads,
+               request.shard_count > 1 ? " (shard " + std::to_string(request.shard_index) + "/" +
+                                             std::to_string(request.shard_count) + ")"
+                                       : std::string());
+  const datasets::TrajectoryDataset dataset = datasets::GenerateDataset(*task, options);
+  datasets::WriteDataset(out, dataset);
+  spdlog::info("wrote {}: {} episodes x {} states x {} dims ({} rejected, {} simulator warnings)", out,
+               dataset.num_episodes, dataset.horizon, dataset.state_dim, dataset.rejected_episodes,
+               dataset.simulator_warnings);
+}
+
+void RunMerge(const std::vector<std::string>& inputs, const std::string& out) {
+  if (inputs.empty()) throw Error("merge: expected at least one input file");
+  std::vector<datasets::TrajectoryDataset> shards;
+  for (const auto& path : inputs) shards.push_back(datasets::ReadDataset(path));
+  EnsureParentFolder(out);
+  const datasets::TrajectoryDataset merged = datasets::MergeDatasets(shards, inputs);
+  datasets::WriteDataset(out, merged);
+  spdlog::info("wrote {}: {} episodes from {} shards", out, merged.num_episodes, inputs.size());
+}
+
+void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
+  const int threads = ApplyThreadCount(config);
+  const datasets::TrajectorySplits data =
+      datasets::LoadTrajectorySplits(config.data, static_cast<uint64_t>(config.seed));
+  trainer::TrainingSetup setup;
+  setup.run_dir = config.run_dir;
+  setup.config_yaml = ToYaml(config);
+  setup.seed = static_cast<uint64_t>(config.seed);
+  setup.model = config.model;
+  setup.flow = config.flow;
+  setup.train = config.train;
+  setup.sampler = config.sampler;
+  setup.eval = config.eval;
+  setup.stop_at_step = request.until_step;
+  spdlog::info("training {} on {} ({} threads) into {}", config::internal::EnumName(config.model.architecture),
+               config.data.path, threads, config.run_dir);
+  const trainer::TrainResult result = trainer::Train(setup, data, request.resume);
+  spdlog::info("trained {} steps in {:.1f} s: loss {:.5f}, val loss {:.5f}, stitching error test {:.4f} ± {:.4f}; "
+               "checkpoint {}",
+               result.steps, result.seconds, result.train_loss, result.val_loss, result.test.mean, result.test.std,
+               result.checkpoint);
+}
+
+LoadedPlanner LoadPlanner(const std::string& ckpt, const std::string& overlay_path,
+                          const std::vector<std::string>& overrides) {
+  LoadedPlanner loaded;
+  loaded.checkpoint = trainer::ResolveCheckpoint(ckpt);
+  const checkpoints::CheckpointHeader header = checkpoints::ReadCheckpointHeader(loaded.checkpoint);
+  loaded.config = LoadExperimentText(header.config_yaml, loaded.checkpoint + " (stored config)", overlay_path,
+                                     overrides);
+  loaded.step = header.step;
+  loaded.env = header.env;
+  loaded.dt = header.dt;
+  loaded.state_labels = header.state_labels;
+  const int64_t D = header.normalizer.dim();
+  models::VelocityNetPtr net = models::MakeVelocityNet(
+      loaded.config.model, D, planning::ConditionDim(loaded.config.flow.conditioning, D));
+  checkpoints::LoadCheckpointWeights(loaded.checkpoint, {nullptr, net.get(), nullptr});
+  net->eval();
+  loaded.planner = std::make_unique<planning::FlowPlanner>(net, header.normalizer, loaded.config.flow.conditioning,
+                                                           header.horizon, loaded.config.sampler);
+  return loaded;
+}
+
+void RunEvalStitching(const EvalRequest& request) {
+  LoadedPlanner loaded = LoadPlanner(request.ckpt, request.overlay_path, request.overrides);
+  ApplyThreadCount(loaded.config);
+  const datasets::TrajectoryDataset dataset = datasets::ReadDataset(loaded.config.data.path);
+  if (dataset.state_dim != loaded.planner->state_dim()) {
+    throw Error(loaded.config.data.path + ": states have " + std::to_string(dataset.state_dim) +
+                " dimensions, the checkpoint plans " + std::to_string(loaded.planner->state_dim()));
+  }
+  const auto test_pairs = datasets::ToTensors(dataset.test_pairs, dataset.state_dim);
+  const auto train_pairs = datasets::ToTensors(dataset.train_pairs, dataset.state_dim);
+  const eval::StitchingResult test = eval::EvaluateStitching(*loaded.planner, test_pairs, "test", loaded.config.eval);
+  const eval::StitchingResult train =
+      eval::EvaluateStitching(*loaded.planner, train_pairs, "train", loaded.config.eval);
+
+  const std::string run = RunFolderOf(loaded.checkpoint);
+  const std::string out = request.out.empty() ? run + "/eval_stitching.json" : request.out;
+  EnsureParentFolder(out);
+  const std::string json = "{\"checkpoint\": \"" + loaded.checkpoint + "\", \"step\": " + std::to_string(loaded.step) +
+                           ", \"data\": \"" + loaded.config.data.path + "\", \"sampler_steps\": " +
+                           std::to_string(loaded.config.sampler.steps) + ", \"test\": " + eval::ToJson(test) +
+                           ", \"train\": " + eval::ToJson(train) + "}\n";
+  WriteFileAtomically(out, json);
+  const std::string plans = fs::path(out).replace_extension(".plans.h5").string();
+  WritePlans(plans, test, train);
+  spdlog::info("stitching error (step {}, {} plans): test pairs {:.4f} ± {:.4f}, training pairs {:.4f} ± {:.4f}; "
+               "wrote {} and {}",
+               loaded.step, loaded.config.eval.num_plans, test.mean, test.std, train.mean, train.std, out, plans);
+}
+
+void RunExport(const EvalRequest& request) {
+  LoadedPlanner loaded = LoadPlanner(request.ckpt, request.overlay_path, request.overrides);
+  const std::string out = request.out.empty() ? trainer::RunDir(RunFolderOf(loaded.checkpoint)).planner() : request.out;
+  EnsureParentFolder(out);
+  planning::ExportMetadata metadata;
+  metadata.env = loaded.env;
+  metadata.dt = loaded.dt;
+  metadata.state_labels = loaded.state_labels;
+  metadata.config_yaml = ToYaml(loaded.config);
+  planning::ExportPlanner(*loaded.planner, metadata, out);
+  spdlog::info("exported {} (step {}) to {}: plan(start (B, {}), goal (B, {}), noise (B, {}, {})) -> (B, {}, {})",
+               loaded.checkpoint, loaded.step, out, loaded.planner->state_dim(), loaded.planner->state_dim(),
+               loaded.planner->horizon(), loaded.planner->state_dim(), loaded.planner->horizon(),
+               loaded.planner->state_dim());
+}
+
+}  // namespace flowplan::experiment

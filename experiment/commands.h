@@ -1,0 +1,70 @@
+#pragma once
+
+// One function per `flowplan` subcommand; apps/flowplan/main.cc only parses
+// flags and calls these.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "experiment/experiment_config.h"
+#include "planning/flow_planner.h"
+
+namespace flowplan::experiment {
+
+/// Sets LibTorch's intra-op threads from config.threads (0: all cores); returns the count.
+int ApplyThreadCount(const ExperimentConfig& config);
+
+struct GenerateRequest {
+  int shard_index = 0;  // --shard k/n
+  int shard_count = 1;
+  std::string out;      // --out, overrides generate.out (e.g. one file per shard)
+};
+
+/// `flowplan generate`: rolls out config.generate and writes the HDF5 file.
+void RunGenerate(const ExperimentConfig& config, const GenerateRequest& request);
+
+/// `flowplan merge`: joins shards (in the order given) into one file.
+void RunMerge(const std::vector<std::string>& inputs, const std::string& out);
+
+struct TrainRequest {
+  bool resume = false;
+  int64_t until_step = 0;  // --until: stop (with a checkpoint) at this step; 0: run to train.steps
+};
+
+/// `flowplan train`: trains (or resumes) the run in config.run_dir.
+void RunTrain(const ExperimentConfig& config, const TrainRequest& request);
+
+/// A planner restored from a checkpoint (EMA weights), with the config it was trained with.
+struct LoadedPlanner {
+  ExperimentConfig config;
+  std::unique_ptr<planning::FlowPlanner> planner;
+  std::string checkpoint;
+  int64_t step = 0;
+  std::string env;
+  double dt = 0.0;
+  std::vector<std::string> state_labels;
+};
+
+/// Loads `ckpt` (a checkpoint file or a run folder = its newest checkpoint); the
+/// checkpoint's config is overlaid with `overlay_path` and `overrides`
+/// (e.g. sampler.steps=20).
+/// @throws flowplan::Error for missing, corrupt or foreign checkpoints.
+LoadedPlanner LoadPlanner(const std::string& ckpt, const std::string& overlay_path,
+                          const std::vector<std::string>& overrides);
+
+struct EvalRequest {
+  std::string ckpt;
+  std::string overlay_path;
+  std::vector<std::string> overrides;
+  std::string out;  // JSON report; default RUN_DIR/eval_stitching.json
+};
+
+/// `flowplan eval stitching`: stitching error on the dataset's test and training pairs.
+void RunEvalStitching(const EvalRequest& request);
+
+/// `flowplan export`: writes the TorchScript planner (default RUN_DIR/planner.pt).
+void RunExport(const EvalRequest& request);
+
+}  // namespace flowplan::experiment

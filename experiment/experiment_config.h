@@ -1,0 +1,61 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "datasets/generate_config.h"
+#include "datasets/trajectory_loader.h"
+#include "eval/stitching.h"
+#include "models/model_config.h"
+#include "planning/flow_planner.h"
+#include "trainer/trainer_config.h"
+
+namespace flowplan::experiment {
+
+/// A whole experiment: one YAML file drives generate, train, eval and export.
+struct ExperimentConfig {
+  int64_t seed = 0;                  // every random draw of the run derives from it
+  int threads = 0;                   // CPU threads (0: all cores); does not change results
+  std::string run_dir = "runs/particle_cross";
+  datasets::GenerateConfig generate;
+  datasets::DataConfig data;
+  models::ModelConfig model;
+  trainer::FlowConfig flow;
+  trainer::TrainerConfig train;
+  planning::SamplerConfig sampler;
+  eval::EvalConfig eval;
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("seed", seed, "base seed of every random draw", config::NonNegative());
+    v.Field("threads", threads, "CPU threads, 0 for all cores (results do not depend on it)",
+            config::NonNegative());
+    v.Field("run_dir", run_dir, "folder of the training run (config, metrics, checkpoints, planner)");
+    v.Field("generate", generate, "dataset generation");
+    v.Field("data", data, "training data");
+    v.Field("model", model, "velocity network");
+    v.Field("flow", flow, "flow-matching objective");
+    v.Field("train", train, "optimization");
+    v.Field("sampler", sampler, "sampling");
+    v.Field("eval", eval, "evaluation");
+  }
+};
+
+/// Defaults, then `path` (if non-empty), then the key=value overrides.
+ExperimentConfig LoadExperiment(const std::string& path, const std::vector<std::string>& overrides);
+
+/// A config from YAML text (a checkpoint's or a run's), then an optional overlay
+/// file, then overrides. `source` names the text in errors.
+ExperimentConfig LoadExperimentText(const std::string& yaml, const std::string& source,
+                                    const std::string& overlay_path, const std::vector<std::string>& overrides);
+
+/// The resolved config as YAML.
+std::string ToYaml(const ExperimentConfig& config);
+
+/// The resolved config as stored in a dataset: without `threads`, which does
+/// not change the data, so that any thread count writes the same bytes.
+std::string DatasetConfigYaml(const ExperimentConfig& config);
+
+}  // namespace flowplan::experiment

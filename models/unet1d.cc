@@ -1,0 +1,207 @@
+#include "models/unet1d.h"
+
+#include <cmath>
+
+#include "core/error.h"
+
+namespace flowplan::models {
+
+void UNetConfig::Validate() const {
+  if (down_dims.size() < 1) throw Error("model.unet.down_dims: expected at least one level");
+  for (size_t i = 0; i < down_dims.size(); ++i) {
+    if (down_dims[i] % groups != 0) {
+      throw Error("model.unet.down_dims[" + std::to_string(i) + "]: expected a multiple of model.unet.groups (" +
+                  std::to_string(groups) + "), got " + std::to_string(down_dims[i]));
+    }
+  }
+  if (kernel_size % 2 == 0) {
+    throw Error("model.unet.kernel_size: expected an odd size, got " + std::to_string(kernel_size));
+  }
+  if (time_embed_dim % 2 != 0) {
+    throw Error("model.unet.time_embed_dim: expected an even size, got " + std::to_string(time_embed_dim));
+  }
+}
+
+namespace internal {
+
+ConvBlock::ConvBlock(int in, int out, int kernel, int groups) : padding_(kernel / 2), groups_(groups) {
+  conv_ = register_module("conv", torch::nn::Conv1d(torch::nn::Conv1dOptions(in, out, kernel).padding(kernel / 2)));
+  norm_ = register_module("norm", torch::nn::GroupNorm(torch::nn::GroupNormOptions(groups, out)));
+}
+
+torch::Tensor ConvBlock::Forward(const torch::Tensor& x) { return torch::mish(norm_(conv_(x))); }
+
+std::string ConvBlock::WriteScript(ScriptWriter& w, const std::string& prefix, const std::string& x) const {
+  const std::string c = w.Let("torch.conv1d(" + x + ", " + w.Tensor(prefix + ".conv.weight", conv_->weight) +
+                              ", " + w.Tensor(prefix + ".conv.bias", conv_->bias) + ", 1, " +
+                              std::to_string(padding_) + ")");
+  const std::string n = w.Let("torch.group_norm(" + c + ", " + std::to_string(groups_) + ", " +
+                              w.Tensor(prefix + ".norm.weight", norm_->weight) + ", " +
+                              w.Tensor(prefix + ".norm.bias", norm_->bias) + ", " +
+                              ScriptFloat(norm_->options.eps()) + ")");
+  return w.Let("torch.mish(" + n + ")");
+}
+
+ResidualBlock::ResidualBlock(int in, int out, int cond_dim, int kernel, int groups) : out_(out) {
+  block0_ = register_module("block0", std::make_shared<ConvBlock>(in, out, kernel, groups));
+  block1_ = register_module("block1", std::make_shared<ConvBlock>(out, out, kernel, groups));
+  film_ = register_module("film", torch::nn::Linear(cond_dim, 2 * out));
+  if (in != out) {
+    residual_ = register_module("residual", torch::nn::Conv1d(torch::nn::Conv1dOptions(in, out, 1)));
+  }
+}
+
+torch::Tensor ResidualBlock::Forward(const torch::Tensor& x, const torch::Tensor& cond) {
+  torch::Tensor h = block0_->Forward(x);
+  const torch::Tensor film = film_(torch::mish(cond)).unsqueeze(-1);  // (B, 2*out, 1)
+  h = film.slice(1, 0, out_) * h + film.slice(1, out_, 2 * out_);
+  h = block1_->Forward(h);
+  return h + (residual_ ? residual_(x) : x);
+}
+
+std::string ResidualBlock::WriteScript(ScriptWriter& w, const std::string& prefix, const std::string& x,
+                                       const std::string& cond) const {
+  std::string h = block0_->WriteScript(w, prefix + ".block0", x);
+  const std::string film = w.Let("torch.linear(torch.mish(" + cond + "), " +
+                                 w.Tensor(prefix + ".film.weight", film_->weight) + ", " +
+                                 w.Tensor(prefix + ".film.bias", film_->bias) + ").unsqueeze(-1)");
+  const std::string out = std::to_string(out_);
+  h = w.Let(film + "[:, 0:" + out + "] * " + h + " + " + film + "[:, " + out + ":" + std::to_string(2 * out_) + "]");
+  h = block1_->WriteScript(w, prefix + ".block1", h);
+  const std::string skip =
+      residual_ ? "torch.conv1d(" + x + ", " + w.Tensor(prefix + ".residual.weight", residual_->weight) + ", " +
+                      w.Tensor(prefix + ".residual.bias", residual_->bias) + ")"
+                : x;
+  return w.Let(h + " + " + skip);
+}
+
+}  // namespace internal
+
+UNet1D::UNet1D(const UNetConfig& config, int64_t state_dim, int64_t cond_dim)
+    : config_(config), state_dim_(state_dim), cond_dim_(cond_dim) {
+  config_.Validate();
+  const int e = config.time_embed_dim;
+  const int half = e / 2;
+  // Sinusoidal frequencies exp(-k ln(10000) / (half - 1)), k = 0 .. half-1.
+  frequencies_ = register_buffer(
+      "frequencies", torch::exp(torch::arange(half, torch::kFloat32) * (-std::log(10000.0) / (half - 1))));
+  time_in_ = register_module("time_in", torch::nn::Linear(e, 4 * e));
+  time_out_ = register_module("time_out", torch::nn::Linear(4 * e, e));
+  const int cond = e + static_cast<int>(cond_dim);
+  const int k = config.kernel_size, g = config.groups;
+
+  std::vector<int> dims = {static_cast<int>(state_dim)};
+  dims.insert(dims.end(), config.down_dims.begin(), config.down_dims.end());
+  const size_t levels = config.down_dims.size();
+  for (size_t i = 0; i < levels; ++i) {
+    Level level;
+    const std::string name = "down" + std::to_string(i);
+    level.block0 = register_module(name + "_block0", std::make_shared<internal::ResidualBlock>(dims[i], dims[i + 1], cond, k, g));
+    level.block1 = register_module(name + "_block1", std::make_shared<internal::ResidualBlock>(dims[i + 1], dims[i + 1], cond, k, g));
+    if (i + 1 < levels) {
+      level.down = register_module(name + "_down", torch::nn::Conv1d(torch::nn::Conv1dOptions(dims[i + 1], dims[i + 1], 3).stride(2).padding(1)));
+    }
+    down_.push_back(level);
+  }
+  const int mid = dims.back();
+  mid0_ = register_module("mid0", std::make_shared<internal::ResidualBlock>(mid, mid, cond, k, g));
+  mid1_ = register_module("mid1", std::make_shared<internal::ResidualBlock>(mid, mid, cond, k, g));
+  // Up levels mirror the down levels except the deepest: (dims[i+1] -> dims[i]) for i = levels-1 .. 1.
+  for (size_t i = levels - 1; i >= 1; --i) {
+    Level level;
+    const std::string name = "up" + std::to_string(levels - 1 - i);
+    level.block0 = register_module(name + "_block0", std::make_shared<internal::ResidualBlock>(2 * dims[i + 1], dims[i], cond, k, g));
+    level.block1 = register_module(name + "_block1", std::make_shared<internal::ResidualBlock>(dims[i], dims[i], cond, k, g));
+    level.up = register_module(name + "_up", torch::nn::ConvTranspose1d(torch::nn::ConvTranspose1dOptions(dims[i], dims[i], 4).stride(2).padding(1)));
+    up_.push_back(level);
+  }
+  final_block_ = register_module("final_block", std::make_shared<internal::ConvBlock>(dims[1], dims[1], k, g));
+  final_conv_ = register_module("final_conv", torch::nn::Conv1d(torch::nn::Conv1dOptions(dims[1], state_dim, 1)));
+}
+
+void UNet1D::CheckHorizon(int64_t horizon) const {
+  const int64_t factor = int64_t{1} << (config_.down_dims.size() - 1);
+  if (horizon < factor || horizon % factor != 0) {
+    throw Error("UNet1D with " + std::to_string(config_.down_dims.size()) +
+                " levels (model.unet.down_dims) needs a horizon that is a multiple of " + std::to_string(factor) +
+                ", got " + std::to_string(horizon));
+  }
+}
+
+torch::Tensor UNet1D::TimeFeature(const torch::Tensor& t) const {
+  const torch::Tensor angles = (t * config_.time_scale).unsqueeze(-1) * frequencies_.unsqueeze(0);  // (B, half)
+  const torch::Tensor embedding = torch::cat({angles.sin(), angles.cos()}, -1);                     // (B, e)
+  return torch::linear(torch::mish(torch::linear(embedding, time_in_->weight, time_in_->bias)), time_out_->weight,
+                       time_out_->bias);
+}
+
+torch::Tensor UNet1D::Forward(const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond) {
+  CheckVelocityInputs(x, t, cond, state_dim_, cond_dim_);
+  CheckHorizon(x.size(1));
+  torch::Tensor feature = TimeFeature(t);
+  if (cond_dim_ > 0) feature = torch::cat({feature, cond}, -1);
+
+  torch::Tensor h = x.transpose(1, 2);  // (B, D, T)
+  std::vector<torch::Tensor> skips;
+  for (Level& level : down_) {
+    h = level.block0->Forward(h, feature);
+    h = level.block1->Forward(h, feature);
+    skips.push_back(h);
+    if (level.down) h = level.down(h);
+  }
+  h = mid0_->Forward(h, feature);
+  h = mid1_->Forward(h, feature);
+  for (Level& level : up_) {
+    // Skips are taken deepest first; the shallowest one is left unused.
+    h = torch::cat({h, skips.back()}, 1);
+    skips.pop_back();
+    h = level.block0->Forward(h, feature);
+    h = level.block1->Forward(h, feature);
+    h = level.up(h);
+  }
+  h = final_conv_(final_block_->Forward(h));
+  return h.transpose(1, 2);  // (B, T, D)
+}
+
+std::string UNet1D::WriteScript(ScriptWriter& w) const {
+  const std::string angles = w.Let("(t * " + ScriptFloat(config_.time_scale) + ").unsqueeze(-1) * " +
+                                   w.Tensor("frequencies", frequencies_) + ".unsqueeze(0)");
+  const std::string embedding = w.Let("torch.cat([torch.sin(" + angles + "), torch.cos(" + angles + ")], -1)");
+  const std::string hidden = w.Let("torch.mish(torch.linear(" + embedding + ", " + w.Tensor("time_in.weight", time_in_->weight) +
+                                   ", " + w.Tensor("time_in.bias", time_in_->bias) + "))");
+  std::string feature = w.Let("torch.linear(" + hidden + ", " + w.Tensor("time_out.weight", time_out_->weight) + ", " +
+                              w.Tensor("time_out.bias", time_out_->bias) + ")");
+  if (cond_dim_ > 0) {
+    w.Line("assert cond is not None");
+    feature = w.Let("torch.cat([" + feature + ", cond], -1)");
+  }
+  std::string h = w.Let("x.transpose(1, 2)");
+  std::vector<std::string> skips;
+  for (size_t i = 0; i < down_.size(); ++i) {
+    const std::string name = "down" + std::to_string(i);
+    h = down_[i].block0->WriteScript(w, name + "_block0", h, feature);
+    h = down_[i].block1->WriteScript(w, name + "_block1", h, feature);
+    skips.push_back(h);
+    if (down_[i].down) {
+      h = w.Let("torch.conv1d(" + h + ", " + w.Tensor(name + "_down.weight", down_[i].down->weight) + ", " +
+                w.Tensor(name + "_down.bias", down_[i].down->bias) + ", 2, 1)");
+    }
+  }
+  h = mid0_->WriteScript(w, "mid0", h, feature);
+  h = mid1_->WriteScript(w, "mid1", h, feature);
+  for (size_t i = 0; i < up_.size(); ++i) {
+    const std::string name = "up" + std::to_string(i);
+    h = w.Let("torch.cat([" + h + ", " + skips.back() + "], 1)");
+    skips.pop_back();
+    h = up_[i].block0->WriteScript(w, name + "_block0", h, feature);
+    h = up_[i].block1->WriteScript(w, name + "_block1", h, feature);
+    h = w.Let("torch.conv_transpose1d(" + h + ", " + w.Tensor(name + "_up.weight", up_[i].up->weight) + ", " +
+              w.Tensor(name + "_up.bias", up_[i].up->bias) + ", 2, 1)");
+  }
+  h = final_block_->WriteScript(w, "final_block", h);
+  h = w.Let("torch.conv1d(" + h + ", " + w.Tensor("final_conv.weight", final_conv_->weight) + ", " +
+            w.Tensor("final_conv.bias", final_conv_->bias) + ")");
+  return w.Let(h + ".transpose(1, 2)");
+}
+
+}  // namespace flowplan::models

@@ -1,0 +1,32 @@
+#include "models/velocity_net.h"
+
+#include "core/error.h"
+
+namespace flowplan::models {
+
+std::string ShapeString(const torch::Tensor& tensor) {
+  if (!tensor.defined()) return "(undefined)";
+  std::string out = "(";
+  for (int64_t i = 0; i < tensor.dim(); ++i) out += (i ? ", " : "") + std::to_string(tensor.size(i));
+  return out + ")";
+}
+
+void CheckVelocityInputs(const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond,
+                         int64_t state_dim, int64_t cond_dim) {
+  if (!x.defined() || x.dim() != 3 || x.size(2) != state_dim) {
+    throw Error("velocity network: x: expected (B, T, " + std::to_string(state_dim) + "), got " + ShapeString(x));
+  }
+  const int64_t batch = x.size(0);
+  if (!t.defined() || t.dim() != 1 || t.size(0) != batch) {
+    throw Error("velocity network: t: expected (" + std::to_string(batch) + ",), got " + ShapeString(t));
+  }
+  if (cond_dim == 0 && cond.defined()) {
+    throw Error("velocity network: cond: this network takes no global condition, got " + ShapeString(cond));
+  }
+  if (cond_dim > 0 && (!cond.defined() || cond.dim() != 2 || cond.size(0) != batch || cond.size(1) != cond_dim)) {
+    throw Error("velocity network: cond: expected (" + std::to_string(batch) + ", " + std::to_string(cond_dim) +
+                "), got " + ShapeString(cond));
+  }
+}
+
+}  // namespace flowplan::models

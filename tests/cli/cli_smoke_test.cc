@@ -1,0 +1,176 @@
+// The real `flowplan` binary on tiny budgets: the whole pipeline, resume, and
+// every kind of bad input ending in one clear line and a non-zero exit.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "checkpoints/checkpoint.h"
+#include "models/model_config.h"
+
+namespace flowplan {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+struct Outcome {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+Outcome Flowplan(const std::string& arguments) {
+  const std::string command = std::string(FLOWPLAN_BINARY) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+std::string Tiny() { return std::string(FLOWPLAN_SOURCE_DIR) + "/tests/cli/tiny.yaml"; }
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) / ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Paths(const std::string& run = "run") const {
+    return " generate.out=" + Path("data.h5") + " data.path=" + Path("data.h5") + " run_dir=" + Path(run);
+  }
+  Outcome Generate() { return Flowplan("generate --config " + Tiny() + Paths()); }
+
+  fs::path dir_;
+};
+
+void ExpectOk(const Outcome& outcome) { ASSERT_EQ(outcome.exit_code, 0) << outcome.output; }
+
+/// One clear line naming the problem, a non-zero exit, no stack dump.
+void ExpectCleanFailure(const Outcome& outcome, const std::string& names) {
+  EXPECT_NE(outcome.exit_code, 0) << outcome.output;
+  EXPECT_THAT(outcome.output, HasSubstr(names));
+  EXPECT_THAT(outcome.output, Not(HasSubstr("Exception raised from")));
+  EXPECT_THAT(outcome.output, Not(HasSubstr("terminate called")));
+}
+
+TEST_F(CliTest, GenerateTrainEvalExportThenPlanFromPython) {
+  ExpectOk(Generate());
+  ExpectOk(Outcome{std::system((std::string(FLOWPLAN_PYTHON) + " " + FLOWPLAN_SOURCE_DIR +
+                                "/tests/cli/check_dataset_layout.py " + Path("data.h5"))
+                                   .c_str()),
+                   "h5py layout check"});
+  ExpectOk(Flowplan("train --config " + Tiny() + Paths()));
+  EXPECT_TRUE(fs::exists(Path("run/config.yaml")));
+  EXPECT_TRUE(fs::exists(Path("run/metrics.jsonl")));
+  EXPECT_TRUE(fs::exists(Path("run/checkpoints/step_00000006.pt")));
+
+  const Outcome eval = Flowplan("eval stitching --ckpt " + Path("run"));
+  ExpectOk(eval);
+  EXPECT_THAT(eval.output, HasSubstr("stitching error"));
+  std::ifstream report(Path("run/eval_stitching.json"));
+  std::stringstream json;
+  json << report.rdbuf();
+  EXPECT_THAT(json.str(), HasSubstr("\"test\": {\"pairs\": \"test\""));
+  EXPECT_THAT(json.str(), HasSubstr("(0,0)->(1,0)"));
+
+  ExpectOk(Flowplan("export --ckpt " + Path("run")));
+  ASSERT_TRUE(fs::exists(Path("run/planner.pt")));
+  const std::string python = std::string(FLOWPLAN_PYTHON) + " -c \"import torch; p = torch.jit.load('" +
+                             Path("run/planner.pt") +
+                             "'); s = torch.tensor([0., 0., 0., 0.]); g = torch.tensor([1., 0., 0., 0.]); "
+                             "x = p.sample(s, g, 3); assert x.shape == (3, p.horizon, 4); "
+                             "assert torch.equal(x[:, 0], s.expand(3, 4)) and torch.equal(x[:, -1], g.expand(3, 4))\"";
+  EXPECT_EQ(std::system(python.c_str()), 0) << python;
+}
+
+TEST_F(CliTest, ResumeAfterAStopEqualsOneRun) {
+  ExpectOk(Generate());
+  ExpectOk(Flowplan("train --config " + Tiny() + Paths("straight")));
+  ExpectOk(Flowplan("train --config " + Tiny() + Paths("stopped") + " --until 3"));
+  EXPECT_FALSE(fs::exists(Path("stopped/checkpoints/step_00000006.pt")));
+  const Outcome resumed = Flowplan("train --resume " + Path("stopped"));
+  ExpectOk(resumed);
+  EXPECT_THAT(resumed.output, HasSubstr("resuming"));
+
+  models::ModelConfig model;
+  model.unet.down_dims = {8, 16};
+  auto load = [&](const std::string& path) {
+    auto net = models::MakeVelocityNet(model, 4, 0), ema = models::MakeVelocityNet(model, 4, 0);
+    checkpoints::LoadCheckpointWeights(path, {net.get(), ema.get(), nullptr});
+    std::vector<torch::Tensor> weights = net->parameters();
+    for (const auto& p : ema->parameters()) weights.push_back(p);
+    return weights;
+  };
+  const auto a = load(Path("straight/checkpoints/step_00000006.pt"));
+  const auto b = load(Path("stopped/checkpoints/step_00000006.pt"));
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(torch::equal(a[i], b[i])) << "tensor " << i;
+}
+
+TEST_F(CliTest, BadConfigKeyValueAndFile) {
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + " train.bach_size=8"), "train.bach_size");
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + " train.batch_size=abc"), "train.batch_size");
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + " train.lr=-1"), "train.lr");
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + " flow.conditioning=global"), "one of inpaint, direct");
+  ExpectCleanFailure(Flowplan("generate --config " + Path("missing.yaml")), "missing.yaml");
+  std::ofstream(Path("broken.yaml")) << "train:\n  steps: [1\n";
+  ExpectCleanFailure(Flowplan("train --config " + Path("broken.yaml")), "broken.yaml");
+  std::ofstream(Path("unknown.yaml")) << "trian:\n  steps: 1\n";
+  ExpectCleanFailure(Flowplan("train --config " + Path("unknown.yaml")), "unknown.yaml:1: trian: unknown key");
+}
+
+TEST_F(CliTest, BadFilesAreNamed) {
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + Paths() + " data.path=" + Path("absent.h5")), "absent.h5");
+  // A folder that cannot exist (its parent is a file), even for root.
+  std::ofstream(Path("a_file")) << "x";
+  ExpectCleanFailure(Flowplan("generate --config " + Tiny() + " generate.out=" + Path("a_file/sub/data.h5")),
+                     "a_file/sub");
+  std::ofstream(Path("garbage.pt")) << "not a checkpoint";
+  ExpectCleanFailure(Flowplan("eval stitching --ckpt " + Path("garbage.pt")), "garbage.pt");
+  ExpectCleanFailure(Flowplan("export --ckpt " + Path("nothing_here.pt")), "nothing_here.pt");
+  ExpectCleanFailure(Flowplan("train --resume " + Path("no_run")), "no_run");
+  std::ofstream(Path("text.h5")) << "hello";
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + Paths() + " data.path=" + Path("text.h5")), "not an HDF5 file");
+}
+
+TEST_F(CliTest, TruncatedCheckpointIsAClearErrorAndLeavesNoPartialOutput) {
+  ExpectOk(Generate());
+  ExpectOk(Flowplan("train --config " + Tiny() + Paths()));
+  const std::string good = Path("run/checkpoints/step_00000006.pt");
+  std::ifstream in(good, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::ofstream(Path("cut.pt"), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  ExpectCleanFailure(Flowplan("export --ckpt " + Path("cut.pt") + " --out " + Path("out.pt")), "cut.pt");
+  EXPECT_FALSE(fs::exists(Path("out.pt")));
+  // A foreign but valid archive: a TorchScript planner is not a checkpoint.
+  ExpectOk(Flowplan("export --ckpt " + good + " --out " + Path("planner.pt")));
+  ExpectCleanFailure(Flowplan("eval stitching --ckpt " + Path("planner.pt")), "not a flowplan checkpoint");
+}
+
+TEST_F(CliTest, HelpListsSubcommandsAndKeys) {
+  const Outcome help = Flowplan("--help");
+  ExpectOk(help);
+  for (const char* command : {"generate", "train", "eval", "export", "merge", "config"}) {
+    EXPECT_THAT(help.output, HasSubstr(command));
+  }
+  const Outcome keys = Flowplan("config keys");
+  ExpectOk(keys);
+  EXPECT_THAT(keys.output, HasSubstr("train.batch_size = 256"));
+  EXPECT_THAT(keys.output, HasSubstr("model.unet.down_dims = [32, 64, 128, 256]"));
+  const Outcome shown = Flowplan("config show --config " + Tiny() + " train.steps=9");
+  ExpectOk(shown);
+  EXPECT_THAT(shown.output, HasSubstr("steps: 9"));
+}
+
+}  // namespace
+}  // namespace flowplan

@@ -1,0 +1,72 @@
+#include "planning/euler.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "planning/conditioning.h"
+
+namespace flowplan::planning {
+namespace {
+
+TEST(EulerTest, ConstantVelocityIsIntegratedExactly) {
+  const torch::Tensor x0 = torch::randn({3, 8, 2}, torch::kFloat64);
+  const torch::Tensor c = torch::randn({3, 8, 2}, torch::kFloat64);
+  for (int steps : {1, 7, 10}) {
+    const torch::Tensor x1 = IntegrateEuler(x0, [&](const torch::Tensor&, const torch::Tensor&) { return c; },
+                                            TimeGrid{0.0, 1.0, steps});
+    EXPECT_TRUE(torch::allclose(x1, x0 + c, 0.0, 1e-12)) << steps << " steps";
+  }
+}
+
+TEST(EulerTest, LinearInTimeVelocityMatchesTheLeftRiemannSum) {
+  // dx/dt = t: Euler with h = 1/n gives sum_i h * (i h) = (n - 1) / (2 n).
+  const torch::Tensor x0 = torch::zeros({1, 1, 1}, torch::kFloat64);
+  const int n = 10;
+  const torch::Tensor x1 = IntegrateEuler(
+      x0, [](const torch::Tensor& x, const torch::Tensor& t) { return t.view({-1, 1, 1}).expand_as(x); },
+      TimeGrid{0.0, 1.0, n});
+  EXPECT_NEAR(x1.item<double>(), (n - 1) / (2.0 * n), 1e-7);
+}
+
+TEST(EulerTest, HookRunsBeforeTheFirstStepAndAfterEachStepAtTheRightTimes) {
+  std::vector<double> times;
+  IntegrateEuler(torch::zeros({1, 2, 1}), [](const torch::Tensor& x, const torch::Tensor&) { return x; },
+                 TimeGrid{0.5, 1.0, 5}, [&](const torch::Tensor& x, double t) {
+                   times.push_back(t);
+                   return x;
+                 });
+  ASSERT_EQ(times.size(), 6u);
+  EXPECT_DOUBLE_EQ(times.front(), 0.5);
+  EXPECT_DOUBLE_EQ(times[1], 0.6);
+  EXPECT_DOUBLE_EQ(times.back(), 1.0);
+}
+
+TEST(EulerTest, VelocitySeesTheGridTimes) {
+  std::vector<float> seen;
+  IntegrateEuler(torch::zeros({2, 2, 1}),
+                 [&](const torch::Tensor& x, const torch::Tensor& t) {
+                   seen.push_back(t[1].item<float>());
+                   return x;
+                 },
+                 TimeGrid{0.0, 1.0, 4});
+  EXPECT_THAT(seen, ::testing::ElementsAre(0.0f, 0.25f, 0.5f, 0.75f));
+}
+
+TEST(EulerTest, ZeroStepsIsAnError) {
+  EXPECT_THROW(IntegrateEuler(torch::zeros({1, 2, 1}), nullptr, TimeGrid{0.0, 1.0, 0}), Error);
+}
+
+TEST(ConditioningTest, InpaintOverwritesOnlyTheEnds) {
+  const torch::Tensor x = torch::zeros({2, 5, 3});
+  const torch::Tensor start = torch::ones({2, 3}), goal = 2 * torch::ones({2, 3});
+  const torch::Tensor y = Inpaint(x, start, goal);
+  EXPECT_TRUE(torch::equal(y.select(1, 0), start));
+  EXPECT_TRUE(torch::equal(y.select(1, 4), goal));
+  EXPECT_TRUE(torch::equal(y.slice(1, 1, 4), x.slice(1, 1, 4)));
+  EXPECT_FALSE(ConditionVector(Conditioning::kInpaint, start, goal).defined());
+  EXPECT_EQ(ConditionVector(Conditioning::kDirect, start, goal).sizes(), (std::vector<int64_t>{2, 6}));
+}
+
+}  // namespace
+}  // namespace flowplan::planning

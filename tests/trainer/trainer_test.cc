@@ -1,0 +1,109 @@
+#include "trainer/trainer.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "checkpoints/checkpoint.h"
+#include "core/error.h"
+#include "datasets/generator.h"
+#include "datasets/particle_task.h"
+#include "trainer/run_dir.h"
+
+namespace flowplan::trainer {
+namespace {
+
+namespace fs = std::filesystem;
+
+datasets::TrajectorySplits TinyData() {
+  sim::ParticleConfig particle;
+  particle.horizon = 16;
+  datasets::ParticleCrossTask task(particle);
+  datasets::GenerateOptions options;
+  options.episodes = 64;
+  options.seed = 1;
+  options.show_progress = false;
+  return datasets::SplitTrajectories(datasets::GenerateDataset(task, options), 0.125, 1, "tiny");
+}
+
+TrainingSetup TinySetup(const std::string& name) {
+  TrainingSetup setup;
+  setup.run_dir = ::testing::TempDir() + "/" + name;
+  fs::remove_all(setup.run_dir);
+  setup.config_yaml = "tiny: true\n";
+  setup.seed = 3;
+  setup.model.unet.down_dims = {8, 16};
+  setup.train.steps = 12;
+  setup.train.batch_size = 8;
+  setup.train.log_every = 4;
+  setup.train.eval_every = 6;
+  setup.train.checkpoint_every = 6;
+  setup.eval.num_plans = 4;
+  setup.sampler.steps = 2;
+  return setup;
+}
+
+std::vector<torch::Tensor> Weights(const std::string& checkpoint, const TrainingSetup& setup) {
+  auto net = models::MakeVelocityNet(setup.model, 4, 0);
+  auto ema = models::MakeVelocityNet(setup.model, 4, 0);
+  checkpoints::LoadCheckpointWeights(checkpoint, {net.get(), ema.get(), nullptr});
+  std::vector<torch::Tensor> out;
+  for (const auto& p : net->parameters()) out.push_back(p.clone());
+  for (const auto& p : ema->parameters()) out.push_back(p.clone());
+  return out;
+}
+
+TEST(TrainerTest, ResumingGivesTheSameWeightsAsOneRun) {
+  const auto data = TinyData();
+  const TrainingSetup straight = TinySetup("straight");
+  const TrainResult a = Train(straight, data, false);
+
+  TrainingSetup interrupted = TinySetup("interrupted");
+  interrupted.stop_at_step = 6;
+  const TrainResult first_half = Train(interrupted, data, false);
+  EXPECT_EQ(first_half.steps, 6);
+  interrupted.stop_at_step = 0;
+  const TrainResult b = Train(interrupted, data, true);
+  EXPECT_EQ(b.steps, 12);
+
+  const auto wa = Weights(a.checkpoint, straight), wb = Weights(b.checkpoint, interrupted);
+  ASSERT_EQ(wa.size(), wb.size());
+  for (size_t i = 0; i < wa.size(); ++i) EXPECT_TRUE(torch::equal(wa[i], wb[i])) << "tensor " << i;
+  EXPECT_EQ(checkpoints::ReadCheckpointHeader(a.checkpoint).rng_state.sizes(),
+            checkpoints::ReadCheckpointHeader(b.checkpoint).rng_state.sizes());
+}
+
+TEST(TrainerTest, RunFolderHoldsConfigMetricsAndPrunedCheckpoints) {
+  TrainingSetup setup = TinySetup("layout");
+  setup.train.checkpoint_every = 2;
+  setup.train.keep_checkpoints = 2;
+  const TrainResult result = Train(setup, TinyData(), false);
+  RunDir run(setup.run_dir);
+  EXPECT_TRUE(fs::exists(run.config()));
+  EXPECT_TRUE(fs::exists(run.metrics()));
+  EXPECT_EQ(run.CheckpointSteps(), (std::vector<int64_t>{10, 12}));
+  EXPECT_EQ(run.LatestCheckpoint(), result.checkpoint);
+  const auto header = checkpoints::ReadCheckpointHeader(result.checkpoint);
+  EXPECT_EQ(header.step, 12);
+  EXPECT_EQ(header.config_yaml, "tiny: true\n");
+  EXPECT_EQ(header.horizon, 16);
+  EXPECT_EQ(header.state_labels.size(), 4u);
+  EXPECT_TRUE(std::isfinite(result.test.mean));
+}
+
+TEST(TrainerTest, ResumeWithoutCheckpointIsAClearError) {
+  const TrainingSetup setup = TinySetup("empty_run");
+  EXPECT_THAT([&] { Train(setup, TinyData(), true); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("holds no checkpoint")));
+}
+
+TEST(TrainerTest, SplitTrainingNeedsAHalfHorizonTheNetCanTake) {
+  TrainingSetup setup = TinySetup("bad_split");
+  setup.model.unet.down_dims = {8, 8, 8, 8, 8};  // T must be a multiple of 16; halves have 8
+  EXPECT_THAT([&] { Train(setup, TinyData(), false); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("flow.split_prob")));
+}
+
+}  // namespace
+}  // namespace flowplan::trainer

@@ -1,0 +1,50 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "datasets/trajectory_loader.h"
+#include "eval/stitching.h"
+#include "models/model_config.h"
+#include "planning/flow_planner.h"
+#include "trainer/trainer_config.h"
+
+namespace flowplan::trainer {
+
+/// Everything a training run needs besides the data.
+struct TrainingSetup {
+  std::string run_dir;
+  std::string config_yaml;  // resolved experiment config, stored in the run and every checkpoint
+  uint64_t seed = 0;
+  models::ModelConfig model;
+  FlowConfig flow;
+  TrainerConfig train;
+  planning::SamplerConfig sampler;
+  eval::EvalConfig eval;
+  int64_t stop_at_step = 0;  // > 0: stop there with a checkpoint (the schedule still spans train.steps)
+};
+
+/// What a finished run reports.
+struct TrainResult {
+  int64_t steps = 0;
+  double train_loss = 0.0;       // mean loss over the last logging window
+  double val_loss = 0.0;         // EMA weights, NaN without a validation split
+  eval::StitchingResult test;    // EMA weights, test (stitching) pairs; mean NaN if none
+  eval::StitchingResult train;   // EMA weights, training pairs
+  std::string checkpoint;        // the final checkpoint
+  double seconds = 0.0;
+};
+
+/// Trains a flow-matching planner on `data`, or resumes the run in
+/// `setup.run_dir` from its newest checkpoint when `resume` is set (continuing
+/// bit-exactly for the same thread count). Writes config.yaml, metrics.jsonl and
+/// checkpoints; on SIGINT writes a checkpoint of the current step and throws.
+/// @throws flowplan::Error for settings the data cannot take (horizon, split).
+TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& data, bool resume);
+
+/// Validation loss of `net` on `val` (N, T, D) normalized, with noise and times
+/// from a generator seeded by `seed`: comparable between evaluations.
+double ValidationLoss(models::VelocityNet& net, const torch::Tensor& val, planning::Conditioning conditioning,
+                      int batch_size, uint64_t seed);
+
+}  // namespace flowplan::trainer

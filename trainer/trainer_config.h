@@ -1,0 +1,54 @@
+#pragma once
+
+#include <cstdint>
+
+#include "core/config.h"
+#include "planning/conditioning.h"
+
+namespace flowplan::trainer {
+
+/// The `flow` section: how the flow-matching objective is posed.
+struct FlowConfig {
+  planning::Conditioning conditioning = planning::Conditioning::kInpaint;
+  double split_prob = 0.5;  // chance per batch of training on trajectory halves instead
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("conditioning", conditioning, "how start and goal reach the network");
+    v.Field("split_prob", split_prob, "probability per batch of training on the two halves of every trajectory",
+            config::Probability());
+  }
+};
+
+/// The `train` section: optimizer, schedule, logging and checkpointing.
+struct TrainerConfig {
+  int64_t steps = 2000;
+  int batch_size = 256;
+  double lr = 2e-4;
+  double weight_decay = 0.01;
+  double ema_decay = 0.995;       // with warm-up: min(ema_decay, (1 + n) / (10 + n))
+  double grad_clip = 0.0;         // max global gradient norm, 0: off
+  int64_t log_every = 50;
+  int64_t eval_every = 500;       // validation loss and stitching error, 0: only at the end
+  int64_t checkpoint_every = 500;
+  int keep_checkpoints = 3;       // older periodic checkpoints are deleted
+  int val_batch_size = 256;
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("steps", steps, "optimizer steps in total", config::Positive());
+    v.Field("batch_size", batch_size, "trajectories per step", config::Positive());
+    v.Field("lr", lr, "peak learning rate (cosine schedule to 0)", config::Positive());
+    v.Field("weight_decay", weight_decay, "AdamW weight decay", config::NonNegative());
+    v.Field("ema_decay", ema_decay, "EMA decay (warm-up (1+n)/(10+n))", config::InRange(0.0, 1.0));
+    v.Field("grad_clip", grad_clip, "max gradient norm, 0 for none", config::NonNegative());
+    v.Field("log_every", log_every, "steps between progress lines and metrics rows", config::Positive());
+    v.Field("eval_every", eval_every, "steps between validation/stitching evaluations, 0: at the end only",
+            config::NonNegative());
+    v.Field("checkpoint_every", checkpoint_every, "steps between checkpoints", config::Positive());
+    v.Field("keep_checkpoints", keep_checkpoints, "periodic checkpoints kept on disk", config::Positive());
+    v.Field("val_batch_size", val_batch_size, "trajectories per validation batch", config::Positive());
+  }
+};
+
+}  // namespace flowplan::trainer
