@@ -23,12 +23,14 @@ Eigen::Vector3d Point(const std::vector<double>& p) { return {p[0], p[1], p[2]};
 class FrankaWorker : public EpisodeWorker {
  public:
   FrankaWorker(std::shared_ptr<const sim::FrankaModel> model, const FrankaTaskConfig& config,
-               FrankaGoals goals, std::vector<Family> families, std::vector<JointVector> family_start_q)
+               FrankaGoals goals, std::vector<Family> families, std::vector<JointVector> family_start_q,
+               std::vector<JointVector> family_goal_q)
       : model_(std::move(model)),
         config_(config),
         goals_(goals),
         families_(std::move(families)),
         family_start_q_(std::move(family_start_q)),
+        family_goal_q_(std::move(family_goal_q)),
         simulator_(*model_, config.rollout),
         scratch_(sim::MakeData(model_->mj())) {
     ik_.posture = Eigen::Map<const JointVector>(config.rollout.controller.posture.data());
@@ -40,7 +42,7 @@ class FrankaWorker : public EpisodeWorker {
     EpisodeRecord record;
     Eigen::Vector3d start, goal;
     JointVector q0;
-    std::string failure;
+    bool reachable = true;
     if (goals_ == FrankaGoals::kCross) {
       const int family = static_cast<int>(index % static_cast<int64_t>(families_.size()));
       record.family = family;
@@ -49,25 +51,33 @@ class FrankaWorker : public EpisodeWorker {
       q0 = family_start_q_[family];
       if (scheme == Augmentation::kRandomPosition) {
         const double jitter = config_.rollout.augmentation.position_jitter;
-        for (int i = 0; i < 3; ++i) start[i] += jitter * rng.Normal();
-        for (int i = 0; i < 3; ++i) goal[i] += jitter * rng.Normal();
-        const sim::IkResult ik = sim::SolveTcpIk(*model_, *scratch_, start, q0, ik_);
-        q0 = ik.q;
-        if (!ik.converged) failure = "jittered start " + sim::FormatPoint(start) + " is unreachable";
+        const Eigen::Vector3d nominal_start = start, nominal_goal = goal;
+        reachable = DrawReachablePair(
+            rng,
+            [&](Eigen::Vector3d* s, Eigen::Vector3d* g) {
+              for (int i = 0; i < 3; ++i) (*s)[i] = nominal_start[i] + jitter * rng.Normal();
+              for (int i = 0; i < 3; ++i) (*g)[i] = nominal_goal[i] + jitter * rng.Normal();
+            },
+            family_start_q_[family], family_goal_q_[family], &start, &goal, &q0);
       }
     } else {
-      if (!DrawReachable(rng, &start, &q0) || !DrawReachable(rng, &goal, nullptr)) {
-        failure = "no reachable point in " + std::to_string(config_.reach_max_draws) + " draws";
-      }
+      reachable = DrawReachablePair(
+          rng,
+          [&](Eigen::Vector3d* s, Eigen::Vector3d* g) {
+            for (int i = 0; i < 3; ++i) (*s)[i] = rng.Uniform(config_.reach_lower[i], config_.reach_upper[i]);
+            for (int i = 0; i < 3; ++i) (*g)[i] = rng.Uniform(config_.reach_lower[i], config_.reach_upper[i]);
+          },
+          ik_.posture, ik_.posture, &start, &goal, &q0);
     }
     record.commanded_start.assign(start.data(), start.data() + 3);
     record.commanded_goal.assign(goal.data(), goal.data() + 3);
-    if (!failure.empty()) {
+    if (!reachable) {
       // Keep the record's shape; the generator drops rejected episodes.
       simulator_.Rollout(q0, goal, Augmentation::kNone, rng, &episode_);
       Fill(&record);
       record.rejected = true;
-      record.reject_reason = failure;
+      record.reject_reason = "no start/goal pair reachable with the gripper down in " +
+                             std::to_string(config_.max_draws) + " draws";
       return record;
     }
     simulator_.Rollout(q0, goal, scheme, rng, &episode_);
@@ -88,18 +98,21 @@ class FrankaWorker : public EpisodeWorker {
   }
 
  private:
-  // Draws a point uniformly in the reach box until the IK reaches it with the
-  // gripper pointing down; `q` (if not null) receives the configuration.
-  bool DrawReachable(Rng& rng, Eigen::Vector3d* point, JointVector* q) {
-    for (int draw = 0; draw < config_.reach_max_draws; ++draw) {
-      for (int i = 0; i < 3; ++i) (*point)[i] = rng.Uniform(config_.reach_lower[i], config_.reach_upper[i]);
-      const sim::IkResult ik = sim::SolveTcpIk(*model_, *scratch_, *point, ik_.posture, ik_);
-      if (ik.converged) {
-        if (q != nullptr) *q = ik.q;
-        return true;
-      }
+  // Draws (start, goal) with `draw` until the IK reaches both with the gripper
+  // pointing down (seeded with start_seed and goal_seed); `q0` receives the
+  // start configuration. False after max_draws failed draws.
+  template <class Draw>
+  bool DrawReachablePair(Rng& rng, Draw draw, const JointVector& start_seed, const JointVector& goal_seed,
+                         Eigen::Vector3d* start, Eigen::Vector3d* goal, JointVector* q0) {
+    for (int attempt = 0; attempt < config_.max_draws; ++attempt) {
+      draw(start, goal);
+      const sim::IkResult at_start = sim::SolveTcpIk(*model_, *scratch_, *start, start_seed, ik_);
+      if (!at_start.converged) continue;
+      if (!sim::SolveTcpIk(*model_, *scratch_, *goal, goal_seed, ik_).converged) continue;
+      *q0 = at_start.q;
+      return true;
     }
-    if (q != nullptr) *q = ik_.posture;
+    *q0 = start_seed;
     return false;
   }
 
@@ -120,6 +133,7 @@ class FrankaWorker : public EpisodeWorker {
   const FrankaGoals goals_;
   const std::vector<Family> families_;
   const std::vector<JointVector> family_start_q_;
+  const std::vector<JointVector> family_goal_q_;
   sim::FrankaSimulator simulator_;
   sim::MjDataPtr scratch_;  // for IK
   sim::IkOptions ik_;
@@ -156,8 +170,8 @@ FrankaTask::FrankaTask(FrankaGoals goals, const FrankaTaskConfig& config, const 
   ik.posture = Eigen::Map<const JointVector>(config.rollout.controller.posture.data());
   sim::MjDataPtr scratch = sim::MakeData(model_->mj());
   for (const Family& family : families_) {
-    family_start_q_.push_back(
-        sim::SolveTcpIkOrThrow(*model_, *scratch, Point(family.start), ik.posture, ik));
+    family_start_q_.push_back(sim::SolveTcpIkOrThrow(*model_, *scratch, Point(family.start), ik.posture, ik));
+    family_goal_q_.push_back(sim::SolveTcpIkOrThrow(*model_, *scratch, Point(family.goal), ik.posture, ik));
   }
 }
 
@@ -178,7 +192,7 @@ EpisodeLayout FrankaTask::Layout() const {
 std::vector<Family> FrankaTask::Families() const { return families_; }
 
 std::unique_ptr<EpisodeWorker> FrankaTask::MakeWorker() const {
-  return std::make_unique<FrankaWorker>(model_, config_, goals_, families_, family_start_q_);
+  return std::make_unique<FrankaWorker>(model_, config_, goals_, families_, family_start_q_, family_goal_q_);
 }
 
 }  // namespace flowplan::datasets

@@ -22,15 +22,16 @@ struct FrankaTaskConfig {
   sim::FrankaRolloutConfig rollout;
   std::array<double, 3> reach_lower = {0.35, -0.5, 0.15};  // m, TCP box of franka_reach
   std::array<double, 3> reach_upper = {0.75, 0.5, 0.75};   // m
-  int reach_max_draws = 100;  // draws per point before an episode is given up as unreachable
+  int max_draws = 100;  // draws of random points before an episode is given up as unreachable
 
   template <class V>
   void Visit(V& v) {
     rollout.Visit(v);
     v.Field("reach_lower", reach_lower, "franka_reach: lower corner of the start/goal box (m)");
     v.Field("reach_upper", reach_upper, "franka_reach: upper corner of the start/goal box (m)");
-    v.Field("reach_max_draws", reach_max_draws,
-            "franka_reach: draws of a start or goal until one is reachable with the gripper down",
+    v.Field("max_draws", max_draws,
+            "franka_reach and random_position: draws of a start/goal pair until both are reachable "
+            "with the gripper down",
             config::Positive());
   }
 };
@@ -41,7 +42,10 @@ enum class FrankaGoals {
   kReach,  // franka_reach: start and goal uniform in the reach box (reachable part)
 };
 
-/// Episodes of the Franka: state [q (7, rad), q̇ (7, rad/s)] at 15 Hz by
+/// Episodes of the Franka. Random start/goal pairs (franka_reach, and the
+/// random_position scheme around the cross points) are drawn again until the
+/// IK reaches both with the gripper pointing down, up to max_draws times.
+/// State [q (7, rad), q̇ (7, rad/s)] at 15 Hz by
 /// default, P = 3 (commanded TCP start and goal, m), extras "tcp" (T, 3) m,
 /// "torques" (T, 7) N·m applied in the physics step after each state and,
 /// for the random_force scheme, "external_force" (T, 3) N on the hand.
@@ -64,6 +68,7 @@ class FrankaTask : public EpisodeTask {
   std::shared_ptr<const sim::FrankaModel> model_;
   std::vector<Family> families_;
   std::vector<sim::JointVector> family_start_q_;  // IK of each family's start
+  std::vector<sim::JointVector> family_goal_q_;   // IK of each family's goal
 };
 
 }  // namespace flowplan::datasets

@@ -76,11 +76,18 @@ JointVector OperationalSpaceController::Compute(const mjData& d, const Eigen::Ve
   const Eigen::Matrix<double, kFrankaJoints, 6> minv_jt = mass_llt.solve(jacobian.transpose());
   const Matrix6 lambda_inverse = jacobian * minv_jt;
   // Near a singularity J M⁻¹ Jᵀ loses rank and Λ grows without bound; flooring
-  // its eigenvalues keeps the task forces finite there.
-  const Eigen::SelfAdjointEigenSolver<Matrix6> eigen(lambda_inverse);
-  const Eigen::Matrix<double, 6, 1> inverse_eigenvalues =
-      eigen.eigenvalues().cwiseMax(kMinInverseInertia).cwiseInverse();
-  const Matrix6 lambda = eigen.eigenvectors() * inverse_eigenvalues.asDiagonal() * eigen.eigenvectors().transpose();
+  // the eigenvalues of J M⁻¹ Jᵀ keeps the task forces finite there. The
+  // eigensolver is needed only when trace(Λ) >= 1 / floor: otherwise every
+  // eigenvalue of Λ is below 1 / floor, i.e. none of J M⁻¹ Jᵀ is below the floor.
+  Matrix6 lambda;
+  const Eigen::LLT<Matrix6> llt(lambda_inverse);
+  if (llt.info() == Eigen::Success) lambda = llt.solve(Matrix6::Identity());
+  if (llt.info() != Eigen::Success || !(lambda.trace() < 1.0 / kMinInverseInertia)) {
+    const Eigen::SelfAdjointEigenSolver<Matrix6> eigen(lambda_inverse);
+    const Eigen::Matrix<double, 6, 1> inverse_eigenvalues =
+        eigen.eigenvalues().cwiseMax(kMinInverseInertia).cwiseInverse();
+    lambda = eigen.eigenvectors() * inverse_eigenvalues.asDiagonal() * eigen.eigenvectors().transpose();
+  }
   const Eigen::Matrix<double, kFrankaJoints, 6> jbar = minv_jt * lambda;
 
   JointVector torque = jacobian.transpose() * (lambda * acceleration);

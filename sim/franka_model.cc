@@ -172,6 +172,9 @@ void FrankaModel::SetPhysics(double timestep, Integrator integrator) {
   }
   model_->opt.timestep = timestep;
   model_->opt.integrator = integrator == Integrator::kEuler ? mjINT_EULER : mjINT_IMPLICIT;
+  // The arm's geoms never collide (contype 0); skipping collision detection
+  // saves its broad phase.
+  model_->opt.disableflags |= mjDSBL_CONTACT;
 }
 
 const std::string& FrankaModelXml() {

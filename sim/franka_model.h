@@ -89,7 +89,8 @@ class FrankaModel {
   int flange_site() const { return flange_site_; }
   int hand_body() const { return hand_body_; }
 
-  /// Sets the physics timestep (s) and integrator. Call before sharing the model.
+  /// Sets the physics timestep (s) and integrator, and disables collision
+  /// detection (nothing collides in rollouts). Call before sharing the model.
   /// @throws flowplan::Error if timestep is not positive.
   void SetPhysics(double timestep, Integrator integrator);
 

@@ -133,5 +133,21 @@ TEST(FrankaDatasetTest, ConfigRoundTripsThroughYaml) {
   EXPECT_EQ(back.franka.rollout.augmentation.scheme, sim::Augmentation::kSameNoise);
 }
 
+TEST(FrankaDatasetTest, ShippedConfigsLoadAndGenerate) {
+  for (const char* name : {"franka_cross", "franka_reach", "franka_cross_same_noise", "franka_cross_no_noise",
+                           "franka_cross_random_pos", "franka_cross_random_forces"}) {
+    const std::string path = std::string(FLOWPLAN_SOURCE_DIR) + "/configs/" + name + ".yaml";
+    const YAML::Node root = config::ParseYamlFile(path);
+    GenerateConfig generate;
+    config::Apply(root["generate"], generate, path);
+    EXPECT_EQ(generate.out, std::string("data/") + name + ".h5") << path;
+    EXPECT_EQ(root["data"]["path"].as<std::string>(), generate.out) << path;
+    EXPECT_EQ(generate.episodes, 10000) << path;
+    const std::unique_ptr<EpisodeTask> task = MakeTask(generate);
+    const TrajectoryDataset d = GenerateDataset(*task, Options(4, 2));
+    EXPECT_EQ(d.num_episodes + d.rejected_episodes, 4) << path;
+  }
+}
+
 }  // namespace
 }  // namespace flowplan::datasets
