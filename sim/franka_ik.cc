@@ -12,6 +12,7 @@ namespace flowplan::sim {
 namespace {
 
 using Jacobian = Eigen::Matrix<double, 6, kFrankaJoints>;
+constexpr int kStallIterations = 30;
 using RowJacobian = Eigen::Matrix<double, 3, kFrankaJoints, Eigen::RowMajor>;
 
 /// Rotation vector (axis · angle, world frame) that turns `current` into `target`.
@@ -31,6 +32,7 @@ IkResult Solve(const FrankaModel& model, mjData& d, const Eigen::Vector3d& targe
 
   IkResult best;
   best.position_error = INFINITY;
+  best.orientation_error = INFINITY;
   JointVector q = seed.cwiseMax(lower).cwiseMin(upper);
   RowJacobian jacp, jacr;
   for (int iteration = 0; iteration <= options.max_iterations; ++iteration) {
@@ -45,7 +47,7 @@ IkResult Solve(const FrankaModel& model, mjData& d, const Eigen::Vector3d& targe
     error.tail<3>() = OrientationError(options.tcp_rotation, rotation);
     const double position_error = error.head<3>().norm();
     const double orientation_error = error.tail<3>().norm();
-    if (position_error < best.position_error) {
+    if (position_error + orientation_error < best.position_error + best.orientation_error) {
       best.q = q;
       best.position_error = position_error;
       best.orientation_error = orientation_error;
@@ -60,6 +62,8 @@ IkResult Solve(const FrankaModel& model, mjData& d, const Eigen::Vector3d& targe
       return best;
     }
     if (iteration == options.max_iterations) break;
+    // An unreachable target stops improving: give up once the best pose is old.
+    if (iteration - best.iterations > kStallIterations) break;
 
     mj_jacSite(&m, &d, jacp.data(), jacr.data(), site);
     Jacobian jacobian;

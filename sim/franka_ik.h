@@ -30,7 +30,7 @@ struct IkResult {
   JointVector q = JointVector::Zero();  // rad; the closest configuration found if not converged
   double position_error = 0.0;          // m, |target - TCP| at q
   double orientation_error = 0.0;       // rad
-  int iterations = 0;
+  int iterations = 0;                   // iteration at which q was reached
 };
 
 /// Solves for a configuration whose TCP is at `target` (m, world frame) with
