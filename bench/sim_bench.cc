@@ -17,6 +17,7 @@
 #include "core/random.h"
 #include "datasets/franka_task.h"
 #include "datasets/generator.h"
+#include "sim/franka_ik.h"
 #include "sim/mujoco_util.h"
 
 namespace flowplan {
@@ -59,7 +60,7 @@ BENCHMARK(BM_FrankaCrossRollouts)
 
 // The whole generation as `flowplan generate` runs it, with quality figures:
 // the share of kept episodes whose last TCP position is within 2 cm of the
-// commanded goal, rejections, MuJoCo warnings, the largest |torque| and |q̇|
+// commanded goal, the mean time of the first state within 2 cm, rejections, MuJoCo warnings, the largest |torque| and |q̇|
 // relative to their limits, and the spread of the TCP half-way (RMS distance
 // of state T/2 from its family's mean, franka_cross only).
 // Args: goals (0 cross, 1 reach), augmentation scheme (enum order of
@@ -86,7 +87,8 @@ void BM_GenerateFranka(benchmark::State& state) {
   const auto& tcp = dataset.extras.at("tcp").values;
   const auto& torques = dataset.extras.at("torques").values;
   const int64_t T = dataset.horizon, D = dataset.state_dim;
-  int64_t within = 0;
+  int64_t within = 0, arrived = 0;
+  double arrival_time = 0.0;
   double torque_ratio = 0.0, speed_ratio = 0.0;
   Eigen::Vector3d mid_sum[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
   int64_t mid_count[2] = {0, 0};
@@ -96,6 +98,14 @@ void BM_GenerateFranka(benchmark::State& state) {
     const Eigen::Vector3d goal(dataset.commanded_goal[3 * i], dataset.commanded_goal[3 * i + 1],
                                dataset.commanded_goal[3 * i + 2]);
     within += (end - goal).norm() < 0.02;
+    for (int64_t t = 0; t < T; ++t) {
+      const size_t at = static_cast<size_t>((i * T + t) * 3);
+      if ((Eigen::Vector3d(tcp[at], tcp[at + 1], tcp[at + 2]) - goal).norm() < 0.02) {
+        arrival_time += static_cast<double>(t) * dataset.dt;
+        ++arrived;
+        break;
+      }
+    }
     for (int64_t t = 0; t < T; ++t) {
       for (int j = 0; j < 7; ++j) {
         torque_ratio = std::max(torque_ratio, std::abs(torques[(i * T + t) * 7 + j]) / limits.torque[j]);
@@ -125,6 +135,7 @@ void BM_GenerateFranka(benchmark::State& state) {
   state.counters["warnings"] = static_cast<double>(dataset.simulator_warnings);
   state.counters["max_torque/limit"] = torque_ratio;
   state.counters["max_speed/limit"] = speed_ratio;
+  if (arrived > 0) state.counters["first_within_2cm_s"] = arrival_time / static_cast<double>(arrived);
   if (spread_count > 0) state.counters["mid_spread_mm"] = 1000.0 * std::sqrt(spread / spread_count);
 }
 BENCHMARK(BM_GenerateFranka)
@@ -140,6 +151,26 @@ BENCHMARK(BM_GenerateFranka)
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();
+
+// IK with the gripper pointing down for points drawn uniformly in the SPEC box
+// x in [0.35, 0.75], y in [-0.5, 0.5], z in [0.15, 0.75]: solves/s and the
+// share of the box that is reachable.
+void BM_TcpIkSpecBox(benchmark::State& state) {
+  const sim::FrankaModel model = sim::LoadFrankaModel();
+  sim::MjDataPtr d = sim::MakeData(model.mj());
+  int64_t solves = 0, reached = 0;
+  for (auto _ : state) {
+    Rng rng(5);
+    for (int i = 0; i < 2000; ++i) {
+      const Eigen::Vector3d target(rng.Uniform(0.35, 0.75), rng.Uniform(-0.5, 0.5), rng.Uniform(0.15, 0.75));
+      reached += sim::SolveTcpIk(model, *d, target, sim::FrankaReadyPose()).converged;
+      ++solves;
+    }
+  }
+  state.counters["solves/s"] = benchmark::Counter(static_cast<double>(solves), benchmark::Counter::kIsRate);
+  state.counters["reachable_%"] = 100.0 * static_cast<double>(reached) / static_cast<double>(solves);
+}
+BENCHMARK(BM_TcpIkSpecBox)->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace flowplan
