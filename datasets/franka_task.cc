@@ -73,7 +73,7 @@ class FrankaWorker : public EpisodeWorker {
     record.commanded_goal.assign(goal.data(), goal.data() + 3);
     if (!reachable) {
       // Keep the record's shape; the generator drops rejected episodes.
-      simulator_.Rollout(q0, goal, Augmentation::kNone, rng, &episode_);
+      simulator_.Clear(&episode_);
       Fill(&record);
       record.rejected = true;
       record.reject_reason = "no start/goal pair reachable with the gripper down in " +

@@ -48,10 +48,21 @@ FrankaSimulator::FrankaSimulator(const FrankaModel& model, const FrankaRolloutCo
   FLOWPLAN_DEMAND(model.mj().opt.timestep == config.physics_timestep());
 }
 
-bool FrankaSimulator::Reject(FrankaEpisode* episode, const std::string& reason) {
+void FrankaSimulator::Reject(FrankaEpisode* episode, const std::string& reason) {
   episode->rejected = true;
   episode->reject_reason = reason + " at t = " + Number(data_->time) + " s";
-  return true;
+}
+
+void FrankaSimulator::Clear(FrankaEpisode* episode) const {
+  const size_t T = static_cast<size_t>(config_.horizon);
+  episode->states.assign(T * kStateDim, 0.0);
+  episode->tcp.assign(T * 3, 0.0);
+  episode->torques.assign(T * kFrankaJoints, 0.0);
+  episode->external_force.assign(T * 3, 0.0);
+  episode->warnings = 0;
+  episode->physics_steps = 0;
+  episode->rejected = false;
+  episode->reject_reason.clear();
 }
 
 void FrankaSimulator::CheckState(FrankaEpisode* episode) {
@@ -83,14 +94,7 @@ void FrankaSimulator::Rollout(const JointVector& q0, const Eigen::Vector3d& goal
   const mjModel& m = model_.mj();
   mjData& d = *data_;
   const int T = config_.horizon;
-  episode->states.assign(static_cast<size_t>(T) * kStateDim, 0.0);
-  episode->tcp.assign(static_cast<size_t>(T) * 3, 0.0);
-  episode->torques.assign(static_cast<size_t>(T) * kFrankaJoints, 0.0);
-  episode->external_force.assign(static_cast<size_t>(T) * 3, 0.0);
-  episode->warnings = 0;
-  episode->physics_steps = 0;
-  episode->rejected = false;
-  episode->reject_reason.clear();
+  Clear(episode);
 
   mj_resetData(&m, &d);
   for (int j = 0; j < kFrankaJoints; ++j) d.qpos[j] = q0[j];

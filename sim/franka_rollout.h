@@ -120,10 +120,11 @@ class FrankaSimulator {
   void Rollout(const JointVector& q0, const Eigen::Vector3d& goal, Augmentation scheme, Rng& rng,
                FrankaEpisode* episode);
 
-  mjData& data() { return *data_; }
+  /// Sizes `episode`'s arrays for config.horizon states and zeroes them.
+  void Clear(FrankaEpisode* episode) const;
 
  private:
-  bool Reject(FrankaEpisode* episode, const std::string& reason);
+  void Reject(FrankaEpisode* episode, const std::string& reason);
   void CheckState(FrankaEpisode* episode);
 
   const FrankaModel& model_;

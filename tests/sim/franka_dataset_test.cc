@@ -102,6 +102,18 @@ TEST(FrankaDatasetTest, ReachDrawsReachablePointsInTheBox) {
   }
 }
 
+TEST(FrankaDatasetTest, UnreachableBoxRejectsEveryEpisodeWithAReason) {
+  FrankaTaskConfig config;
+  config.reach_lower = {1.5, 0.0, 0.5};
+  config.reach_upper = {1.6, 0.1, 0.6};
+  config.max_draws = 2;
+  FrankaTask task(FrankaGoals::kReach, config);
+  EXPECT_THAT([&] { GenerateDataset(task, Options(3, 1)); },
+              ::testing::ThrowsMessage<Error>(HasSubstr(
+                  "all 3 episodes were rejected (first reason: no start/goal pair reachable with the gripper "
+                  "down in 2 draws)")));
+}
+
 TEST(FrankaDatasetTest, BadConfigValuesNameTheirKey) {
   GenerateConfig config;
   const YAML::Node yaml = config::ParseYamlText(
