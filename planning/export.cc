@@ -12,8 +12,10 @@ constexpr int64_t kExportFormatVersion = 1;
 
 std::string PlannerSource(const FlowPlanner& planner, const std::string& velocity_body) {
   const bool inpaint = planner.conditioning() == Conditioning::kInpaint;
+  const bool splitting = planner.sampler().splitting != Splitting::kNone;
   const std::string D = std::to_string(planner.state_dim());
   const std::string T = std::to_string(planner.horizon());
+  const std::string H = std::to_string(planner.horizon() / 2);
   std::string s;
   s += "def velocity(self, x: Tensor, t: Tensor, cond: Optional[Tensor]) -> Tensor:\n";
   s += velocity_body;
@@ -27,7 +29,22 @@ def denormalize(self, x: Tensor) -> Tensor:
 def inpaint(self, x: Tensor, start: Tensor, goal: Tensor) -> Tensor:
     return torch.cat([start.unsqueeze(1), x[:, 1:-1], goal.unsqueeze(1)], 1)
 
-def plan(self, start: Tensor, goal: Tensor, noise: Tensor) -> Tensor:
+def integrate(self, x: Tensor, s: Tensor, g: Tensor, t0: float, steps: int) -> Tensor:
+)PY";
+  s += inpaint ? "    cond: Optional[Tensor] = None\n    x = self.inpaint(x, s, g)\n"
+               : "    cond: Optional[Tensor] = torch.cat([s, g], -1)\n";
+  s += "    h = (1.0 - t0) / steps\n";
+  s += "    for i in range(steps):\n";
+  s += "        t = torch.full([x.size(0)], t0 + i * h)\n";
+  if (inpaint) {
+    s += "        x = x + h * self.velocity(self.inpaint(x, s, g), t, cond)\n";
+    s += "        x = self.inpaint(x, s, g)\n";
+  } else {
+    s += "        x = x + h * self.velocity(x, t, cond)\n";
+  }
+  s += "    return x\n";
+  s += R"PY(
+def plan(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Tensor] = None) -> Tensor:
     assert start.dim() == 2 and start.size(1) == )PY" + D + R"PY(, "plan: start: expected (B, )PY" + D + R"PY()"
     assert goal.dim() == 2 and goal.size(0) == start.size(0) and goal.size(1) == )PY" + D + R"PY(, "plan: goal: expected the shape of start"
     assert noise.dim() == 3 and noise.size(0) == start.size(0) and noise.size(1) == )PY" + T + " and noise.size(2) == " + D + R"PY(, "plan: noise: expected (B, )PY" + T + ", " + D + R"PY()"
@@ -35,27 +52,31 @@ def plan(self, start: Tensor, goal: Tensor, noise: Tensor) -> Tensor:
     goal = goal.float()
     s = self.normalize(start)
     g = self.normalize(goal)
+    x = self.integrate(noise.float(), s, g, 0.0, )PY" + std::to_string(planner.sampler().steps) + R"PY()
 )PY";
-  s += inpaint ? "    cond: Optional[Tensor] = None\n" : "    cond: Optional[Tensor] = torch.cat([s, g], -1)\n";
-  s += "    x = noise.float()\n";
-  if (inpaint) s += "    x = self.inpaint(x, s, g)\n";
-  s += "    h = 1.0 / " + std::to_string(planner.sampler().steps) + "\n";
-  s += "    for i in range(" + std::to_string(planner.sampler().steps) + "):\n";
-  s += "        t = torch.full([x.size(0)], 0.0 + i * h)\n";
-  if (inpaint) {
-    s += "        x = x + h * self.velocity(self.inpaint(x, s, g), t, cond)\n";
-    s += "        x = self.inpaint(x, s, g)\n";
-    s += "    return self.inpaint(self.denormalize(x), start, goal)\n";
-  } else {
-    s += "        x = x + h * self.velocity(x, t, cond)\n";
-    s += "    return self.denormalize(x)\n";
+  if (splitting) {
+    s += R"PY(    assert renoise is not None, "plan: renoise: this planner splits trajectories and needs re-noising noise (B, )PY" + T + ", " + D + R"PY()"
+    assert renoise.size() == noise.size(), "plan: renoise: expected the shape of noise"
+    B = x.size(0)
+    before_mid = x[:, )PY" + H + R"PY( - 1]
+    after_mid = x[:, )PY" + H + R"PY(]
+    x = 0.5 * renoise.float() + 0.5 * x
+    halves = torch.cat([x[:, 0:)PY" + H + "], x[:, " + H + ":" + T + R"PY(]], 0)
+    refined = self.integrate(halves, torch.cat([s, after_mid], 0), torch.cat([before_mid, g], 0), 0.5, )PY" +
+         std::to_string(SplitSteps(planner.sampler())) + R"PY()
+    x = torch.cat([refined[0:B], refined[B:2 * B]], 1)
+)PY";
   }
+  s += inpaint ? "    return self.inpaint(self.denormalize(x), start, goal)\n" : "    return self.denormalize(x)\n";
   s += R"PY(
 def sample(self, start: Tensor, goal: Tensor, num_samples: int) -> Tensor:
     assert start.dim() == 1 and goal.dim() == 1, "sample: expected start and goal of shape (D,)"
     noise = torch.randn([num_samples, )PY" + T + ", " + D + R"PY(])
-    return self.plan(start.unsqueeze(0).expand(num_samples, -1), goal.unsqueeze(0).expand(num_samples, -1), noise)
 )PY";
+  s += splitting ? "    renoise: Optional[Tensor] = torch.randn([num_samples, " + T + ", " + D + "])\n"
+                 : "    renoise: Optional[Tensor] = None\n";
+  s += "    return self.plan(start.unsqueeze(0).expand(num_samples, -1), goal.unsqueeze(0).expand(num_samples, -1), "
+       "noise, renoise)\n";
   return s;
 }
 
@@ -74,6 +95,8 @@ torch::jit::Module BuildScriptPlanner(const FlowPlanner& planner, const ExportMe
   module.register_attribute("horizon", c10::IntType::get(), planner.horizon());
   module.register_attribute("state_dim", c10::IntType::get(), planner.state_dim());
   module.register_attribute("steps", c10::IntType::get(), static_cast<int64_t>(planner.sampler().steps));
+  module.register_attribute("splitting", c10::StringType::get(),
+                            std::string(config::internal::EnumName(planner.sampler().splitting)));
   module.register_attribute("dt", c10::FloatType::get(), metadata.dt);
   module.register_attribute("env", c10::StringType::get(), metadata.env);
   module.register_attribute("conditioning", c10::StringType::get(),

@@ -15,7 +15,7 @@
 namespace flowplan::planning {
 namespace {
 
-FlowPlanner MakePlanner(Conditioning conditioning) {
+FlowPlanner MakePlanner(Conditioning conditioning, Splitting splitting = Splitting::kNone) {
   torch::manual_seed(11);
   models::ModelConfig config;  // the default UNet: every block type is exercised
   auto net = models::MakeVelocityNet(config, 4, ConditionDim(conditioning, 4));
@@ -24,18 +24,19 @@ FlowPlanner MakePlanner(Conditioning conditioning) {
   torch::NoGradGuard no_grad;
   for (auto& p : net->parameters()) p.mul_(1.5);
   models::MinMaxNormalizer normalizer(torch::tensor({0.f, 0.f, -2.f, -2.f}), torch::tensor({1.f, 1.f, 2.f, 2.f}));
-  return FlowPlanner(net, normalizer, conditioning, 64, SamplerConfig{10});
+  return FlowPlanner(net, normalizer, conditioning, 64, SamplerConfig{10, splitting});
 }
 
 ExportMetadata Metadata() { return ExportMetadata{"particle", 0.05, {"x", "y", "vx", "vy"}, "seed: 0\n"}; }
 
 struct Request {
-  torch::Tensor start, goal, noise;
+  torch::Tensor start, goal, noise, renoise;
 };
 
 Request MakeRequest() {
   torch::manual_seed(5);
-  return {torch::rand({3, 4}) * torch::tensor({1.f, 1.f, 0.5f, 0.5f}), torch::rand({3, 4}), torch::randn({3, 64, 4})};
+  return {torch::rand({3, 4}) * torch::tensor({1.f, 1.f, 0.5f, 0.5f}), torch::rand({3, 4}), torch::randn({3, 64, 4}),
+          torch::randn({3, 64, 4})};
 }
 
 void WriteFloats(const std::string& path, const torch::Tensor& t) {
@@ -51,27 +52,31 @@ torch::Tensor ReadFloats(const std::string& path, std::vector<int64_t> shape) {
   return t;
 }
 
-class ExportTest : public ::testing::TestWithParam<Conditioning> {};
+using Variant = std::tuple<Conditioning, Splitting>;
+class ExportTest : public ::testing::TestWithParam<Variant> {
+ protected:
+  FlowPlanner Planner() const { return MakePlanner(std::get<0>(GetParam()), std::get<1>(GetParam())); }
+};
 
 TEST_P(ExportTest, TorchScriptMatchesTheInProcessPlannerInCpp) {
-  const FlowPlanner planner = MakePlanner(GetParam());
+  const FlowPlanner planner = Planner();
   const std::string path = ::testing::TempDir() + "/planner_cpp.pt";
   ExportPlanner(planner, Metadata(), path);
   torch::jit::Module loaded = torch::jit::load(path);
   const Request r = MakeRequest();
-  const torch::Tensor expected = planner.Plan(r.start, r.goal, r.noise);
-  const torch::Tensor got = loaded.run_method("plan", r.start, r.goal, r.noise).toTensor();
+  const torch::Tensor expected = planner.Plan(r.start, r.goal, r.noise, r.renoise);
+  const torch::Tensor got = loaded.run_method("plan", r.start, r.goal, r.noise, r.renoise).toTensor();
   ASSERT_EQ(got.sizes(), expected.sizes());
   EXPECT_LT((got - expected).abs().max().item<float>(), 1e-5);
   // The plan must actually depend on the network: compare with a plan of other noise.
-  EXPECT_GT((planner.Plan(r.start, r.goal, -r.noise) - expected).abs().max().item<float>(), 1e-2);
+  EXPECT_GT((planner.Plan(r.start, r.goal, -r.noise, r.renoise) - expected).abs().max().item<float>(), 1e-2);
   EXPECT_EQ(loaded.attr("horizon").toInt(), 64);
   EXPECT_EQ(loaded.attr("state_dim").toInt(), 4);
   EXPECT_EQ(loaded.attr("env").toStringRef(), "particle");
 }
 
 TEST_P(ExportTest, TorchScriptMatchesTheInProcessPlannerInPython) {
-  const FlowPlanner planner = MakePlanner(GetParam());
+  const FlowPlanner planner = Planner();
   const std::string dir = ::testing::TempDir();
   const std::string path = dir + "/planner_py.pt";
   ExportPlanner(planner, Metadata(), path);
@@ -79,17 +84,29 @@ TEST_P(ExportTest, TorchScriptMatchesTheInProcessPlannerInPython) {
   WriteFloats(dir + "/start.bin", r.start);
   WriteFloats(dir + "/goal.bin", r.goal);
   WriteFloats(dir + "/noise.bin", r.noise);
+  WriteFloats(dir + "/renoise.bin", r.renoise);
   const std::string command = std::string(FLOWPLAN_PYTHON) + " " + FLOWPLAN_SOURCE_DIR +
                               "/tests/planning/run_exported_planner.py " + path + " " + dir + " 3";
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   const torch::Tensor got = ReadFloats(dir + "/plan.bin", {3, 64, 4});
-  const torch::Tensor expected = planner.Plan(r.start, r.goal, r.noise);
+  const torch::Tensor expected = planner.Plan(r.start, r.goal, r.noise, r.renoise);
   EXPECT_LT((got - expected).abs().max().item<float>(), 1e-5);
 }
 
-INSTANTIATE_TEST_SUITE_P(Conditioning, ExportTest,
-                         ::testing::Values(Conditioning::kInpaint, Conditioning::kDirect),
-                         [](const auto& info) { return info.param == Conditioning::kInpaint ? "Inpaint" : "Direct"; });
+INSTANTIATE_TEST_SUITE_P(Variants, ExportTest,
+                         ::testing::Combine(::testing::Values(Conditioning::kInpaint, Conditioning::kDirect),
+                                            ::testing::Values(Splitting::kNone, Splitting::kMidpoint)),
+                         [](const auto& info) {
+                           return std::string(std::get<0>(info.param) == Conditioning::kInpaint ? "Inpaint" : "Direct") +
+                                  (std::get<1>(info.param) == Splitting::kNone ? "" : "Split");
+                         });
+
+TEST(ExportTest, SplittingPlannerWithoutRenoiseIsRejected) {
+  torch::jit::Module module = BuildScriptPlanner(MakePlanner(Conditioning::kInpaint, Splitting::kMidpoint), Metadata());
+  const Request r = MakeRequest();
+  EXPECT_THAT([&] { module.run_method("plan", r.start, r.goal, r.noise); },
+              ::testing::ThrowsMessage<std::exception>(::testing::HasSubstr("plan: renoise")));
+}
 
 TEST(ExportTest, BadShapesAreRejectedByTheScript) {
   const FlowPlanner planner = MakePlanner(Conditioning::kInpaint);
@@ -99,7 +116,7 @@ TEST(ExportTest, BadShapesAreRejectedByTheScript) {
 }
 
 TEST(ExportTest, SampleStartsAndEndsAtTheRequest) {
-  const FlowPlanner planner = MakePlanner(Conditioning::kInpaint);
+  const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, Splitting::kMidpoint);
   torch::jit::Module module = BuildScriptPlanner(planner, Metadata());
   const torch::Tensor start = torch::tensor({0.0f, 0.0f, 0.0f, 0.0f}), goal = torch::tensor({1.0f, 0.0f, 0.1f, 0.0f});
   const torch::Tensor plans = module.run_method("sample", start, goal, 5).toTensor();

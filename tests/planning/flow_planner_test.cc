@@ -51,6 +51,47 @@ TEST(FlowPlannerTest, BadShapesNameTheArgument) {
               ThrowsMessage<Error>(HasSubstr("noise: expected (2, 16, 4), got (2, 8, 4)")));
 }
 
+/// A network whose velocity is zero everywhere: plans stay where the noise puts them.
+class ZeroVelocity : public models::VelocityNet {
+ public:
+  torch::Tensor Forward(const torch::Tensor& x, const torch::Tensor&, const torch::Tensor&) override {
+    return torch::zeros_like(x);
+  }
+  void CheckHorizon(int64_t) const override {}
+  std::string WriteScript(models::ScriptWriter&) const override { return ""; }
+  int64_t state_dim() const override { return 4; }
+  int64_t cond_dim() const override { return 0; }
+};
+
+TEST(FlowPlannerTest, MidpointSplittingUsesTheStatesBesideTheMiddleAsBoundaries) {
+  auto net = std::make_shared<ZeroVelocity>();
+  models::MinMaxNormalizer unit(-torch::ones({4}), torch::ones({4}));  // raw == normalized
+  const FlowPlanner plain(net, unit, Conditioning::kInpaint, 16, SamplerConfig{4, Splitting::kNone});
+  const FlowPlanner split(net, unit, Conditioning::kInpaint, 16, SamplerConfig{4, Splitting::kMidpoint});
+  const torch::Tensor start = torch::full({2, 4}, -0.5f), goal = torch::full({2, 4}, 0.5f);
+  const torch::Tensor noise = 0.3 * torch::randn({2, 16, 4}), renoise = 0.3 * torch::randn({2, 16, 4});
+  const torch::Tensor first = plain.Plan(start, goal, noise);
+  const torch::Tensor joined = split.Plan(start, goal, noise, renoise);
+  ASSERT_EQ(joined.sizes(), first.sizes());
+  // With zero velocity, each half keeps its re-noised states and takes its boundaries
+  // from the first plan: states 7 and 8 are the first plan's, the ends the request's.
+  EXPECT_TRUE(torch::allclose(joined.select(1, 7), first.select(1, 7)));
+  EXPECT_TRUE(torch::allclose(joined.select(1, 8), first.select(1, 8)));
+  EXPECT_TRUE(torch::equal(joined.select(1, 0), start));
+  EXPECT_TRUE(torch::equal(joined.select(1, 15), goal));
+  EXPECT_TRUE(torch::allclose(joined.slice(1, 1, 7), (0.5 * renoise + 0.5 * first).slice(1, 1, 7)));
+  EXPECT_THAT([&] { split.Plan(start, goal, noise); }, ThrowsMessage<Error>(HasSubstr("renoise")));
+}
+
+TEST(FlowPlannerTest, SplittingNeedsHalvesTheNetworkCanTake) {
+  models::ModelConfig config;
+  config.unet.down_dims = {8, 8, 8, 8};  // T must be a multiple of 8
+  auto net = models::MakeVelocityNet(config, 4, 0);
+  models::MinMaxNormalizer unit(-torch::ones({4}), torch::ones({4}));
+  EXPECT_THAT([&] { FlowPlanner(net, unit, Conditioning::kInpaint, 8, SamplerConfig{4, Splitting::kMidpoint}); },
+              ThrowsMessage<Error>(HasSubstr("sampler.splitting")));
+}
+
 TEST(FlowPlannerTest, PlanningDoesNotChangeTheNetwork) {
   const FlowPlanner planner = MakePlanner(Conditioning::kInpaint);
   std::vector<torch::Tensor> before;

@@ -1,7 +1,7 @@
 """Runs an exported flowplan planner with nothing but torch.
 
 usage: run_exported_planner.py PLANNER.pt DIR B
-Reads DIR/start.bin, DIR/goal.bin (B, D) and DIR/noise.bin (B, T, D) as float32,
+Reads DIR/start.bin, DIR/goal.bin (B, D), DIR/noise.bin and DIR/renoise.bin (B, T, D) as float32,
 writes DIR/plan.bin, and checks the planner's documented attributes and methods.
 """
 import sys
@@ -20,7 +20,8 @@ def read(name, shape):
 
 
 start, goal, noise = read("start.bin", (batch, D)), read("goal.bin", (batch, D)), read("noise.bin", (batch, T, D))
-plan = planner.plan(start, goal, noise)
+renoise = read("renoise.bin", (batch, T, D)) if planner.splitting != "none" else None
+plan = planner.plan(start, goal, noise, renoise)
 assert plan.shape == (batch, T, D), plan.shape
 if planner.conditioning == "inpaint":
     assert torch.equal(plan[:, 0], start) and torch.equal(plan[:, -1], goal)
