@@ -17,6 +17,16 @@ TEST(MujocoUtilTest, HandlersAreInstalled) {
   EXPECT_NE(mju_user_warning, nullptr);
 }
 
+TEST(MujocoUtilDeathTest, ErrorsEndTheProcessWithStatusOneInsteadOfWaitingForEnter) {
+  // The handler logs to the console logger (stdout), so only the exit status is checked.
+  EXPECT_EXIT(
+      {
+        InstallMujocoHandlers();
+        mju_error("broken");
+      },
+      ::testing::ExitedWithCode(1), "");
+}
+
 TEST(MujocoUtilTest, BadStateIsCountedAsAnInstabilityWarning) {
   InstallMujocoHandlers();
   MjModelPtr m = LoadModelFromXml(kPendulum, "pendulum");
