@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -33,15 +34,25 @@ namespace internal {
 
 std::string FormatDouble(double value) {
   if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
-  char buffer[64];
+  if (std::isnan(value)) return ".nan";
+  char buffer[512];
+  std::string shortest;
   for (int precision = 1; precision <= 17; ++precision) {
     std::snprintf(buffer, sizeof(buffer), "%.*g", precision, value);
     if (std::strtod(buffer, nullptr) == value) break;
   }
-  std::string text = buffer;
+  shortest = buffer;
+  // Plain decimals read better than exponents (10.0, not 1e+01) when they are no longer.
+  for (int decimals = 1; decimals <= 17; ++decimals) {
+    std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
+    if (std::strtod(buffer, nullptr) == value) {
+      if (std::strlen(buffer) <= shortest.size() + 2) shortest = buffer;
+      break;
+    }
+  }
   // Keep a float looking like a float so that it reads back as a number field.
-  if (text.find_first_of(".eEn") == std::string::npos) text += ".0";
-  return text;
+  if (shortest.find_first_of(".eEn") == std::string::npos) shortest += ".0";
+  return shortest;
 }
 
 std::string Describe(const YAML::Node& node) {
@@ -125,8 +136,13 @@ YAML::Node ParseOverride(const std::string& assignment) {
 }
 
 std::string FormatKeys(const std::vector<KeyInfo>& keys) {
+  // Align the help texts, but let an unusually long "key = value" push only its own line.
+  constexpr std::size_t kMaxWidth = 56;
   std::size_t width = 0;
-  for (const auto& k : keys) width = std::max(width, k.key.size() + 3 + k.default_value.size());
+  for (const auto& k : keys) {
+    const std::size_t length = k.key.size() + 3 + k.default_value.size();
+    if (length <= kMaxWidth) width = std::max(width, length);
+  }
   std::string out;
   for (const auto& k : keys) {
     std::string left = k.key + " = " + k.default_value;

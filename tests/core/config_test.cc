@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 
 namespace flowplan {
@@ -78,6 +79,16 @@ TEST(ConfigTest, YamlRoundTripIsExact) {
   EXPECT_EQ(back.point, c.point);
   EXPECT_EQ(back.name, c.name);
   EXPECT_EQ(config::ToYaml(back), config::ToYaml(c));
+}
+
+TEST(ConfigTest, NumbersAreWrittenShortAndExact) {
+  EXPECT_EQ(config::internal::FormatDouble(10.0), "10.0");
+  EXPECT_EQ(config::internal::FormatDouble(2e-4), "0.0002");
+  EXPECT_EQ(config::internal::FormatDouble(0.995), "0.995");
+  EXPECT_EQ(config::internal::FormatDouble(1e-300), "1e-300");
+  for (double x : {0.1 + 0.2, 1.0 / 3.0, 12345.678, -7.25e-9}) {
+    EXPECT_EQ(std::strtod(config::internal::FormatDouble(x).c_str(), nullptr), x);
+  }
 }
 
 TEST(ConfigTest, UnknownKeyNamesFileLineAndKey) {
