@@ -13,7 +13,9 @@
 #include "datasets/h5.h"
 #include "datasets/trajectory_dataset.h"
 #include "eval/stitching.h"
+#include "kinematics/forward_kinematics.h"
 #include "planning/export.h"
+#include "sim/franka_model.h"
 #include "trainer/run_dir.h"
 #include "trainer/trainer.h"
 
@@ -21,8 +23,8 @@ namespace flowplan::experiment {
 namespace fs = std::filesystem;
 
 int ApplyThreadCount(const ExperimentConfig& config) {
-  // Denormal floats (e.g. in Adam's second moments late in training) run two
-  // orders of magnitude slower on x86; flush them before any worker thread starts.
+  // Arithmetic on denormal floats is orders of magnitude slower on x86; flush
+  // them to zero before any worker thread starts (the threads inherit the mode).
   at::globalContext().setFlushDenormal(true);
   const int threads = ResolveThreadCount(config.threads);
   at::set_num_threads(threads);
@@ -184,6 +186,23 @@ void RunExport(const EvalRequest& request) {
                loaded.checkpoint, loaded.step, out, loaded.planner->state_dim(), loaded.planner->state_dim(),
                loaded.planner->horizon(), loaded.planner->state_dim(), loaded.planner->horizon(),
                loaded.planner->state_dim());
+}
+
+}  // namespace flowplan::experiment
+
+namespace flowplan::experiment {
+
+void RunFrankaFk(const std::vector<double>& q) {
+  const sim::FrankaModel model = sim::LoadFrankaModel();
+  const sim::FrankaPose pose = sim::FrankaForwardKinematics(model, q);
+  const kinematics::ForwardKinematics fk(model.description());
+  const torch::Tensor tcp = fk.TcpPosition(torch::tensor(q, torch::kFloat64).view({1, -1}))[0];
+  const Eigen::Vector3d torch_tcp(tcp[0].item<double>(), tcp[1].item<double>(), tcp[2].item<double>());
+  auto text = [](const Eigen::Vector3d& p) { return fmt::format("({:.9f}, {:.9f}, {:.9f})", p.x(), p.y(), p.z()); };
+  fmt::print("TCP (MuJoCo):     {} m\n", text(pose.tcp_position));
+  fmt::print("TCP (LibTorch):   {} m\n", text(torch_tcp));
+  fmt::print("flange (MuJoCo):  {} m\n", text(pose.flange_position));
+  fmt::print("|TCP difference|: {:.3g} m\n", (pose.tcp_position - torch_tcp).norm());
 }
 
 }  // namespace flowplan::experiment

@@ -67,4 +67,9 @@ void RunEvalStitching(const EvalRequest& request);
 /// `flowplan export`: writes the TorchScript planner (default RUN_DIR/planner.pt).
 void RunExport(const EvalRequest& request);
 
+/// `flowplan fk`: prints the Franka's TCP and flange positions for joint angles
+/// `q` (7 values, rad) through MuJoCo and through the LibTorch kinematics.
+/// @throws flowplan::Error for a wrong number of joint values.
+void RunFrankaFk(const std::vector<double>& q);
+
 }  // namespace flowplan::experiment

@@ -17,6 +17,7 @@
 #include "core/logging.h"
 #include "experiment/commands.h"
 #include "experiment/experiment_config.h"
+#include "sim/mujoco_util.h"
 
 namespace {
 
@@ -104,6 +105,13 @@ int Main(int argc, char** argv) {
   add_config(show, false);
   auto* keys = config_command->add_subcommand("keys", "list every config key with its default and meaning");
 
+  // fk
+  auto* fk = app.add_subcommand("fk", "print the Franka TCP position of joint angles (MuJoCo and LibTorch)");
+  std::vector<double> joint_angles;
+  fk->add_option("--q", joint_angles, "7 joint angles in rad, comma-separated: --q=0,-0.785,0,-2.356,0,1.571,0.785")
+      ->required()
+      ->delimiter(',');
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -111,6 +119,7 @@ int Main(int argc, char** argv) {
   }
   flowplan::SetUpLogging(log_level);
   flowplan::InstallInterruptHandler();
+  flowplan::sim::InstallMujocoHandlers();
 
   if (generate->parsed()) {
     flowplan::experiment::GenerateRequest request;
@@ -140,6 +149,8 @@ int Main(int argc, char** argv) {
     flowplan::experiment::RunExport(export_request);
   } else if (show->parsed()) {
     std::cout << flowplan::experiment::ToYaml(flowplan::experiment::LoadExperiment(config_path, overrides));
+  } else if (fk->parsed()) {
+    flowplan::experiment::RunFrankaFk(joint_angles);
   } else if (keys->parsed()) {
     std::cout << flowplan::config::FormatKeys(flowplan::config::ListKeys(ExperimentConfig{}));
   }

@@ -157,10 +157,19 @@ TEST_F(CliTest, TruncatedCheckpointIsAClearErrorAndLeavesNoPartialOutput) {
   ExpectCleanFailure(Flowplan("eval stitching --ckpt " + Path("planner.pt")), "not a flowplan checkpoint");
 }
 
+TEST_F(CliTest, FkPrintsTheReadyPoseThroughMujocoAndLibTorch) {
+  const Outcome ready = Flowplan("fk --q=0,-0.7853981633974483,0,-2.356194490192345,0,1.5707963267948966,0.7853981633974483");
+  ExpectOk(ready);
+  // Flange of the ready pose (libfranka / MoveIt), TCP 0.107 m below it.
+  EXPECT_THAT(ready.output, HasSubstr("flange (MuJoCo):  (0.306890567, 0.000000000, 0.590282052)"));
+  EXPECT_THAT(ready.output, HasSubstr("TCP (LibTorch):   (0.306890567, 0.000000000, 0.483282052)"));
+  ExpectCleanFailure(Flowplan("fk --q=1,2"), "expected 7 joint values, got 2");
+}
+
 TEST_F(CliTest, HelpListsSubcommandsAndKeys) {
   const Outcome help = Flowplan("--help");
   ExpectOk(help);
-  for (const char* command : {"generate", "train", "eval", "export", "merge", "config"}) {
+  for (const char* command : {"generate", "train", "eval", "export", "merge", "config", "fk"}) {
     EXPECT_THAT(help.output, HasSubstr(command));
   }
   const Outcome keys = Flowplan("config keys");
