@@ -22,13 +22,12 @@
 namespace flowplan::experiment {
 namespace fs = std::filesystem;
 
-int ApplyThreadCount(const ExperimentConfig& config) {
+int ConfigureThreads(const ExperimentConfig& config) {
   // Arithmetic on denormal floats is orders of magnitude slower on x86; flush
   // them to zero before any worker thread starts (the threads inherit the mode).
   at::globalContext().setFlushDenormal(true);
-  const int threads = ResolveThreadCount(config.threads);
-  at::set_num_threads(threads);
-  return threads;
+  at::set_num_threads(1);
+  return ResolveThreadCount(config.threads);
 }
 
 namespace {
@@ -100,13 +99,14 @@ void RunMerge(const std::vector<std::string>& inputs, const std::string& out) {
 }
 
 void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
-  const int threads = ApplyThreadCount(config);
+  const int threads = ConfigureThreads(config);
   const datasets::TrajectorySplits data =
       datasets::LoadTrajectorySplits(config.data, static_cast<uint64_t>(config.seed));
   trainer::TrainingSetup setup;
   setup.run_dir = config.run_dir;
   setup.config_yaml = ToYaml(config);
   setup.seed = static_cast<uint64_t>(config.seed);
+  setup.threads = threads;
   setup.model = config.model;
   setup.flow = config.flow;
   setup.train = config.train;
@@ -145,7 +145,7 @@ LoadedPlanner LoadPlanner(const std::string& ckpt, const std::string& overlay_pa
 
 void RunEvalStitching(const EvalRequest& request) {
   LoadedPlanner loaded = LoadPlanner(request.ckpt, request.overlay_path, request.overrides);
-  ApplyThreadCount(loaded.config);
+  const int threads = ConfigureThreads(loaded.config);
   const datasets::TrajectoryDataset dataset = datasets::ReadDataset(loaded.config.data.path);
   if (dataset.state_dim != loaded.planner->state_dim()) {
     throw Error(loaded.config.data.path + ": states have " + std::to_string(dataset.state_dim) +
@@ -153,9 +153,9 @@ void RunEvalStitching(const EvalRequest& request) {
   }
   const auto test_pairs = datasets::ToTensors(dataset.test_pairs, dataset.state_dim);
   const auto train_pairs = datasets::ToTensors(dataset.train_pairs, dataset.state_dim);
-  const eval::StitchingResult test = eval::EvaluateStitching(*loaded.planner, test_pairs, "test", loaded.config.eval);
+  const eval::StitchingResult test = eval::EvaluateStitching(*loaded.planner, test_pairs, "test", loaded.config.eval, threads);
   const eval::StitchingResult train =
-      eval::EvaluateStitching(*loaded.planner, train_pairs, "train", loaded.config.eval);
+      eval::EvaluateStitching(*loaded.planner, train_pairs, "train", loaded.config.eval, threads);
 
   const std::string run = RunFolderOf(loaded.checkpoint);
   const std::string out = request.out.empty() ? run + "/eval_stitching.json" : request.out;

@@ -13,8 +13,10 @@
 
 namespace flowplan::experiment {
 
-/// Sets LibTorch's intra-op threads from config.threads (0: all cores); returns the count.
-int ApplyThreadCount(const ExperimentConfig& config);
+/// Worker threads from config.threads (0: all cores). LibTorch itself runs
+/// single-threaded: the workers take fixed shards of the work, so results do
+/// not depend on the thread count.
+int ConfigureThreads(const ExperimentConfig& config);
 
 struct GenerateRequest {
   int shard_index = 0;  // --shard k/n

@@ -15,21 +15,36 @@ torch::Tensor InterpolateOt(const torch::Tensor& x0, const torch::Tensor& x1, co
   return tb * x1 + (1.0 - tb) * x0;
 }
 
-torch::Tensor FlowMatchingLoss(models::VelocityNet& net, const torch::Tensor& x1,
-                               planning::Conditioning conditioning, at::Generator& generator) {
-  const int64_t B = x1.size(0), T = x1.size(1);
-  const torch::Tensor x0 = torch::randn(x1.sizes(), generator, x1.options());
-  const torch::Tensor t = torch::rand({B}, generator, x1.options());
-  torch::Tensor xt = InterpolateOt(x0, x1, t);
-  const torch::Tensor target = x1 - x0;
-  const torch::Tensor start = x1.select(1, 0), goal = x1.select(1, T - 1);
+FlowMatchingBatch FlowMatchingBatch::Slice(int64_t begin, int64_t end) const {
+  return {x1.slice(0, begin, end), x0.slice(0, begin, end), t.slice(0, begin, end)};
+}
+
+FlowMatchingBatch DrawFlowMatchingBatch(const torch::Tensor& x1, at::Generator& generator) {
+  FlowMatchingBatch batch;
+  batch.x1 = x1;
+  batch.x0 = torch::randn(x1.sizes(), generator, x1.options());
+  batch.t = torch::rand({x1.size(0)}, generator, x1.options());
+  return batch;
+}
+
+torch::Tensor FlowMatchingLoss(models::VelocityNet& net, const FlowMatchingBatch& batch,
+                               planning::Conditioning conditioning) {
+  const int64_t T = batch.x1.size(1);
+  torch::Tensor xt = InterpolateOt(batch.x0, batch.x1, batch.t);
+  const torch::Tensor target = batch.x1 - batch.x0;
+  const torch::Tensor start = batch.x1.select(1, 0), goal = batch.x1.select(1, T - 1);
   if (conditioning == planning::Conditioning::kInpaint) {
     xt = planning::Inpaint(xt, start, goal);
-    const torch::Tensor v = net.Forward(xt, t, torch::Tensor());
+    const torch::Tensor v = net.Forward(xt, batch.t, torch::Tensor());
     return torch::mse_loss(v.slice(1, 1, T - 1), target.slice(1, 1, T - 1));
   }
-  const torch::Tensor v = net.Forward(xt, t, planning::ConditionVector(conditioning, start, goal));
+  const torch::Tensor v = net.Forward(xt, batch.t, planning::ConditionVector(conditioning, start, goal));
   return torch::mse_loss(v, target);
+}
+
+torch::Tensor FlowMatchingLoss(models::VelocityNet& net, const torch::Tensor& x1,
+                               planning::Conditioning conditioning, at::Generator& generator) {
+  return FlowMatchingLoss(net, DrawFlowMatchingBatch(x1, generator), conditioning);
 }
 
 }  // namespace flowplan::trainer

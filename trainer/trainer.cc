@@ -16,6 +16,7 @@
 #include "models/normalizer.h"
 #include "trainer/flow_matching.h"
 #include "trainer/run_dir.h"
+#include "trainer/sharded_gradient.h"
 
 namespace flowplan::trainer {
 namespace {
@@ -124,6 +125,8 @@ TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& 
   const auto started = std::chrono::steady_clock::now();
   const TrainerConfig& config = setup.train;
   const int64_t T = data.horizon(), D = data.state_dim();
+  // One intra-op thread: parallelism comes from the gradient shards (see ShardedGradient).
+  at::set_num_threads(1);
   RunDir run(setup.run_dir);
   run.Create();
   WriteFileAtomically(run.config(), setup.config_yaml);
@@ -172,6 +175,7 @@ TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& 
   const int64_t num_train = train_n.size(0);
   const planning::FlowPlanner ema_planner(ema, normalizer, setup.flow.conditioning, T, setup.sampler);
   MetricsLog metrics(run.metrics());
+  ShardedGradient gradient(*net, [&] { return BuildNet(setup, D); }, config.shards, setup.threads);
 
   auto save = [&](int64_t at_step) {
     checkpoints::CheckpointHeader header;
@@ -195,7 +199,7 @@ TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& 
     result.val_loss = ValidationLoss(*ema, val_n, setup.flow.conditioning, config.val_batch_size,
                                      StreamSeed(setup.seed, kValidationStream));
     auto stitching = [&](const datasets::EvalPairTensors& pairs, const std::string& label) {
-      if (!pairs.names.empty()) return eval::EvaluateStitching(ema_planner, pairs, label, setup.eval);
+      if (!pairs.names.empty()) return eval::EvaluateStitching(ema_planner, pairs, label, setup.eval, setup.threads);
       eval::StitchingResult none;  // datasets without start/goal families (e.g. random reaches)
       none.pairs = label;
       none.mean = none.std = NAN;
@@ -229,16 +233,13 @@ TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& 
     torch::Tensor x1 = train_n.index_select(0, index);
     const bool split = torch::rand({1}, generator).item<double>() < setup.flow.split_prob;
     if (split) x1 = SplitHalves(x1);
-    const torch::Tensor loss = FlowMatchingLoss(*net, x1, setup.flow.conditioning, generator);
-    optimizer.zero_grad();
-    loss.backward();
+    const double loss_value = gradient.Compute(DrawFlowMatchingBatch(x1, generator), setup.flow.conditioning);
     if (config.grad_clip > 0.0) torch::nn::utils::clip_grad_norm_(net->parameters(), config.grad_clip);
     optimizer.step();
     const double n = static_cast<double>(step);
     UpdateEma(*ema, *net, std::min(config.ema_decay, (1.0 + n) / (10.0 + n)));
     ++step;
 
-    const double loss_value = loss.item<double>();
     if (!std::isfinite(loss_value)) {
       throw Error("training diverged at step " + std::to_string(step) + " (loss " + Number(loss_value) +
                   "); lower train.lr or set train.grad_clip");

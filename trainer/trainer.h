@@ -16,6 +16,7 @@ struct TrainingSetup {
   std::string run_dir;
   std::string config_yaml;  // resolved experiment config, stored in the run and every checkpoint
   uint64_t seed = 0;
+  int threads = 1;  // worker threads; results do not depend on it
   models::ModelConfig model;
   FlowConfig flow;
   TrainerConfig train;
@@ -37,7 +38,8 @@ struct TrainResult {
 
 /// Trains a flow-matching planner on `data`, or resumes the run in
 /// `setup.run_dir` from its newest checkpoint when `resume` is set (continuing
-/// bit-exactly for the same thread count). Writes config.yaml, metrics.jsonl and
+/// bit-exactly). The weights do not depend on the thread count: LibTorch runs
+/// single-threaded and `setup.threads` workers share fixed gradient shards. Writes config.yaml, metrics.jsonl and
 /// checkpoints; on SIGINT writes a checkpoint of the current step and throws.
 /// @throws flowplan::Error for settings the data cannot take (horizon, split).
 TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& data, bool resume);

@@ -33,6 +33,7 @@ struct TrainerConfig {
   int64_t checkpoint_every = 500;
   int keep_checkpoints = 3;       // older periodic checkpoints are deleted
   int val_batch_size = 256;
+  int shards = 4;                 // gradient shards per batch, spread over the worker threads
 
   template <class V>
   void Visit(V& v) {
@@ -48,6 +49,10 @@ struct TrainerConfig {
     v.Field("checkpoint_every", checkpoint_every, "steps between checkpoints", config::Positive());
     v.Field("keep_checkpoints", keep_checkpoints, "periodic checkpoints kept on disk", config::Positive());
     v.Field("val_batch_size", val_batch_size, "trajectories per validation batch", config::Positive());
+    v.Field("shards", shards,
+            "gradient shards per batch; threads work on shards in parallel, so results depend on this, "
+            "not on the thread count",
+            config::Positive());
   }
 };
 

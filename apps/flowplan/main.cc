@@ -42,6 +42,7 @@ void ParseShard(const std::string& text, flowplan::experiment::GenerateRequest& 
 int Main(int argc, char** argv) {
   CLI::App app{"flowplan: flow-matching trajectory planners that stitch, from data to TorchScript"};
   app.require_subcommand(1);
+  app.fallthrough();  // --log-level also after the subcommand
   app.option_defaults()->always_capture_default();
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "debug, info, warn, error or off");

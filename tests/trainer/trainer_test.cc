@@ -10,6 +10,7 @@
 #include "datasets/generator.h"
 #include "datasets/particle_task.h"
 #include "trainer/run_dir.h"
+#include "trainer/sharded_gradient.h"
 
 namespace flowplan::trainer {
 namespace {
@@ -72,6 +73,44 @@ TEST(TrainerTest, ResumingGivesTheSameWeightsAsOneRun) {
   for (size_t i = 0; i < wa.size(); ++i) EXPECT_TRUE(torch::equal(wa[i], wb[i])) << "tensor " << i;
   EXPECT_EQ(checkpoints::ReadCheckpointHeader(a.checkpoint).rng_state.sizes(),
             checkpoints::ReadCheckpointHeader(b.checkpoint).rng_state.sizes());
+}
+
+TEST(TrainerTest, ThreadCountDoesNotChangeTheWeights) {
+  const auto data = TinyData();
+  TrainingSetup one = TinySetup("one_thread");
+  one.threads = 1;
+  TrainingSetup two = TinySetup("two_threads");
+  two.threads = 2;
+  TrainingSetup three = TinySetup("three_threads");
+  three.threads = 3;
+  const auto w1 = Weights(Train(one, data, false).checkpoint, one);
+  const auto w2 = Weights(Train(two, data, false).checkpoint, two);
+  const auto w3 = Weights(Train(three, data, false).checkpoint, three);
+  for (size_t i = 0; i < w1.size(); ++i) {
+    EXPECT_TRUE(torch::equal(w1[i], w2[i])) << "tensor " << i;
+    EXPECT_TRUE(torch::equal(w1[i], w3[i])) << "tensor " << i;
+  }
+}
+
+TEST(TrainerTest, ShardsSumToTheWholeBatchGradient) {
+  // The sharded gradient equals the gradient of the unsharded batch up to rounding.
+  torch::manual_seed(0);
+  models::ModelConfig config;
+  config.unet.down_dims = {8, 16};
+  auto master = models::MakeVelocityNet(config, 4, 0);
+  auto reference = models::MakeVelocityNet(config, 4, 0);
+  models::CopyWeights(*master, *reference);
+  auto generator = at::make_generator<at::CPUGeneratorImpl>(1);
+  const FlowMatchingBatch batch = DrawFlowMatchingBatch(torch::randn({10, 16, 4}), generator);
+  ShardedGradient sharded(*master, [&] { return models::MakeVelocityNet(config, 4, 0); }, 3, 2);
+  const double loss = sharded.Compute(batch, planning::Conditioning::kInpaint);
+  const torch::Tensor whole = FlowMatchingLoss(*reference, batch, planning::Conditioning::kInpaint);
+  whole.backward();
+  EXPECT_NEAR(loss, whole.item<double>(), 1e-6);
+  const auto a = master->parameters(), b = reference->parameters();
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_TRUE(torch::allclose(a[i].grad(), b[i].grad(), 1e-4, 1e-6)) << "parameter " << i;
+  }
 }
 
 TEST(TrainerTest, RunFolderHoldsConfigMetricsAndPrunedCheckpoints) {
