@@ -3,17 +3,20 @@ BUILD ?= build
 JOBS ?= $(shell nproc)
 FLOWPLAN := $(BUILD)/apps/flowplan/flowplan
 
-.PHONY: deps build demo test test-all bench clean
+.PHONY: deps configure build demo test bench clean
 
 deps:
 	./scripts/install_deps.sh
 
-build: deps
+configure: deps
 	cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release
+
+build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
-# Generate the particle dataset, train, evaluate stitching, export, plot.
-demo: build
+# Generate the particle datasets, train, evaluate stitching, export, plot.
+demo: configure
+	cmake --build $(BUILD) -j $(JOBS) --target flowplan
 	FLOWPLAN=$(FLOWPLAN) ./scripts/demo.sh
 
 # Unit, reference and smoke tests (benchmarks excluded).
