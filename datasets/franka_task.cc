@@ -12,12 +12,6 @@ namespace {
 using sim::Augmentation;
 using sim::JointVector;
 
-constexpr double kCrossX = 0.5;  // m, the plane of the cross
-
-Family CrossFamily(double y0, double z0, double y1, double z1, const char* name) {
-  return {name, {kCrossX, y0, z0}, {kCrossX, y1, z1}};
-}
-
 Eigen::Vector3d Point(const std::vector<double>& p) { return {p[0], p[1], p[2]}; }
 
 class FrankaWorker : public EpisodeWorker {
@@ -163,15 +157,32 @@ FrankaTask::FrankaTask(FrankaGoals goals, const FrankaTaskConfig& config, const 
   model_ = std::move(model);
 
   if (goals_ == FrankaGoals::kCross) {
-    families_ = {CrossFamily(-0.3, 0.2, 0.3, 0.6, "(-0.3,0.2)->(0.3,0.6)"),
-                 CrossFamily(-0.3, 0.6, 0.3, 0.2, "(-0.3,0.6)->(0.3,0.2)")};
+    if (config.cross_starts.empty() || config.cross_starts.size() != config.cross_goals.size()) {
+      throw Error(where + ".cross_goals: expected one goal per start (" + std::to_string(config.cross_starts.size()) +
+                  " starts), got " + std::to_string(config.cross_goals.size()));
+    }
+    auto text = [](const std::array<double, 3>& p) {
+      return "(" + Number(p[0]) + "," + Number(p[1]) + "," + Number(p[2]) + ")";
+    };
+    for (size_t i = 0; i < config.cross_starts.size(); ++i) {
+      const auto& a = config.cross_starts[i];
+      const auto& b = config.cross_goals[i];
+      families_.push_back({text(a) + "->" + text(b), {a.begin(), a.end()}, {b.begin(), b.end()}});
+    }
   }
   sim::IkOptions ik;
   ik.posture = Eigen::Map<const JointVector>(config.rollout.controller.posture.data());
   sim::MjDataPtr scratch = sim::MakeData(model_->mj());
-  for (const Family& family : families_) {
-    family_start_q_.push_back(sim::SolveTcpIkOrThrow(*model_, *scratch, Point(family.start), ik.posture, ik));
-    family_goal_q_.push_back(sim::SolveTcpIkOrThrow(*model_, *scratch, Point(family.goal), ik.posture, ik));
+  auto solve = [&](const std::vector<double>& target, const std::string& key) {
+    try {
+      return sim::SolveTcpIkOrThrow(*model_, *scratch, Point(target), ik.posture, ik);
+    } catch (const Error& e) {
+      throw Error(where + "." + key + ": " + e.what());
+    }
+  };
+  for (size_t i = 0; i < families_.size(); ++i) {
+    family_start_q_.push_back(solve(families_[i].start, "cross_starts[" + std::to_string(i) + "]"));
+    family_goal_q_.push_back(solve(families_[i].goal, "cross_goals[" + std::to_string(i) + "]"));
   }
 }
 

@@ -20,6 +20,10 @@ namespace flowplan::datasets {
 /// sampling box of franka_reach.
 struct FrankaTaskConfig {
   sim::FrankaRolloutConfig rollout;
+  // franka_cross: family i goes from cross_starts[i] to cross_goals[i] (TCP, m); by
+  // default the two diagonals of the y-z plane at x = 0.5 (SPEC section 3).
+  std::vector<std::array<double, 3>> cross_starts = {{0.5, -0.3, 0.2}, {0.5, -0.3, 0.6}};
+  std::vector<std::array<double, 3>> cross_goals = {{0.5, 0.3, 0.6}, {0.5, 0.3, 0.2}};
   std::array<double, 3> reach_lower = {0.35, -0.5, 0.15};  // m, TCP box of franka_reach
   std::array<double, 3> reach_upper = {0.75, 0.5, 0.75};   // m
   int max_draws = 100;  // draws of random points before an episode is given up as unreachable
@@ -27,6 +31,8 @@ struct FrankaTaskConfig {
   template <class V>
   void Visit(V& v) {
     rollout.Visit(v);
+    v.Field("cross_starts", cross_starts, "franka_cross: commanded TCP start of each family (m)");
+    v.Field("cross_goals", cross_goals, "franka_cross: commanded TCP goal of each family (m), one per start");
     v.Field("reach_lower", reach_lower, "franka_reach: lower corner of the start/goal box (m)");
     v.Field("reach_upper", reach_upper, "franka_reach: upper corner of the start/goal box (m)");
     v.Field("max_draws", max_draws,

@@ -72,6 +72,8 @@ TrajectoryDataset GenerateDataset(const EpisodeTask& task, const GenerateOptions
   dataset.point_dim = layout.point_dim;
   dataset.config_yaml = options.config_yaml;
   dataset.seed = options.seed;
+  dataset.first_episode = begin;
+  dataset.end_episode = end;
   for (const auto& [name, k] : layout.extras) dataset.extras[name].shape = {0, T, k};
   for (const EpisodeRecord& record : records) {
     if (record.rejected) {

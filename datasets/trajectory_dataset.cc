@@ -105,6 +105,8 @@ void WriteDataset(const std::string& path, const TrajectoryDataset& dataset) {
     file.SetAttribute("/", "state_labels", Join(dataset.state_labels, ','));
     file.SetAttribute("/", "config", dataset.config_yaml);
     file.SetAttribute("/", "seed", static_cast<int64_t>(dataset.seed));
+    file.SetAttribute("/", "first_episode", dataset.first_episode);
+    file.SetAttribute("/", "end_episode", dataset.end_episode);
     file.SetAttribute("/", "rejected_episodes", dataset.rejected_episodes);
     file.SetAttribute("/", "simulator_warnings", dataset.simulator_warnings);
 
@@ -145,6 +147,8 @@ TrajectoryDataset ReadDataset(const std::string& path) {
   dataset.state_labels = Split(file.GetStringAttribute("/", "state_labels"), ',');
   dataset.config_yaml = file.GetStringAttribute("/", "config");
   dataset.seed = static_cast<uint64_t>(file.GetIntAttribute("/", "seed"));
+  dataset.first_episode = file.GetIntAttribute("/", "first_episode");
+  dataset.end_episode = file.GetIntAttribute("/", "end_episode");
   dataset.rejected_episodes = file.GetIntAttribute("/", "rejected_episodes");
   dataset.simulator_warnings = file.GetIntAttribute("/", "simulator_warnings");
 
@@ -219,6 +223,12 @@ TrajectoryDataset MergeDatasets(const std::vector<TrajectoryDataset>& shards,
                 shard.test_pairs.goal == merged.test_pairs.goal,
             "/eval pairs");
     require(shard.extras.size() == merged.extras.size(), "/extras");
+    if (i > 0 && shard.first_episode != shards[i - 1].end_episode) {
+      throw Error(where + ": holds episodes [" + std::to_string(shard.first_episode) + ", " +
+                  std::to_string(shard.end_episode) + "), but the shard before it ends at episode " +
+                  std::to_string(shards[i - 1].end_episode) + "; give the shards in order, each once");
+    }
+    merged.end_episode = shard.end_episode;
     merged.num_episodes += shard.num_episodes;
     merged.states.insert(merged.states.end(), shard.states.begin(), shard.states.end());
     merged.commanded_start.insert(merged.commanded_start.end(), shard.commanded_start.begin(),

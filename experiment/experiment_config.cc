@@ -20,6 +20,7 @@ std::string ToYaml(const ExperimentConfig& config) { return config::ToYaml(confi
 std::string DatasetConfigYaml(const ExperimentConfig& config) {
   YAML::Node node = config::internal::Encode(config);
   node.remove("threads");
+  node["generate"].remove("out");
   YAML::Emitter out;
   out << node;
   return std::string(out.c_str()) + "\n";

@@ -54,8 +54,9 @@ ExperimentConfig LoadExperimentText(const std::string& yaml, const std::string& 
 /// The resolved config as YAML.
 std::string ToYaml(const ExperimentConfig& config);
 
-/// The resolved config as stored in a dataset: without `threads`, which does
-/// not change the data, so that any thread count writes the same bytes.
+/// The resolved config as stored in a dataset: without `threads` and
+/// `generate.out`, which do not change the data, so that any thread count and
+/// any output path (a shard's too) write the same bytes.
 std::string DatasetConfigYaml(const ExperimentConfig& config);
 
 }  // namespace flowplan::experiment

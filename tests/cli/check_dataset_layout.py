@@ -16,7 +16,7 @@ with h5py.File(sys.argv[1], "r") as f:
     assert f["commanded_goal"].shape == f["commanded_start"].shape
     assert f["family"].dtype == np.int32 and f["family"].shape == (n,)
     assert float(f.attrs["dt"]) > 0
-    assert "seed:" in f.attrs["config"] and "threads" not in f.attrs["config"]
+    assert "seed:" in f.attrs["config"] and "threads" not in f.attrs["config"] and "out:" not in f.attrs["config"]
     for group in ("eval/train_pairs", "eval/test_pairs"):
         pairs = f[group]
         p = pairs["start"].shape[0]
@@ -29,4 +29,9 @@ with h5py.File(sys.argv[1], "r") as f:
     if env == "particle":
         assert labels == ["x", "y", "vx", "vy"], labels
         assert x[..., :2].min() >= 0 and x[..., :2].max() <= 1
+    if env == "franka":
+        assert labels == [f"q{j}" for j in range(1, 8)] + [f"dq{j}" for j in range(1, 8)], labels
+        assert f["extras"]["tcp"].shape == (n, t, 3) and f["extras"]["torques"].shape == (n, t, 7)
+        limits = np.array([87.0] * 4 + [12.0] * 3)
+        assert (np.abs(f["extras"]["torques"][...]) <= limits + 1e-3).all()
 print("layout ok")

@@ -157,6 +157,32 @@ TEST_F(CliTest, TruncatedCheckpointIsAClearErrorAndLeavesNoPartialOutput) {
   ExpectCleanFailure(Flowplan("eval stitching --ckpt " + Path("planner.pt")), "not a flowplan checkpoint");
 }
 
+std::string Bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+TEST_F(CliTest, FrankaGenerationIsThreadAndShardInvariantAndH5pyReadsIt) {
+  const std::string config = std::string(FLOWPLAN_SOURCE_DIR) + "/configs/franka_cross.yaml generate.episodes=12";
+  ExpectOk(Flowplan("generate --config " + config + " threads=1 generate.out=" + Path("one.h5")));
+  ExpectOk(Flowplan("generate --config " + config + " threads=2 generate.out=" + Path("two.h5")));
+  ExpectOk(Flowplan("generate --config " + config + " --shard 0/2 --out " + Path("s0.h5")));
+  ExpectOk(Flowplan("generate --config " + config + " --shard 1/2 --out " + Path("s1.h5")));
+  ExpectOk(Flowplan("merge " + Path("s0.h5") + " " + Path("s1.h5") + " --out " + Path("merged.h5")));
+  const std::string one = Bytes(Path("one.h5"));
+  EXPECT_FALSE(one.empty());
+  EXPECT_TRUE(one == Bytes(Path("two.h5"))) << "1 and 2 threads wrote different files";
+  EXPECT_TRUE(one == Bytes(Path("merged.h5"))) << "merged shards differ from the whole file";
+  ExpectOk(Outcome{std::system((std::string(FLOWPLAN_PYTHON) + " " + FLOWPLAN_SOURCE_DIR +
+                                "/tests/cli/check_dataset_layout.py " + Path("one.h5"))
+                                   .c_str()),
+                   "h5py layout check"});
+  ExpectCleanFailure(Flowplan("generate --config " + config + " generate.franka.cross_goals=[[0.5,0.3,0.6],[2,0,0.5]]"),
+                     "generate.franka.cross_goals[1]: franka IK: target (2.0, 0.0, 0.5) is unreachable");
+  ExpectCleanFailure(Flowplan("merge " + Path("s0.h5") + " " + Path("one.h5") + " --out " + Path("bad.h5")),
+                     "in order, each once");
+}
+
 TEST_F(CliTest, FkPrintsTheReadyPoseThroughMujocoAndLibTorch) {
   const Outcome ready = Flowplan("fk --q=0,-0.7853981633974483,0,-2.356194490192345,0,1.5707963267948966,0.7853981633974483");
   ExpectOk(ready);

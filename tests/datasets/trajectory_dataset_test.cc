@@ -34,6 +34,8 @@ TrajectoryDataset SmallDataset() {
   d.test_pairs = {{1, 2, 3, 4, 9, 9, 9, 9}, {5, 6, 7, 8, 0, 0, 0, 0}, {"a->b", "c->d"}};
   d.config_yaml = "seed: 3\n";
   d.seed = 3;
+  d.first_episode = 0;
+  d.end_episode = 3;
   d.rejected_episodes = 2;
   d.simulator_warnings = 7;
   return d;
@@ -102,15 +104,22 @@ TEST(TrajectoryDatasetTest, InconsistentDatasetIsNotWritten) {
 
 TEST(TrajectoryDatasetTest, MergeConcatenatesAndChecksCompatibility) {
   const TrajectoryDataset a = SmallDataset();
-  const TrajectoryDataset merged = MergeDatasets({a, a}, {"a.h5", "b.h5"});
+  TrajectoryDataset b = a;
+  b.first_episode = a.end_episode;
+  b.end_episode = a.end_episode + 3;
+  const TrajectoryDataset merged = MergeDatasets({a, b}, {"a.h5", "b.h5"});
+  EXPECT_EQ(merged.first_episode, 0);
+  EXPECT_EQ(merged.end_episode, 6);
   EXPECT_EQ(merged.num_episodes, 6);
   EXPECT_EQ(merged.states.size(), 2 * a.states.size());
   EXPECT_EQ(merged.extras.at("tcp").shape[0], 6);
   EXPECT_EQ(merged.rejected_episodes, 4);
-  TrajectoryDataset other = a;
+  TrajectoryDataset other = b;
   other.seed = 4;
   EXPECT_THAT([&] { MergeDatasets({a, other}, {"a.h5", "c.h5"}); },
               ThrowsMessage<Error>(AllOf(HasSubstr("c.h5"), HasSubstr("seed"))));
+  EXPECT_THAT([&] { MergeDatasets({a, a}, {"a.h5", "a_again.h5"}); },
+              ThrowsMessage<Error>(AllOf(HasSubstr("a_again.h5"), HasSubstr("in order, each once"))));
 }
 
 }  // namespace

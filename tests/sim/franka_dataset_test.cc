@@ -78,9 +78,9 @@ TEST(FrankaDatasetTest, CrossLayoutFamiliesAndEvaluationPairs) {
   }
   ASSERT_EQ(d.train_pairs.count(), 2);
   ASSERT_EQ(d.test_pairs.count(), 2);
-  EXPECT_EQ(d.train_pairs.names[0], "(-0.3,0.2)->(0.3,0.6)");
-  EXPECT_EQ(d.test_pairs.names[0], "(-0.3,0.2)->(0.3,0.2)");
-  EXPECT_EQ(d.test_pairs.names[1], "(-0.3,0.6)->(0.3,0.6)");
+  EXPECT_EQ(d.train_pairs.names[0], "(0.5,-0.3,0.2)->(0.5,0.3,0.6)");
+  EXPECT_EQ(d.test_pairs.names[0], "(0.5,-0.3,0.2)->(0.5,0.3,0.2)");
+  EXPECT_EQ(d.test_pairs.names[1], "(0.5,-0.3,0.6)->(0.5,0.3,0.6)");
   // Pair states start at rest.
   for (int j = 7; j < 14; ++j) EXPECT_EQ(d.test_pairs.start[j], 0.0f);
 }
@@ -112,6 +112,18 @@ TEST(FrankaDatasetTest, UnreachableBoxRejectsEveryEpisodeWithAReason) {
               ::testing::ThrowsMessage<Error>(HasSubstr(
                   "all 3 episodes were rejected (first reason: no start/goal pair reachable with the gripper "
                   "down in 2 draws)")));
+}
+
+TEST(FrankaDatasetTest, UnreachableCrossPointIsNamedWithItsKey) {
+  FrankaTaskConfig config;
+  config.cross_goals[1] = {2.0, 0.0, 0.5};
+  EXPECT_THAT([&] { FrankaTask(FrankaGoals::kCross, config); },
+              ::testing::ThrowsMessage<Error>(AllOf(HasSubstr("generate.franka.cross_goals[1]"),
+                                                    HasSubstr("target (2.0, 0.0, 0.5) is unreachable"))));
+  config = FrankaTaskConfig{};
+  config.cross_goals.pop_back();
+  EXPECT_THAT([&] { FrankaTask(FrankaGoals::kCross, config); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("generate.franka.cross_goals: expected one goal per start")));
 }
 
 TEST(FrankaDatasetTest, BadConfigValuesNameTheirKey) {
