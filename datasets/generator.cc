@@ -74,6 +74,7 @@ TrajectoryDataset GenerateDataset(const EpisodeTask& task, const GenerateOptions
   dataset.seed = options.seed;
   dataset.first_episode = begin;
   dataset.end_episode = end;
+  dataset.total_episodes = options.episodes;
   for (const auto& [name, k] : layout.extras) dataset.extras[name].shape = {0, T, k};
   for (const EpisodeRecord& record : records) {
     if (record.rejected) {

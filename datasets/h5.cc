@@ -242,12 +242,23 @@ bool File::HasAttribute(const std::string& object, const std::string& name) cons
   return H5Aexists(target.get(), name.c_str()) > 0;
 }
 
-std::string File::GetStringAttribute(const std::string& object, const std::string& name) const {
+Handle File::OpenScalarAttribute(const std::string& object, const std::string& name, H5T_class_t expected,
+                                 const char* what) const {
   if (!HasAttribute(object, name)) Fail(object, "missing attribute '" + name + "'");
   Handle target = OpenAttributeTarget(object);
   Handle attribute(H5Aopen(target.get(), name.c_str(), H5P_DEFAULT), H5Aclose);
+  Handle space(H5Aget_space(attribute.get()), H5Sclose);
   Handle stored(H5Aget_type(attribute.get()), H5Tclose);
-  if (H5Tget_class(stored.get()) != H5T_STRING) Fail(object, "attribute '" + name + "' is not a string");
+  if (!attribute.valid() || H5Sget_simple_extent_npoints(space.get()) != 1 ||
+      H5Tget_class(stored.get()) != expected) {
+    Fail(object, "attribute '" + name + "': expected a single " + what);
+  }
+  return attribute;
+}
+
+std::string File::GetStringAttribute(const std::string& object, const std::string& name) const {
+  Handle attribute = OpenScalarAttribute(object, name, H5T_STRING, "string");
+  Handle stored(H5Aget_type(attribute.get()), H5Tclose);
   if (H5Tis_variable_str(stored.get()) > 0) {
     Handle type(H5Tcopy(H5T_C_S1), H5Tclose);
     H5Tset_size(type.get(), H5T_VARIABLE);
@@ -261,28 +272,20 @@ std::string File::GetStringAttribute(const std::string& object, const std::strin
   }
   const size_t size = H5Tget_size(stored.get());
   std::string value(size, '\0');
-  if (H5Aread(attribute.get(), stored.get(), value.data()) < 0) {
-    Fail(object, "cannot read attribute " + name);
-  }
+  if (H5Aread(attribute.get(), stored.get(), value.data()) < 0) Fail(object, "cannot read attribute " + name);
   value.resize(value.find('\0') == std::string::npos ? size : value.find('\0'));
   return value;
 }
 
 int64_t File::GetIntAttribute(const std::string& object, const std::string& name) const {
-  if (!HasAttribute(object, name)) Fail(object, "missing attribute '" + name + "'");
-  Handle target = OpenAttributeTarget(object);
-  Handle attribute(H5Aopen(target.get(), name.c_str(), H5P_DEFAULT), H5Aclose);
-  Handle stored(H5Aget_type(attribute.get()), H5Tclose);
-  if (H5Tget_class(stored.get()) != H5T_INTEGER) Fail(object, "attribute '" + name + "' is not an integer");
+  Handle attribute = OpenScalarAttribute(object, name, H5T_INTEGER, "integer");
   int64_t value = 0;
   if (H5Aread(attribute.get(), H5T_NATIVE_INT64, &value) < 0) Fail(object, "cannot read attribute " + name);
   return value;
 }
 
 double File::GetDoubleAttribute(const std::string& object, const std::string& name) const {
-  if (!HasAttribute(object, name)) Fail(object, "missing attribute '" + name + "'");
-  Handle target = OpenAttributeTarget(object);
-  Handle attribute(H5Aopen(target.get(), name.c_str(), H5P_DEFAULT), H5Aclose);
+  Handle attribute = OpenScalarAttribute(object, name, H5T_FLOAT, "floating-point number");
   double value = 0;
   if (H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, &value) < 0) Fail(object, "cannot read attribute " + name);
   return value;
@@ -291,7 +294,9 @@ double File::GetDoubleAttribute(const std::string& object, const std::string& na
 void File::Close() {
   if (!file_.valid()) return;
   if (H5Fflush(file_.get(), H5F_SCOPE_LOCAL) < 0) Fail("", "cannot flush file (disk full?)");
-  file_.Reset();
+  const hid_t id = file_.get();
+  file_.Release();
+  if (H5Fclose(id) < 0) Fail("", "cannot close file (disk full?)");
 }
 
 }  // namespace flowplan::datasets::h5

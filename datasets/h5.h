@@ -26,6 +26,8 @@ class Handle {
   hid_t get() const { return id_; }
   bool valid() const { return id_ >= 0; }
   void Reset();
+  /// Gives up ownership without closing.
+  void Release() { id_ = -1; }
 
  private:
   hid_t id_ = -1;
@@ -80,6 +82,9 @@ class File {
              hid_t file_type, const void* data);
   void Read(const std::string& name, hid_t mem_type, void* data) const;
   Handle OpenAttributeTarget(const std::string& object) const;
+  /// Opens an attribute after checking that it holds one value of class `expected`.
+  Handle OpenScalarAttribute(const std::string& object, const std::string& name, H5T_class_t expected,
+                             const char* what) const;
   [[noreturn]] void Fail(const std::string& object, const std::string& what) const;
 
   Handle file_;

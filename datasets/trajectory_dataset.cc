@@ -4,6 +4,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "datasets/h5.h"
 
 namespace flowplan::datasets {
@@ -24,12 +25,6 @@ std::vector<std::string> Split(const std::string& text, char separator) {
   std::stringstream stream(text);
   for (std::string part; std::getline(stream, part, separator);) parts.push_back(part);
   return parts;
-}
-
-std::string ShapeText(const std::vector<int64_t>& shape) {
-  std::string out = "(";
-  for (size_t i = 0; i < shape.size(); ++i) out += (i ? ", " : "") + std::to_string(shape[i]);
-  return out + ")";
 }
 
 int64_t Count(const std::vector<int64_t>& shape) {
@@ -107,6 +102,7 @@ void WriteDataset(const std::string& path, const TrajectoryDataset& dataset) {
     file.SetAttribute("/", "seed", static_cast<int64_t>(dataset.seed));
     file.SetAttribute("/", "first_episode", dataset.first_episode);
     file.SetAttribute("/", "end_episode", dataset.end_episode);
+    file.SetAttribute("/", "total_episodes", dataset.total_episodes);
     file.SetAttribute("/", "rejected_episodes", dataset.rejected_episodes);
     file.SetAttribute("/", "simulator_warnings", dataset.simulator_warnings);
 
@@ -149,6 +145,7 @@ TrajectoryDataset ReadDataset(const std::string& path) {
   dataset.seed = static_cast<uint64_t>(file.GetIntAttribute("/", "seed"));
   dataset.first_episode = file.GetIntAttribute("/", "first_episode");
   dataset.end_episode = file.GetIntAttribute("/", "end_episode");
+  dataset.total_episodes = file.GetIntAttribute("/", "total_episodes");
   dataset.rejected_episodes = file.GetIntAttribute("/", "rejected_episodes");
   dataset.simulator_warnings = file.GetIntAttribute("/", "simulator_warnings");
 
@@ -217,6 +214,7 @@ TrajectoryDataset MergeDatasets(const std::vector<TrajectoryDataset>& shards,
     require(shard.point_dim == merged.point_dim, "/commanded_start shape");
     require(shard.config_yaml == merged.config_yaml, "config");
     require(shard.seed == merged.seed, "seed");
+    require(shard.total_episodes == merged.total_episodes, "total_episodes");
     require(shard.train_pairs.start == merged.train_pairs.start &&
                 shard.test_pairs.start == merged.test_pairs.start &&
                 shard.train_pairs.goal == merged.train_pairs.goal &&
@@ -247,6 +245,11 @@ TrajectoryDataset MergeDatasets(const std::vector<TrajectoryDataset>& shards,
       array.values.insert(array.values.end(), it->second.values.begin(), it->second.values.end());
       array.shape[0] += it->second.shape[0];
     }
+  }
+  if (shards.front().first_episode != 0 || merged.end_episode != merged.total_episodes) {
+    throw Error("merge: the shards hold episodes [" + std::to_string(shards.front().first_episode) + ", " +
+                std::to_string(merged.end_episode) + ") of a dataset of " + std::to_string(merged.total_episodes) +
+                "; give every shard");
   }
   merged.CheckConsistent("merge");
   return merged;

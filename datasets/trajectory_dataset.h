@@ -49,6 +49,7 @@ struct TrajectoryDataset {
   uint64_t seed = 0;
   int64_t first_episode = 0;              // episode indices [first_episode, end_episode) were rolled out
   int64_t end_episode = 0;                // (a shard holds part of a dataset's index range)
+  int64_t total_episodes = 0;             // episodes of the whole dataset the file belongs to
   int64_t rejected_episodes = 0;          // unstable/failed rollouts left out
   int64_t simulator_warnings = 0;         // simulator warnings over all kept episodes
 
@@ -65,9 +66,10 @@ void WriteDataset(const std::string& path, const TrajectoryDataset& dataset);
 /// missing files, foreign files, other format versions and inconsistent shapes.
 TrajectoryDataset ReadDataset(const std::string& path);
 
-/// Joins shards of one dataset in the order given: episodes are concatenated,
-/// counters summed; header, config and evaluation pairs must agree and the
-/// shards' episode ranges must follow each other without gap or overlap.
+/// Joins the shards of one dataset in the order given: episodes are
+/// concatenated, counters summed; header, config and evaluation pairs must
+/// agree, and the shards' episode ranges must cover the whole dataset in order,
+/// without gap or overlap.
 /// @throws flowplan::Error naming the first shard that disagrees.
 TrajectoryDataset MergeDatasets(const std::vector<TrajectoryDataset>& shards,
                                 const std::vector<std::string>& names);

@@ -9,6 +9,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "datasets/h5.h"
 
 namespace flowplan::datasets {
 namespace {
@@ -36,6 +37,7 @@ TrajectoryDataset SmallDataset() {
   d.seed = 3;
   d.first_episode = 0;
   d.end_episode = 3;
+  d.total_episodes = 3;
   d.rejected_episodes = 2;
   d.simulator_warnings = 7;
   return d;
@@ -93,6 +95,26 @@ TEST(TrajectoryDatasetTest, ForeignAndTruncatedFilesAreRejected) {
   EXPECT_THROW(ReadDataset(cut), Error);
 }
 
+TEST(TrajectoryDatasetTest, AttributeOfTheWrongKindIsAClearError) {
+  // An attribute set by another tool to a list instead of a single value.
+  const std::string path = TempPath("list_attribute.h5");
+  WriteDataset(path, SmallDataset());
+  {
+    hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    H5Adelete(file, "seed");
+    const hsize_t two = 2;
+    hid_t space = H5Screate_simple(1, &two, nullptr);
+    hid_t attribute = H5Acreate2(file, "seed", H5T_STD_I64LE, space, H5P_DEFAULT, H5P_DEFAULT);
+    const int64_t values[2] = {1, 2};
+    H5Awrite(attribute, H5T_NATIVE_INT64, values);
+    H5Aclose(attribute);
+    H5Sclose(space);
+    H5Fclose(file);
+  }
+  EXPECT_THAT([&] { ReadDataset(path); },
+              ThrowsMessage<Error>(AllOf(HasSubstr(path), HasSubstr("'seed': expected a single integer"))));
+}
+
 TEST(TrajectoryDatasetTest, InconsistentDatasetIsNotWritten) {
   TrajectoryDataset d = SmallDataset();
   d.states.pop_back();
@@ -103,7 +125,8 @@ TEST(TrajectoryDatasetTest, InconsistentDatasetIsNotWritten) {
 }
 
 TEST(TrajectoryDatasetTest, MergeConcatenatesAndChecksCompatibility) {
-  const TrajectoryDataset a = SmallDataset();
+  TrajectoryDataset a = SmallDataset();
+  a.total_episodes = 6;  // a and b are the halves of a dataset of 6 episodes
   TrajectoryDataset b = a;
   b.first_episode = a.end_episode;
   b.end_episode = a.end_episode + 3;
@@ -120,6 +143,8 @@ TEST(TrajectoryDatasetTest, MergeConcatenatesAndChecksCompatibility) {
               ThrowsMessage<Error>(AllOf(HasSubstr("c.h5"), HasSubstr("seed"))));
   EXPECT_THAT([&] { MergeDatasets({a, a}, {"a.h5", "a_again.h5"}); },
               ThrowsMessage<Error>(AllOf(HasSubstr("a_again.h5"), HasSubstr("in order, each once"))));
+  EXPECT_THAT([&] { MergeDatasets({a}, {"a.h5"}); },
+              ThrowsMessage<Error>(HasSubstr("the shards hold episodes [0, 3) of a dataset of 6")));
 }
 
 }  // namespace
