@@ -2,14 +2,13 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/format.h"
 
 namespace flowplan::checkpoints {
 namespace {
 
 using torch::serialize::InputArchive;
 using torch::serialize::OutputArchive;
-
-std::string FirstLine(const std::string& text) { return text.substr(0, text.find('\n')); }
 
 InputArchive OpenArchive(const std::string& path) {
   {
@@ -122,8 +121,28 @@ void LoadCheckpointWeights(const std::string& path, const CheckpointModules& mod
                   FirstLine(e.what_without_backtrace()));
     }
   };
-  load("model", modules.model);
-  load("ema", modules.ema);
+  // LibTorch replaces each tensor with the stored one whatever its shape, so the
+  // shapes are compared after loading.
+  auto load_module = [&](const char* key, torch::nn::Module* module) {
+    if (module == nullptr) return;
+    std::vector<std::pair<std::string, std::vector<int64_t>>> shapes;
+    for (const auto& item : module->named_parameters()) shapes.emplace_back(item.key(), item.value().sizes().vec());
+    for (const auto& item : module->named_buffers()) shapes.emplace_back(item.key(), item.value().sizes().vec());
+    load(key, module);
+    auto params = module->named_parameters();
+    auto buffers = module->named_buffers();
+    for (const auto& [name, shape] : shapes) {
+      const torch::Tensor* now = params.find(name);
+      if (now == nullptr) now = buffers.find(name);
+      if (now == nullptr || now->sizes().vec() != shape) {
+        throw Error(path + ": \"" + std::string(key) + "\" weight " + name + " has shape " +
+                    (now ? ShapeText(now->sizes().vec()) : std::string("(missing)")) + ", the model expects " +
+                    ShapeText(shape) + " (was the config changed?)");
+      }
+    }
+  };
+  load_module("model", modules.model);
+  load_module("ema", modules.ema);
   load("optimizer", modules.optimizer);
 }
 

@@ -20,6 +20,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <set>
@@ -42,6 +43,7 @@ struct Bounds {
   bool lo_open = false;
   bool hi_open = false;
   const char* expected = nullptr;  // e.g. "a positive number"; null: derived from lo/hi
+  bool allow_infinite = false;     // .inf / -.inf accepted (when inside [lo, hi]), e.g. "no cap"
 
   bool Contains(double x) const {
     return (lo_open ? x > lo : x >= lo) && (hi_open ? x < hi : x <= hi);
@@ -59,6 +61,10 @@ inline Bounds NonNegative() {
 inline Bounds AtLeast(double lo) { return {lo, std::numeric_limits<double>::infinity()}; }
 inline Bounds InRange(double lo, double hi) { return {lo, hi}; }
 inline Bounds Probability() { return {0.0, 1.0, false, false, "a probability in [0, 1]"}; }
+/// A positive value or .inf (meaning "no limit").
+inline Bounds PositiveOrInfinite() {
+  return {0.0, std::numeric_limits<double>::infinity(), true, false, "a positive value or .inf", true};
+}
 
 /// Names of an enum's values, returned by an ADL-visible function declared next to
 /// the enum:  `inline const config::EnumNames<Mode>& EnumEntries(Mode) {...}`.
@@ -68,10 +74,10 @@ using EnumNames = std::vector<std::pair<E, const char*>>;
 /// Where a YAML value came from, for error messages.
 struct Location {
   std::string source;  // "configs/x.yaml" or "command line"
-  std::string key;     // dotted key, e.g. "trainer.batch_size"
+  std::string key;     // dotted key, e.g. "train.batch_size"
   int line = -1;       // 1-based line in the source, -1 if unknown
 
-  std::string Prefix() const;  // "configs/x.yaml:12: trainer.batch_size"
+  std::string Prefix() const;  // "configs/x.yaml:12: train.batch_size"
 };
 
 /// One line of a key listing, for `flowplan config keys` and --help texts.
@@ -149,6 +155,7 @@ void DecodeScalar(const YAML::Node& node, T& out, const Location& where, const B
     if (!node.IsScalar() || !YAML::convert<double>::decode(node, value))
       ThrowExpected(where, "a number", node);
     if (!(value == value)) ThrowExpected(where, "a number", node);
+    if (std::isinf(value) && !bounds.allow_infinite) ThrowExpected(where, "a finite number", node);
     if (!bounds.Contains(value)) ThrowExpected(where, bounds.Describe(), node);
     out = static_cast<T>(value);
   } else if constexpr (std::is_same_v<T, std::string>) {

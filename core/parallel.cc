@@ -4,6 +4,7 @@
 #include <atomic>
 #include <exception>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -36,7 +37,12 @@ void ParallelFor(int count, int threads, const std::function<void(int, int)>& bo
   } else {
     std::vector<std::thread> pool;
     pool.reserve(threads);
-    for (int w = 0; w < threads; ++w) pool.emplace_back(work, w);
+    try {
+      for (int w = 0; w < threads; ++w) pool.emplace_back(work, w);
+    } catch (const std::system_error&) {
+      // Fewer threads than asked for: the ones running finish the work.
+      if (pool.empty()) throw;
+    }
     for (auto& t : pool) t.join();
   }
   if (error) std::rethrow_exception(error);

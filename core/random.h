@@ -10,9 +10,11 @@ namespace flowplan {
 /// which thread runs it or in which order.
 uint64_t StreamSeed(uint64_t base_seed, uint64_t index);
 
-/// A small, portable generator (xoshiro256++ seeded through SplitMix64) whose
-/// outputs are the same on every platform and standard library; std::normal_
-/// distribution is not. Not thread-safe: each worker owns its own.
+/// A small generator (xoshiro256++ seeded through SplitMix64) whose integer and
+/// uniform outputs are the same with every compiler and standard library
+/// (std::normal_distribution's are not); Normal() uses the C library's log,
+/// sin and cos, so it matches wherever those do. Not thread-safe: each worker
+/// owns its own.
 class Rng {
  public:
   explicit Rng(uint64_t seed);

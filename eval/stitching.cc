@@ -1,9 +1,10 @@
 #include "eval/stitching.h"
 
 #include <cmath>
-#include <sstream>
 
 #include "core/error.h"
+#include "core/format.h"
+#include "core/interrupt.h"
 #include "core/parallel.h"
 
 namespace flowplan::eval {
@@ -17,6 +18,7 @@ torch::Tensor StitchingErrors(const torch::Tensor& plans, const torch::Tensor& s
 
 torch::Tensor PlanInChunks(const planning::FlowPlanner& planner, const torch::Tensor& start, const torch::Tensor& goal,
                            at::Generator& generator, int threads, int64_t chunk) {
+  at::globalContext().setFlushDenormal(true);  // as in training; worker threads inherit it
   const int64_t N = start.size(0);
   const std::vector<int64_t> shape = {N, planner.horizon(), planner.state_dim()};
   const torch::Tensor noise = torch::randn(shape, generator, torch::kFloat32);
@@ -26,6 +28,7 @@ torch::Tensor PlanInChunks(const planning::FlowPlanner& planner, const torch::Te
   const int chunks = static_cast<int>((N + chunk - 1) / chunk);
   std::vector<torch::Tensor> plans(static_cast<size_t>(chunks));
   ParallelFor(chunks, threads, [&](int, int c) {
+    ThrowIfInterrupted();
     const int64_t begin = c * chunk, end = std::min(N, begin + chunk);
     plans[c] = planner.Plan(start.slice(0, begin, end), goal.slice(0, begin, end), noise.slice(0, begin, end),
                             renoise.defined() ? renoise.slice(0, begin, end) : renoise);
@@ -47,7 +50,7 @@ StitchingResult EvaluateStitching(const planning::FlowPlanner& planner, const da
   result.pair_index = pair_index;
   const torch::Tensor errors = StitchingErrors(result.plans, start, goal).to(torch::kFloat64);
   result.mean = errors.mean().item<double>();
-  result.std = config.num_plans > 1 ? errors.std(/*unbiased=*/false).item<double>() : 0.0;
+  result.stddev = config.num_plans > 1 ? errors.std(/*unbiased=*/false).item<double>() : 0.0;
   for (int64_t p = 0; p < P; ++p) {
     result.pair_names.push_back(p < static_cast<int64_t>(pairs.names.size()) ? pairs.names[p] : std::to_string(p));
     const torch::Tensor mask = pair_index == p;
@@ -57,15 +60,14 @@ StitchingResult EvaluateStitching(const planning::FlowPlanner& planner, const da
 }
 
 std::string ToJson(const StitchingResult& result) {
-  std::ostringstream out;
-  out.precision(6);
-  out << "{\"pairs\": \"" << result.pairs << "\", \"mean\": " << result.mean << ", \"std\": " << result.std
-      << ", \"num_plans\": " << (result.plans.defined() ? result.plans.size(0) : 0) << ", \"per_pair\": {";
+  std::string out = "{\"pairs\": " + JsonString(result.pairs) + ", \"mean\": " + JsonNumber(result.mean) +
+                    ", \"stddev\": " + JsonNumber(result.stddev) +
+                    ", \"num_plans\": " + std::to_string(result.plans.defined() ? result.plans.size(0) : 0) +
+                    ", \"per_pair\": {";
   for (size_t i = 0; i < result.pair_names.size(); ++i) {
-    out << (i ? ", " : "") << "\"" << result.pair_names[i] << "\": " << result.pair_means[i];
+    out += (i ? ", " : "") + JsonString(result.pair_names[i]) + ": " + JsonNumber(result.pair_means[i]);
   }
-  out << "}}";
-  return out.str();
+  return out + "}}";
 }
 
 }  // namespace flowplan::eval

@@ -29,7 +29,7 @@ struct EvalConfig {
 struct StitchingResult {
   std::string pairs;                  // "test" or "train"
   double mean = 0.0;
-  double std = 0.0;
+  double stddev = 0.0;
   std::vector<std::string> pair_names;  // (P,)
   std::vector<double> pair_means;       // (P,)
   torch::Tensor plans;                  // (num_plans, T, D) raw
@@ -52,7 +52,8 @@ StitchingResult EvaluateStitching(const planning::FlowPlanner& planner, const da
 torch::Tensor PlanInChunks(const planning::FlowPlanner& planner, const torch::Tensor& start, const torch::Tensor& goal,
                            at::Generator& generator, int threads, int64_t chunk = 16);
 
-/// {"pairs": "test", "mean": …, "std": …, "per_pair": {"name": mean, …}}
+/// {"pairs": "test", "mean": …, "stddev": …, "num_plans": …, "per_pair": {"name": mean, …}};
+/// NaN (no plans) is written as null.
 std::string ToJson(const StitchingResult& result);
 
 }  // namespace flowplan::eval

@@ -8,6 +8,7 @@
 #include "checkpoints/checkpoint.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/parallel.h"
 #include "datasets/generator.h"
 #include "datasets/h5.h"
@@ -115,11 +116,33 @@ void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
   setup.stop_at_step = request.until_step;
   spdlog::info("training {} on {} ({} threads) into {}", config::internal::EnumName(config.model.architecture),
                config.data.path, threads, config.run_dir);
-  const trainer::TrainResult result = trainer::Train(setup, data, request.resume);
+  const trainer::TrainResult result = trainer::Train(setup, data, request.start);
   spdlog::info("trained {} steps in {:.1f} s: loss {:.5f}, val loss {:.5f}, stitching error test {:.4f} ± {:.4f}; "
                "checkpoint {}",
-               result.steps, result.seconds, result.train_loss, result.val_loss, result.test.mean, result.test.std,
+               result.steps, result.seconds, result.train_loss, result.val_loss, result.test.mean, result.test.stddev,
                result.checkpoint);
+}
+
+void CheckSameNetwork(const ExperimentConfig& trained, const ExperimentConfig& changed, const std::string& where) {
+  const auto before = config::ListKeys(trained), after = config::ListKeys(changed);
+  for (size_t i = 0; i < before.size(); ++i) {
+    const std::string& key = before[i].key;
+    const bool shapes_network = key.rfind("model.", 0) == 0 || key == "flow.conditioning";
+    if (shapes_network && before[i].default_value != after[i].default_value) {
+      throw Error(key + ": the network was trained with " + before[i].default_value + " (" + where + "), got " +
+                  after[i].default_value + "; a trained network's architecture and conditioning cannot change");
+    }
+  }
+}
+
+void RunResume(const std::string& run_dir, const std::vector<std::string>& overrides, int64_t until_step) {
+  const std::string stored = run_dir + "/config.yaml";
+  const std::string text = ReadFile(stored);
+  const ExperimentConfig trained = LoadExperimentText(text, stored, "", {});
+  ExperimentConfig config = LoadExperimentText(text, stored, "", overrides);
+  CheckSameNetwork(trained, config, stored);
+  config.run_dir = run_dir;
+  RunTrain(config, TrainRequest{trainer::TrainStart::kResume, until_step});
 }
 
 LoadedPlanner LoadPlanner(const std::string& ckpt, const std::string& overlay_path,
@@ -127,8 +150,9 @@ LoadedPlanner LoadPlanner(const std::string& ckpt, const std::string& overlay_pa
   LoadedPlanner loaded;
   loaded.checkpoint = trainer::ResolveCheckpoint(ckpt);
   const checkpoints::CheckpointHeader header = checkpoints::ReadCheckpointHeader(loaded.checkpoint);
-  loaded.config = LoadExperimentText(header.config_yaml, loaded.checkpoint + " (stored config)", overlay_path,
-                                     overrides);
+  const std::string where = loaded.checkpoint + " (stored config)";
+  loaded.config = LoadExperimentText(header.config_yaml, where, overlay_path, overrides);
+  CheckSameNetwork(LoadExperimentText(header.config_yaml, where, "", {}), loaded.config, loaded.checkpoint);
   loaded.step = header.step;
   loaded.env = header.env;
   loaded.dt = header.dt;
@@ -160,16 +184,18 @@ void RunEvalStitching(const EvalRequest& request) {
   const std::string run = RunFolderOf(loaded.checkpoint);
   const std::string out = request.out.empty() ? run + "/eval_stitching.json" : request.out;
   EnsureParentFolder(out);
-  const std::string json = "{\"checkpoint\": \"" + loaded.checkpoint + "\", \"step\": " + std::to_string(loaded.step) +
-                           ", \"data\": \"" + loaded.config.data.path + "\", \"sampler_steps\": " +
-                           std::to_string(loaded.config.sampler.steps) + ", \"test\": " + eval::ToJson(test) +
-                           ", \"train\": " + eval::ToJson(train) + "}\n";
+  const std::string json =
+      "{\"checkpoint\": " + JsonString(loaded.checkpoint) + ", \"step\": " + std::to_string(loaded.step) +
+      ", \"data\": " + JsonString(loaded.config.data.path) +
+      ", \"sampler_steps\": " + std::to_string(loaded.config.sampler.steps) +
+      ", \"sampler_splitting\": " + JsonString(config::internal::EnumName(loaded.config.sampler.splitting)) +
+      ", \"test\": " + eval::ToJson(test) + ", \"train\": " + eval::ToJson(train) + "}\n";
   WriteFileAtomically(out, json);
   const std::string plans = fs::path(out).replace_extension(".plans.h5").string();
   WritePlans(plans, test, train);
   spdlog::info("stitching error (step {}, {} plans): test pairs {:.4f} ± {:.4f}, training pairs {:.4f} ± {:.4f}; "
                "wrote {} and {}",
-               loaded.step, loaded.config.eval.num_plans, test.mean, test.std, train.mean, train.std, out, plans);
+               loaded.step, loaded.config.eval.num_plans, test.mean, test.stddev, train.mean, train.stddev, out, plans);
 }
 
 void RunExport(const EvalRequest& request) {

@@ -10,6 +10,7 @@
 
 #include "experiment/experiment_config.h"
 #include "planning/flow_planner.h"
+#include "trainer/trainer.h"
 
 namespace flowplan::experiment {
 
@@ -31,12 +32,22 @@ void RunGenerate(const ExperimentConfig& config, const GenerateRequest& request)
 void RunMerge(const std::vector<std::string>& inputs, const std::string& out);
 
 struct TrainRequest {
-  bool resume = false;
+  trainer::TrainStart start = trainer::TrainStart::kFresh;
   int64_t until_step = 0;  // --until: stop (with a checkpoint) at this step; 0: run to train.steps
 };
 
 /// `flowplan train`: trains (or resumes) the run in config.run_dir.
 void RunTrain(const ExperimentConfig& config, const TrainRequest& request);
+
+/// `flowplan train --resume RUN_DIR`: the run's stored config with `overrides`
+/// (e.g. train.steps=8000 to train longer).
+/// @throws flowplan::Error if an override changes the network or its conditioning.
+void RunResume(const std::string& run_dir, const std::vector<std::string>& overrides, int64_t until_step);
+
+/// Throws, naming the key, if `changed` differs from `trained` in anything that
+/// shapes the trained network (model.*, flow.conditioning). `where` names the
+/// stored config in the message.
+void CheckSameNetwork(const ExperimentConfig& trained, const ExperimentConfig& changed, const std::string& where);
 
 /// A planner restored from a checkpoint (EMA weights), with the config it was trained with.
 struct LoadedPlanner {

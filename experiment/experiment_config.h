@@ -31,7 +31,7 @@ struct ExperimentConfig {
   void Visit(V& v) {
     v.Field("seed", seed, "base seed of every random draw", config::NonNegative());
     v.Field("threads", threads, "CPU threads, 0 for all cores (results do not depend on it)",
-            config::NonNegative());
+            config::InRange(0, 1024));
     v.Field("run_dir", run_dir, "folder of the training run (config, metrics, checkpoints, planner)");
     v.Field("generate", generate, "dataset generation");
     v.Field("data", data, "training data");

@@ -3,15 +3,10 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/format.h"
 
 namespace flowplan::kinematics {
 namespace {
-
-std::string ShapeText(const torch::Tensor& t) {
-  std::string out = "(";
-  for (int64_t i = 0; i < t.dim(); ++i) out += (i ? ", " : "") + std::to_string(t.size(i));
-  return out + ")";
-}
 
 /// 4×4 pose from a position and a unit quaternion (w, x, y, z), float64.
 torch::Tensor Pose(const std::array<double, 3>& pos, const std::array<double, 4>& quat) {
@@ -90,7 +85,7 @@ ForwardKinematics::ForwardKinematics(const sim::KinematicDescription& descriptio
 void ForwardKinematics::CheckJoints(const torch::Tensor& q) const {
   if (!q.defined() || q.dim() != 2 || q.size(1) != num_joints_) {
     throw Error("kinematics: q: expected (B, " + std::to_string(num_joints_) + "), got " +
-                (q.defined() ? ShapeText(q) : std::string("an undefined tensor")));
+                (q.defined() ? ShapeText(q.sizes().vec()) : std::string("an undefined tensor")));
   }
   if (q.scalar_type() != torch::kFloat32 && q.scalar_type() != torch::kFloat64) {
     throw Error(std::string("kinematics: q: expected float32 or float64, got ") + c10::toString(q.scalar_type()));

@@ -1,14 +1,12 @@
 #include "models/velocity_net.h"
 
 #include "core/error.h"
+#include "core/format.h"
 
 namespace flowplan::models {
 
 std::string ShapeString(const torch::Tensor& tensor) {
-  if (!tensor.defined()) return "(undefined)";
-  std::string out = "(";
-  for (int64_t i = 0; i < tensor.dim(); ++i) out += (i ? ", " : "") + std::to_string(tensor.size(i));
-  return out + ")";
+  return tensor.defined() ? ShapeText(tensor.sizes().vec()) : "(undefined)";
 }
 
 void CheckVelocityInputs(const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond,
@@ -26,6 +24,20 @@ void CheckVelocityInputs(const torch::Tensor& x, const torch::Tensor& t, const t
   if (cond_dim > 0 && (!cond.defined() || cond.dim() != 2 || cond.size(0) != batch || cond.size(1) != cond_dim)) {
     throw Error("velocity network: cond: expected (" + std::to_string(batch) + ", " + std::to_string(cond_dim) +
                 "), got " + ShapeString(cond));
+  }
+}
+
+}  // namespace flowplan::models
+
+namespace flowplan::models {
+
+void CheckHalfHorizon(const VelocityNet& net, int64_t horizon, const std::string& what) {
+  try {
+    if (horizon % 2 != 0) throw Error("the horizon " + std::to_string(horizon) + " is odd");
+    net.CheckHorizon(horizon / 2);
+  } catch (const Error& e) {
+    throw Error(what + " halves of " + std::to_string(horizon / 2) + " states, which the network cannot take: " +
+                e.what());
   }
 }
 

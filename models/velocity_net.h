@@ -41,6 +41,10 @@ using VelocityNetPtr = std::shared_ptr<VelocityNet>;
 void CheckVelocityInputs(const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond,
                          int64_t state_dim, int64_t cond_dim);
 
+/// Throws, naming `what` (e.g. "flow.split_prob > 0 trains on"), if `net` cannot
+/// take the halves (T/2 states) of a horizon-T trajectory.
+void CheckHalfHorizon(const VelocityNet& net, int64_t horizon, const std::string& what);
+
 /// "(2, 64, 4)"
 std::string ShapeString(const torch::Tensor& tensor);
 

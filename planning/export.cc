@@ -35,7 +35,7 @@ def integrate(self, x: Tensor, s: Tensor, g: Tensor, t0: float, steps: int) -> T
                : "    cond: Optional[Tensor] = torch.cat([s, g], -1)\n";
   s += "    h = (1.0 - t0) / steps\n";
   s += "    for i in range(steps):\n";
-  s += "        t = torch.full([x.size(0)], t0 + i * h)\n";
+  s += "        t = torch.full([x.size(0)], t0 + i * h, dtype=x.dtype, device=x.device)\n";
   if (inpaint) {
     s += "        x = x + h * self.velocity(self.inpaint(x, s, g), t, cond)\n";
     s += "        x = self.inpaint(x, s, g)\n";
@@ -71,9 +71,10 @@ def plan(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Ten
   s += R"PY(
 def sample(self, start: Tensor, goal: Tensor, num_samples: int) -> Tensor:
     assert start.dim() == 1 and goal.dim() == 1, "sample: expected start and goal of shape (D,)"
-    noise = torch.randn([num_samples, )PY" + T + ", " + D + R"PY(])
+    noise = torch.randn([num_samples, )PY" + T + ", " + D + R"PY(], dtype=self.lo.dtype, device=self.lo.device)
 )PY";
-  s += splitting ? "    renoise: Optional[Tensor] = torch.randn([num_samples, " + T + ", " + D + "])\n"
+  s += splitting ? "    renoise: Optional[Tensor] = torch.randn([num_samples, " + T + ", " + D +
+                       "], dtype=self.lo.dtype, device=self.lo.device)\n"
                  : "    renoise: Optional[Tensor] = None\n";
   s += "    return self.plan(start.unsqueeze(0).expand(num_samples, -1), goal.unsqueeze(0).expand(num_samples, -1), "
        "noise, renoise)\n";

@@ -18,15 +18,7 @@ FlowPlanner::FlowPlanner(models::VelocityNetPtr net, models::MinMaxNormalizer no
   FLOWPLAN_DEMAND(net_->cond_dim() == ConditionDim(conditioning_, net_->state_dim()));
   net_->CheckHorizon(horizon_);
   if (sampler_.steps < 1) throw Error("sampler.steps: expected a positive value, got " + std::to_string(sampler_.steps));
-  if (sampler_.splitting != Splitting::kNone) {
-    try {
-      if (horizon_ % 2 != 0) throw Error("the horizon " + std::to_string(horizon_) + " is odd");
-      net_->CheckHorizon(horizon_ / 2);
-    } catch (const Error& e) {
-      throw Error("sampler.splitting: plans halves of " + std::to_string(horizon_ / 2) +
-                  " states, which this planner cannot take: " + e.what());
-    }
-  }
+  if (sampler_.splitting != Splitting::kNone) models::CheckHalfHorizon(*net_, horizon_, "sampler.splitting plans");
 }
 
 void FlowPlanner::CheckRequest(const torch::Tensor& start, const torch::Tensor& goal, const torch::Tensor& noise,

@@ -43,8 +43,8 @@ struct SamplerConfig {
 inline int SplitSteps(const SamplerConfig& sampler) { return std::max(1, sampler.steps / 2); }
 
 /// A trained flow planner: network, normalizer, conditioning and sampler.
-/// Planning does not change it; concurrent calls need separate planners only
-/// because LibTorch modules are not re-entrant under autograd.
+/// Planning does not change it, and Plan() (which runs without autograd) may be
+/// called from several threads at once.
 class FlowPlanner {
  public:
   /// @param horizon T the network was trained for; @throws if the network cannot take it.

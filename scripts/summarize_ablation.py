@@ -15,6 +15,6 @@ with open(os.path.join(out, "variants.txt")) as f:
         with open(os.path.join(out, name, "eval_stitching_split.json")) as g:
             split = json.load(g)
         data = "no noise" if "no_noise" in config else "noise"
-        cell = lambda r: f"{r['mean']:.3f} ± {r['std']:.3f}"
+        cell = lambda r: f"{r['mean']:.3f} ± {r['stddev']:.3f}"
         print(f"| {name} | {data} | {overrides or '—'} | {plain['step']} | {cell(plain['test'])} | "
               f"{cell(split['test'])} | {cell(plain['train'])} |")

@@ -13,5 +13,5 @@ for name, label in (("eval_stitching.json", "FP"), ("eval_stitching_split.json",
     with open(path) as f:
         report = json.load(f)
     test, train = report["test"], report["train"]
-    parts.append(f"{label}: test {test['mean']:.3f} ± {test['std']:.3f} (train pairs {train['mean']:.3f})")
+    parts.append(f"{label}: test {test['mean']:.3f} ± {test['stddev']:.3f} (train pairs {train['mean']:.3f})")
 print(f"  {config:40s} step {report['step']}: " + "; ".join(parts))

@@ -55,7 +55,7 @@ struct OscConfig {
     v.Field("damping_ratio", damping_ratio, "task-space damping ratio (1: critical)",
             config::NonNegative());
     v.Field("max_speed", max_speed, "cap on the commanded TCP speed (m/s; .inf: none)",
-            config::Positive());
+            config::PositiveOrInfinite());
     v.Field("orientation_stiffness", orientation_stiffness, "task-space orientation stiffness (1/s^2)",
             config::Positive());
     v.Field("speed_guard", speed_guard,

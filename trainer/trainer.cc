@@ -5,11 +5,12 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
-#include <sstream>
+#include <cstdlib>
 
 #include "checkpoints/checkpoint.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/interrupt.h"
 #include "core/progress.h"
 #include "core/random.h"
@@ -21,10 +22,10 @@
 namespace flowplan::trainer {
 namespace {
 
-// Stream indices of the run's generators (see StreamSeed).
-constexpr uint64_t kTrainStream = 1;
-constexpr uint64_t kInitStream = 2;
-constexpr uint64_t kValidationStream = 3;
+// Stream tags of the run's generators (see StreamSeed), apart from small episode indices.
+constexpr uint64_t kTrainStream = 0x7261'696e'0001ULL;
+constexpr uint64_t kInitStream = 0x7261'696e'0002ULL;
+constexpr uint64_t kValidationStream = 0x7261'696e'0003ULL;
 
 /// Seeds LibTorch's global generator for the duration of a scope (module
 /// constructors draw their initial weights from it) and restores it after.
@@ -69,7 +70,8 @@ void UpdateEma(models::VelocityNet& ema, const models::VelocityNet& net, double 
   for (size_t i = 0; i < source.size(); ++i) target[i].mul_(decay).add_(source[i], 1.0 - decay);
 }
 
-/// Keeps the rows of a metrics file up to `step` (a resumed run rewrites what follows).
+/// Keeps the rows of a metrics file up to `step` (a resumed run rewrites what
+/// follows); rows it cannot read are dropped.
 void TruncateMetrics(const std::string& path, int64_t step) {
   std::ifstream in(path);
   if (!in) return;
@@ -77,17 +79,11 @@ void TruncateMetrics(const std::string& path, int64_t step) {
   while (std::getline(in, line)) {
     const auto pos = line.find("\"step\": ");
     if (pos == std::string::npos) continue;
-    if (std::stoll(line.substr(pos + 8)) <= step) kept += line + "\n";
+    char* end = nullptr;
+    const long long row_step = std::strtoll(line.c_str() + pos + 8, &end, 10);
+    if (end != line.c_str() + pos + 8 && row_step <= step) kept += line + "\n";
   }
   WriteFileAtomically(path, kept);
-}
-
-std::string Number(double value) {
-  if (!std::isfinite(value)) return "null";
-  std::ostringstream out;
-  out.precision(7);
-  out << value;
-  return out.str();
 }
 
 class MetricsLog {
@@ -121,152 +117,201 @@ double ValidationLoss(models::VelocityNet& net, const torch::Tensor& val, planni
   return total / static_cast<double>(count);
 }
 
-TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& data, bool resume) {
-  const auto started = std::chrono::steady_clock::now();
-  const TrainerConfig& config = setup.train;
-  const int64_t T = data.horizon(), D = data.state_dim();
-  // One intra-op thread: parallelism comes from the gradient shards (see ShardedGradient).
-  at::set_num_threads(1);
-  RunDir run(setup.run_dir);
-  run.Create();
-  WriteFileAtomically(run.config(), setup.config_yaml);
 
-  models::VelocityNetPtr net = BuildNet(setup, D);
-  models::VelocityNetPtr ema = BuildNet(setup, D);
-  models::CopyWeights(*net, *ema);
-  net->CheckHorizon(T);
-  if (setup.flow.split_prob > 0.0) {
-    try {
-      net->CheckHorizon(T / 2);
-      if (T % 2 != 0) throw Error("odd horizon " + std::to_string(T));
-    } catch (const Error& e) {
-      throw Error("flow.split_prob > 0 trains on half trajectories of " + std::to_string(T / 2) +
-                  " states, which the network cannot take: " + e.what());
+namespace {
+
+/// One training run: the networks, optimizer, generator and run folder, and
+/// the steps that advance them.
+class TrainingRun {
+ public:
+  TrainingRun(const TrainingSetup& setup, const datasets::TrajectorySplits& data, TrainStart start)
+      : setup_(setup),
+        config_(setup.train),
+        data_(data),
+        run_(setup.run_dir),
+        T_(data.horizon()),
+        D_(data.state_dim()),
+        net_(BuildNet(setup, D_)),
+        ema_(BuildNet(setup, D_)),
+        optimizer_(net_->parameters(), torch::optim::AdamWOptions(config_.lr).weight_decay(config_.weight_decay)),
+        generator_(at::make_generator<at::CPUGeneratorImpl>(StreamSeed(setup.seed, kTrainStream))),
+        normalizer_(models::MinMaxNormalizer::Fit(data.train)) {
+    models::CopyWeights(*net_, *ema_);
+    net_->CheckHorizon(T_);
+    if (setup.flow.split_prob > 0.0) models::CheckHalfHorizon(*net_, T_, "flow.split_prob > 0 trains on");
+    run_.Create();
+    if (start == TrainStart::kResume) {
+      Restore();
+    } else if (!run_.CheckpointSteps().empty()) {
+      throw Error(run_.root() + ": holds checkpoints of an earlier run; continue it with flowplan train --resume " +
+                  run_.root() + ", or choose another run_dir");
+    } else {
+      std::remove(run_.metrics().c_str());
     }
+    // Written only once the run is known to start: a failed start leaves the folder as it was.
+    WriteFileAtomically(run_.config(), setup.config_yaml);
+    train_n_ = normalizer_.Normalize(data.train);
+    val_n_ = data.val.size(0) > 0 ? normalizer_.Normalize(data.val) : data.val;
+    ema_planner_ = std::make_unique<planning::FlowPlanner>(ema_, normalizer_, setup.flow.conditioning, T_,
+                                                           setup.sampler);
+    gradient_ = std::make_unique<ShardedGradient>(*net_, [&] { return BuildNet(setup_, D_); }, config_.shards,
+                                                  setup.threads);
+    metrics_ = std::make_unique<MetricsLog>(run_.metrics());
+    spdlog::info("model: {} parameters, horizon {}, state dim {}, {} training / {} validation episodes",
+                 models::CountParameters(*net_), T_, D_, data.train.size(0), data.val.size(0));
   }
-  torch::optim::AdamW optimizer(net->parameters(),
-                                torch::optim::AdamWOptions(config.lr).weight_decay(config.weight_decay));
-  auto generator = at::make_generator<at::CPUGeneratorImpl>(StreamSeed(setup.seed, kTrainStream));
 
-  models::MinMaxNormalizer normalizer = models::MinMaxNormalizer::Fit(data.train);
-  int64_t step = 0;
-  if (resume) {
-    const std::string path = run.LatestCheckpoint();
+  TrainResult Run() {
+    const auto started = std::chrono::steady_clock::now();
+    const int64_t last_step =
+        setup_.stop_at_step > 0 ? std::min(setup_.stop_at_step, config_.steps) : config_.steps;
+    ProgressMeter progress("train", config_.steps, "steps", 0.0);
+    progress.Update(step_);
+    net_->train();
+    while (step_ < last_step) {
+      if (InterruptRequested()) {
+        throw Error("interrupted at step " + std::to_string(step_) + "; checkpoint " + Save() +
+                    "; continue with: flowplan train --resume " + setup_.run_dir);
+      }
+      const double lr = CosineLearningRate(config_, step_);
+      const double loss = Step(lr);
+      window_loss_ += loss;
+      ++window_steps_;
+      if (step_ % config_.log_every == 0 || step_ == last_step) LogProgress(lr, progress.Rate(step_));
+      if ((config_.eval_every > 0 && step_ % config_.eval_every == 0) || step_ == last_step) {
+        Evaluate();
+        LogEvaluation();
+      }
+      if (step_ % config_.checkpoint_every == 0 || step_ == last_step) result_.checkpoint = Save();
+    }
+    if (result_.checkpoint.empty()) {
+      // Resumed at the final step: nothing left to train, and its metrics are logged already.
+      Evaluate();
+      result_.checkpoint = run_.LatestCheckpoint();
+    }
+    result_.steps = step_;
+    result_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    return result_;
+  }
+
+ private:
+  void Restore() {
+    const std::string path = run_.LatestCheckpoint();
     const checkpoints::CheckpointHeader header = checkpoints::ReadCheckpointHeader(path);
-    if (header.horizon != T || header.normalizer.dim() != D) {
+    if (header.horizon != T_ || header.normalizer.dim() != D_) {
       throw Error(path + ": checkpoint was trained on (T, D) = (" + std::to_string(header.horizon) + ", " +
-                  std::to_string(header.normalizer.dim()) + "), the data has (" + std::to_string(T) + ", " +
-                  std::to_string(D) + ")");
+                  std::to_string(header.normalizer.dim()) + "), the data has (" + std::to_string(T_) + ", " +
+                  std::to_string(D_) + ")");
     }
-    checkpoints::LoadCheckpointWeights(path, {net.get(), ema.get(), &optimizer});
-    normalizer = header.normalizer;
-    generator.set_state(header.rng_state);
-    step = header.step;
-    TruncateMetrics(run.metrics(), step);
-    spdlog::info("resuming {} at step {}", path, step);
-  } else {
-    std::remove(run.metrics().c_str());
+    checkpoints::LoadCheckpointWeights(path, {net_.get(), ema_.get(), &optimizer_});
+    normalizer_ = header.normalizer;
+    generator_.set_state(header.rng_state);
+    step_ = header.step;
+    TruncateMetrics(run_.metrics(), step_);
+    spdlog::info("resuming {} at step {}", path, step_);
   }
-  spdlog::info("model: {} parameters, horizon {}, state dim {}, {} training / {} validation episodes",
-               models::CountParameters(*net), T, D, data.train.size(0), data.val.size(0));
 
-  const torch::Tensor train_n = normalizer.Normalize(data.train);
-  const torch::Tensor val_n = data.val.size(0) > 0 ? normalizer.Normalize(data.val) : data.val;
-  const int64_t num_train = train_n.size(0);
-  const planning::FlowPlanner ema_planner(ema, normalizer, setup.flow.conditioning, T, setup.sampler);
-  MetricsLog metrics(run.metrics());
-  ShardedGradient gradient(*net, [&] { return BuildNet(setup, D); }, config.shards, setup.threads);
-
-  auto save = [&](int64_t at_step) {
-    checkpoints::CheckpointHeader header;
-    header.step = at_step;
-    header.config_yaml = setup.config_yaml;
-    header.normalizer = normalizer;
-    header.rng_state = generator.get_state();
-    header.env = data.env;
-    header.dt = data.dt;
-    header.state_labels = data.state_labels;
-    header.horizon = T;
-    const std::string path = run.checkpoint(at_step);
-    checkpoints::SaveCheckpoint(path, header, {net.get(), ema.get(), &optimizer});
-    run.PruneCheckpoints(config.keep_checkpoints);
-    return path;
-  };
-
-  TrainResult result;
-  auto evaluate = [&](int64_t at_step) {
-    ema->eval();
-    result.val_loss = ValidationLoss(*ema, val_n, setup.flow.conditioning, config.val_batch_size,
-                                     StreamSeed(setup.seed, kValidationStream));
-    auto stitching = [&](const datasets::EvalPairTensors& pairs, const std::string& label) {
-      if (!pairs.names.empty()) return eval::EvaluateStitching(ema_planner, pairs, label, setup.eval, setup.threads);
-      eval::StitchingResult none;  // datasets without start/goal families (e.g. random reaches)
-      none.pairs = label;
-      none.mean = none.std = NAN;
-      return none;
-    };
-    result.test = stitching(data.test_pairs, "test");
-    result.train = stitching(data.train_pairs, "train");
-    spdlog::info("eval step {}: val loss {:.5f}, stitching error test {:.4f} ± {:.4f}, train {:.4f} ± {:.4f}",
-                 at_step, result.val_loss, result.test.mean, result.test.std, result.train.mean, result.train.std);
-    metrics.Write("{\"step\": " + std::to_string(at_step) + ", \"val_loss\": " + Number(result.val_loss) +
-                  ", \"stitch_test_mean\": " + Number(result.test.mean) + ", \"stitch_test_std\": " +
-                  Number(result.test.std) + ", \"stitch_train_mean\": " + Number(result.train.mean) +
-                  ", \"stitch_train_std\": " + Number(result.train.std) + "}");
-  };
-
-  ProgressMeter progress("train", config.steps, "steps", 0.0);
-  progress.Update(step);
-  double window_loss = 0.0;
-  int64_t window_steps = 0;
-  net->train();
-  const int64_t last_step = setup.stop_at_step > 0 ? std::min(setup.stop_at_step, config.steps) : config.steps;
-  while (step < last_step) {
-    if (InterruptRequested()) {
-      const std::string path = save(step);
-      throw Error("interrupted at step " + std::to_string(step) + "; checkpoint " + path +
-                  "; continue with: flowplan train --resume " + setup.run_dir);
-    }
-    const double lr = CosineLearningRate(config, step);
-    SetLearningRate(optimizer, lr);
-    const torch::Tensor index = torch::randint(num_train, {config.batch_size}, generator, torch::kInt64);
-    torch::Tensor x1 = train_n.index_select(0, index);
-    const bool split = torch::rand({1}, generator).item<double>() < setup.flow.split_prob;
-    if (split) x1 = SplitHalves(x1);
-    const double loss_value = gradient.Compute(DrawFlowMatchingBatch(x1, generator), setup.flow.conditioning);
-    if (config.grad_clip > 0.0) torch::nn::utils::clip_grad_norm_(net->parameters(), config.grad_clip);
-    optimizer.step();
-    const double n = static_cast<double>(step);
-    UpdateEma(*ema, *net, std::min(config.ema_decay, (1.0 + n) / (10.0 + n)));
-    ++step;
-
-    if (!std::isfinite(loss_value)) {
-      throw Error("training diverged at step " + std::to_string(step) + " (loss " + Number(loss_value) +
+  /// One optimizer step at learning rate `lr`; returns the batch loss.
+  double Step(double lr) {
+    SetLearningRate(optimizer_, lr);
+    const torch::Tensor index = torch::randint(train_n_.size(0), {config_.batch_size}, generator_, torch::kInt64);
+    torch::Tensor x1 = train_n_.index_select(0, index);  // (B, T, D) normalized
+    if (torch::rand({1}, generator_).item<double>() < setup_.flow.split_prob) x1 = SplitHalves(x1);
+    const double loss = gradient_->Compute(DrawFlowMatchingBatch(x1, generator_), setup_.flow.conditioning);
+    if (config_.grad_clip > 0.0) torch::nn::utils::clip_grad_norm_(net_->parameters(), config_.grad_clip);
+    optimizer_.step();
+    const double n = static_cast<double>(step_);
+    UpdateEma(*ema_, *net_, std::min(config_.ema_decay, (1.0 + n) / (10.0 + n)));
+    ++step_;
+    if (!std::isfinite(loss)) {
+      throw Error("training diverged at step " + std::to_string(step_) + " (loss " + JsonNumber(loss) +
                   "); lower train.lr or set train.grad_clip");
     }
-    window_loss += loss_value;
-    ++window_steps;
-    if (step % config.log_every == 0 || step == config.steps) {
-      result.train_loss = window_loss / static_cast<double>(window_steps);
-      const double rate = progress.Rate(step);
-      spdlog::info("step {}/{} loss {:.5f} lr {:.3g} {:.2f} steps/s ETA {}", step, config.steps, result.train_loss,
-                   lr, rate, FormatDuration(rate > 0 ? static_cast<double>(config.steps - step) / rate : NAN));
-      metrics.Write("{\"step\": " + std::to_string(step) + ", \"loss\": " + Number(result.train_loss) +
-                    ", \"lr\": " + Number(lr) + ", \"steps_per_s\": " + Number(rate) + "}");
-      window_loss = 0.0;
-      window_steps = 0;
-    }
-    if ((config.eval_every > 0 && step % config.eval_every == 0) || step == last_step) evaluate(step);
-    if (step % config.checkpoint_every == 0 || step == last_step) result.checkpoint = save(step);
+    return loss;
   }
-  if (result.checkpoint.empty()) {
-    // Resumed at the final step: nothing left to train.
-    evaluate(step);
-    result.checkpoint = run.LatestCheckpoint();
+
+  void LogProgress(double lr, double rate) {
+    result_.train_loss = window_loss_ / static_cast<double>(window_steps_);
+    spdlog::info("step {}/{} loss {:.5f} lr {:.3g} {:.2f} steps/s ETA {}", step_, config_.steps, result_.train_loss,
+                 lr, rate, FormatDuration(rate > 0 ? static_cast<double>(config_.steps - step_) / rate : NAN));
+    metrics_->Write("{\"step\": " + std::to_string(step_) + ", \"loss\": " + JsonNumber(result_.train_loss) +
+                    ", \"lr\": " + JsonNumber(lr) + ", \"steps_per_s\": " + JsonNumber(rate) + "}");
+    window_loss_ = 0.0;
+    window_steps_ = 0;
   }
-  result.steps = step;
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  return result;
+
+  /// Validation loss and stitching errors of the EMA weights into result_.
+  void Evaluate() {
+    ema_->eval();
+    result_.val_loss = ValidationLoss(*ema_, val_n_, setup_.flow.conditioning, config_.val_batch_size,
+                                      StreamSeed(setup_.seed, kValidationStream));
+    result_.test = Stitching(data_.test_pairs, "test");
+    result_.train = Stitching(data_.train_pairs, "train");
+    spdlog::info("eval step {}: val loss {:.5f}, stitching error test {:.4f} ± {:.4f}, train {:.4f} ± {:.4f}", step_,
+                 result_.val_loss, result_.test.mean, result_.test.stddev, result_.train.mean, result_.train.stddev);
+  }
+
+  eval::StitchingResult Stitching(const datasets::EvalPairTensors& pairs, const std::string& label) const {
+    if (!pairs.names.empty()) return eval::EvaluateStitching(*ema_planner_, pairs, label, setup_.eval, setup_.threads);
+    eval::StitchingResult none;  // datasets without start/goal families (e.g. random reaches)
+    none.pairs = label;
+    none.mean = none.stddev = NAN;
+    return none;
+  }
+
+  void LogEvaluation() {
+    metrics_->Write("{\"step\": " + std::to_string(step_) + ", \"val_loss\": " + JsonNumber(result_.val_loss) +
+                    ", \"stitch_test_mean\": " + JsonNumber(result_.test.mean) + ", \"stitch_test_std\": " +
+                    JsonNumber(result_.test.stddev) + ", \"stitch_train_mean\": " + JsonNumber(result_.train.mean) +
+                    ", \"stitch_train_std\": " + JsonNumber(result_.train.stddev) + "}");
+  }
+
+  /// Writes a checkpoint of the current step and returns its path.
+  std::string Save() {
+    checkpoints::CheckpointHeader header;
+    header.step = step_;
+    header.config_yaml = setup_.config_yaml;
+    header.normalizer = normalizer_;
+    header.rng_state = generator_.get_state();
+    header.env = data_.env;
+    header.dt = data_.dt;
+    header.state_labels = data_.state_labels;
+    header.horizon = T_;
+    const std::string path = run_.checkpoint(step_);
+    checkpoints::SaveCheckpoint(path, header, {net_.get(), ema_.get(), &optimizer_});
+    run_.PruneCheckpoints(config_.keep_checkpoints);
+    return path;
+  }
+
+  const TrainingSetup& setup_;
+  const TrainerConfig& config_;
+  const datasets::TrajectorySplits& data_;
+  RunDir run_;
+  const int64_t T_, D_;
+  models::VelocityNetPtr net_, ema_;
+  torch::optim::AdamW optimizer_;
+  at::Generator generator_;
+  models::MinMaxNormalizer normalizer_;
+  torch::Tensor train_n_;  // (N_train, T, D) normalized
+  torch::Tensor val_n_;    // (N_val, T, D) normalized
+  std::unique_ptr<planning::FlowPlanner> ema_planner_;
+  std::unique_ptr<ShardedGradient> gradient_;
+  std::unique_ptr<MetricsLog> metrics_;
+  int64_t step_ = 0;
+  double window_loss_ = 0.0;
+  int64_t window_steps_ = 0;
+  TrainResult result_;
+};
+
+}  // namespace
+
+TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& data, TrainStart start) {
+  // LibTorch runs single-threaded, parallelism comes from the gradient shards
+  // (see ShardedGradient); denormals are flushed (they are orders of magnitude
+  // slower on x86) before any worker thread, which inherits the mode, starts.
+  at::globalContext().setFlushDenormal(true);
+  at::set_num_threads(1);
+  return TrainingRun(setup, data, start).Run();
 }
 
 }  // namespace flowplan::trainer

@@ -36,13 +36,16 @@ struct TrainResult {
   double seconds = 0.0;
 };
 
+/// Whether a run starts afresh or continues its folder's newest checkpoint.
+enum class TrainStart { kFresh, kResume };
+
 /// Trains a flow-matching planner on `data`, or resumes the run in
-/// `setup.run_dir` from its newest checkpoint when `resume` is set (continuing
-/// bit-exactly). The weights do not depend on the thread count: LibTorch runs
+/// `setup.run_dir` from its newest checkpoint (continuing bit-exactly). The weights do not depend on the thread count: LibTorch runs
 /// single-threaded and `setup.threads` workers share fixed gradient shards. Writes config.yaml, metrics.jsonl and
 /// checkpoints; on SIGINT writes a checkpoint of the current step and throws.
-/// @throws flowplan::Error for settings the data cannot take (horizon, split).
-TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& data, bool resume);
+/// @throws flowplan::Error for settings the data cannot take (horizon, split), a
+///   fresh start in a folder that holds checkpoints, or a resume without one.
+TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& data, TrainStart start);
 
 /// Validation loss of `net` on `val` (N, T, D) normalized, with noise and times
 /// from a generator seeded by `seed`: comparable between evaluations.

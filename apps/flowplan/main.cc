@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/interrupt.h"
 #include "core/logging.h"
 #include "experiment/commands.h"
@@ -32,8 +32,12 @@ void ParseShard(const std::string& text, flowplan::experiment::GenerateRequest& 
   if (!std::regex_match(text, match, pattern)) {
     throw flowplan::Error("--shard: expected k/n (e.g. 0/4), got \"" + text + "\"");
   }
-  request.shard_index = std::stoi(match[1].str());
-  request.shard_count = std::stoi(match[2].str());
+  try {
+    request.shard_index = std::stoi(match[1].str());
+    request.shard_count = std::stoi(match[2].str());
+  } catch (const std::out_of_range&) {
+    throw flowplan::Error("--shard: expected k/n with numbers that fit an int, got \"" + text + "\"");
+  }
   if (request.shard_count < 1 || request.shard_index >= request.shard_count) {
     throw flowplan::Error("--shard: expected k/n with 0 <= k < n, got \"" + text + "\"");
   }
@@ -76,7 +80,8 @@ int Main(int argc, char** argv) {
   std::string resume_dir;
   int64_t until_step = 0;
   train->add_option("--resume", resume_dir, "continue the run in this folder from its newest checkpoint");
-  train->add_option("--until", until_step, "stop with a checkpoint at this step (0: train.steps)");
+  train->add_option("--until", until_step, "stop with a checkpoint at this step (0: train.steps)")
+      ->check(CLI::NonNegativeNumber);
 
   // eval
   auto* eval = app.add_subcommand("eval", "evaluate a trained planner");
@@ -130,18 +135,13 @@ int Main(int argc, char** argv) {
   } else if (merge->parsed()) {
     flowplan::experiment::RunMerge(merge_inputs, merge_out);
   } else if (train->parsed()) {
-    flowplan::experiment::TrainRequest request;
-    request.until_step = until_step;
     if (!resume_dir.empty()) {
       if (!config_path.empty()) throw flowplan::Error("train: give either --config or --resume, not both");
-      request.resume = true;
-      const std::string stored = resume_dir + "/config.yaml";
-      ExperimentConfig config = flowplan::experiment::LoadExperimentText(
-          flowplan::ReadFile(stored), stored, "", overrides);
-      config.run_dir = resume_dir;
-      flowplan::experiment::RunTrain(config, request);
+      flowplan::experiment::RunResume(resume_dir, overrides, until_step);
     } else {
       if (config_path.empty()) throw flowplan::Error("train: expected --config FILE or --resume RUN_DIR");
+      flowplan::experiment::TrainRequest request;
+      request.until_step = until_step;
       flowplan::experiment::RunTrain(flowplan::experiment::LoadExperiment(config_path, overrides), request);
     }
   } else if (stitching->parsed()) {
@@ -158,8 +158,6 @@ int Main(int argc, char** argv) {
   return 0;
 }
 
-std::string FirstLine(const std::string& text) { return text.substr(0, text.find('\n')); }
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -168,11 +166,11 @@ int main(int argc, char** argv) {
   } catch (const flowplan::Error& e) {
     spdlog::error("{}", e.what());
   } catch (const c10::Error& e) {
-    spdlog::error("LibTorch: {}", FirstLine(e.what_without_backtrace()));
+    spdlog::error("LibTorch: {}", flowplan::FirstLine(e.what_without_backtrace()));
   } catch (const flowplan::InternalError& e) {
     spdlog::critical("{} (this is a bug in flowplan)", e.what());
   } catch (const std::exception& e) {
-    spdlog::error("{}", FirstLine(e.what()));
+    spdlog::error("{}", flowplan::FirstLine(e.what()));
   }
   return 1;
 }

@@ -117,11 +117,42 @@ TEST_F(CliTest, ResumeAfterAStopEqualsOneRun) {
   for (size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(torch::equal(a[i], b[i])) << "tensor " << i;
 }
 
+TEST_F(CliTest, TrainedNetworkCannotBeChangedByOverridesOrRetrainedInPlace) {
+  ExpectOk(Generate());
+  ExpectOk(Flowplan("train --config " + Tiny() + Paths()));
+  ExpectCleanFailure(Flowplan("eval stitching --ckpt " + Path("run") + " model.unet.groups=4"),
+                     "model.unet.groups: the network was trained with 8");
+  ExpectCleanFailure(Flowplan("export --ckpt " + Path("run") + " flow.conditioning=direct"), "flow.conditioning");
+  ExpectCleanFailure(Flowplan("train --resume " + Path("run") + " model.unet.kernel_size=3"), "model.unet.kernel_size");
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + Paths()), "holds checkpoints of an earlier run");
+  // What may change: the sampler, the evaluation, and the length of training.
+  ExpectOk(Flowplan("eval stitching --ckpt " + Path("run") + " sampler.steps=4 sampler.splitting=midpoint"));
+  ExpectOk(Flowplan("train --resume " + Path("run") + " train.steps=8"));
+  EXPECT_TRUE(fs::exists(Path("run/checkpoints/step_00000008.pt")));
+}
+
+TEST_F(CliTest, CtrlCDuringTrainingWritesACheckpointToResumeFrom) {
+  ExpectOk(Generate());
+  // Long enough to be interrupted: SIGINT after 3 s.
+  const Outcome stopped =
+      Flowplan("train --config " + Tiny() + Paths() + " train.steps=100000 train.eval_every=0 --log-level info & "
+               "pid=$!; sleep 3; kill -INT $pid; wait $pid");
+  EXPECT_NE(stopped.exit_code, 0) << stopped.output;
+  EXPECT_THAT(stopped.output, HasSubstr("interrupted at step"));
+  EXPECT_THAT(stopped.output, HasSubstr("flowplan train --resume"));
+  const auto checkpoints = fs::directory_iterator(Path("run/checkpoints"));
+  EXPECT_NE(checkpoints, fs::directory_iterator()) << "no checkpoint written on interrupt";
+}
+
 TEST_F(CliTest, BadConfigKeyValueAndFile) {
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " train.bach_size=8"), "train.bach_size");
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " train.batch_size=abc"), "train.batch_size");
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " train.lr=-1"), "train.lr");
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " flow.conditioning=global"), "one of inpaint, direct");
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + " model.unet.time_scale=.inf"),
+                     "model.unet.time_scale: expected a finite number");
+  ExpectCleanFailure(Flowplan("generate --config " + Tiny() + " --shard 99999999999/1"), "--shard");
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + " --until -5"), "--until");
   ExpectCleanFailure(Flowplan("generate --config " + Path("missing.yaml")), "missing.yaml");
   std::ofstream(Path("broken.yaml")) << "train:\n  steps: [1\n";
   ExpectCleanFailure(Flowplan("train --config " + Path("broken.yaml")), "broken.yaml");

@@ -3,7 +3,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <thread>
 #include <vector>
 
 #include "core/error.h"
@@ -46,7 +48,10 @@ TEST(ParallelTest, FirstExceptionIsRethrown) {
                Error);
 }
 
-TEST(ParallelTest, ZeroMeansAllCores) { EXPECT_GE(ResolveThreadCount(0), 1); }
+TEST(ParallelTest, ZeroMeansAllCores) {
+  EXPECT_EQ(ResolveThreadCount(0), static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  EXPECT_EQ(ResolveThreadCount(3), 3);
+}
 
 }  // namespace
 }  // namespace flowplan

@@ -131,7 +131,7 @@ TEST_F(ForwardKinematicsTest, ShapesAndTypesAreCheckedAtEntry) {
   EXPECT_THAT([&] { fk_.Forward(torch::zeros({3, 6}, torch::kFloat64)); },
               ::testing::ThrowsMessage<Error>(HasSubstr("kinematics: q: expected (B, 7), got (3, 6)")));
   EXPECT_THAT([&] { fk_.TcpPosition(torch::zeros({7}, torch::kFloat64)); },
-              ::testing::ThrowsMessage<Error>(HasSubstr("expected (B, 7), got (7)")));
+              ::testing::ThrowsMessage<Error>(HasSubstr("expected (B, 7), got (7,)")));
   EXPECT_THAT([&] { fk_.Forward(torch::zeros({2, 7}, torch::kInt64)); },
               ::testing::ThrowsMessage<Error>(HasSubstr("expected float32 or float64")));
 }

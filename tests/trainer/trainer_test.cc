@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "checkpoints/checkpoint.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "datasets/generator.h"
 #include "datasets/particle_task.h"
@@ -58,21 +59,21 @@ std::vector<torch::Tensor> Weights(const std::string& checkpoint, const Training
 TEST(TrainerTest, ResumingGivesTheSameWeightsAsOneRun) {
   const auto data = TinyData();
   const TrainingSetup straight = TinySetup("straight");
-  const TrainResult a = Train(straight, data, false);
+  const TrainResult a = Train(straight, data, TrainStart::kFresh);
 
   TrainingSetup interrupted = TinySetup("interrupted");
-  interrupted.stop_at_step = 6;
-  const TrainResult first_half = Train(interrupted, data, false);
-  EXPECT_EQ(first_half.steps, 6);
+  interrupted.stop_at_step = 5;  // not a logging, evaluation or checkpoint step
+  const TrainResult first_part = Train(interrupted, data, TrainStart::kFresh);
+  EXPECT_EQ(first_part.steps, 5);
   interrupted.stop_at_step = 0;
-  const TrainResult b = Train(interrupted, data, true);
+  const TrainResult b = Train(interrupted, data, TrainStart::kResume);
   EXPECT_EQ(b.steps, 12);
 
   const auto wa = Weights(a.checkpoint, straight), wb = Weights(b.checkpoint, interrupted);
   ASSERT_EQ(wa.size(), wb.size());
   for (size_t i = 0; i < wa.size(); ++i) EXPECT_TRUE(torch::equal(wa[i], wb[i])) << "tensor " << i;
-  EXPECT_EQ(checkpoints::ReadCheckpointHeader(a.checkpoint).rng_state.sizes(),
-            checkpoints::ReadCheckpointHeader(b.checkpoint).rng_state.sizes());
+  EXPECT_TRUE(torch::equal(checkpoints::ReadCheckpointHeader(a.checkpoint).rng_state,
+                           checkpoints::ReadCheckpointHeader(b.checkpoint).rng_state));
 }
 
 TEST(TrainerTest, ThreadCountDoesNotChangeTheWeights) {
@@ -83,9 +84,9 @@ TEST(TrainerTest, ThreadCountDoesNotChangeTheWeights) {
   two.threads = 2;
   TrainingSetup three = TinySetup("three_threads");
   three.threads = 3;
-  const auto w1 = Weights(Train(one, data, false).checkpoint, one);
-  const auto w2 = Weights(Train(two, data, false).checkpoint, two);
-  const auto w3 = Weights(Train(three, data, false).checkpoint, three);
+  const auto w1 = Weights(Train(one, data, TrainStart::kFresh).checkpoint, one);
+  const auto w2 = Weights(Train(two, data, TrainStart::kFresh).checkpoint, two);
+  const auto w3 = Weights(Train(three, data, TrainStart::kFresh).checkpoint, three);
   for (size_t i = 0; i < w1.size(); ++i) {
     EXPECT_TRUE(torch::equal(w1[i], w2[i])) << "tensor " << i;
     EXPECT_TRUE(torch::equal(w1[i], w3[i])) << "tensor " << i;
@@ -117,7 +118,7 @@ TEST(TrainerTest, RunFolderHoldsConfigMetricsAndPrunedCheckpoints) {
   TrainingSetup setup = TinySetup("layout");
   setup.train.checkpoint_every = 2;
   setup.train.keep_checkpoints = 2;
-  const TrainResult result = Train(setup, TinyData(), false);
+  const TrainResult result = Train(setup, TinyData(), TrainStart::kFresh);
   RunDir run(setup.run_dir);
   EXPECT_TRUE(fs::exists(run.config()));
   EXPECT_TRUE(fs::exists(run.metrics()));
@@ -131,16 +132,28 @@ TEST(TrainerTest, RunFolderHoldsConfigMetricsAndPrunedCheckpoints) {
   EXPECT_TRUE(std::isfinite(result.test.mean));
 }
 
+TEST(TrainerTest, FreshRunRefusesAFolderWithCheckpoints) {
+  const auto data = TinyData();
+  const TrainingSetup setup = TinySetup("used_folder");
+  Train(setup, data, TrainStart::kFresh);
+  const std::string config_before = ReadFile(RunDir(setup.run_dir).config());
+  TrainingSetup again = setup;
+  again.config_yaml = "another: run\n";
+  EXPECT_THAT([&] { Train(again, data, TrainStart::kFresh); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("holds checkpoints of an earlier run")));
+  EXPECT_EQ(ReadFile(RunDir(setup.run_dir).config()), config_before);
+}
+
 TEST(TrainerTest, ResumeWithoutCheckpointIsAClearError) {
   const TrainingSetup setup = TinySetup("empty_run");
-  EXPECT_THAT([&] { Train(setup, TinyData(), true); },
+  EXPECT_THAT([&] { Train(setup, TinyData(), TrainStart::kResume); },
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("holds no checkpoint")));
 }
 
 TEST(TrainerTest, SplitTrainingNeedsAHalfHorizonTheNetCanTake) {
   TrainingSetup setup = TinySetup("bad_split");
   setup.model.unet.down_dims = {8, 8, 8, 8, 8};  // T must be a multiple of 16; halves have 8
-  EXPECT_THAT([&] { Train(setup, TinyData(), false); },
+  EXPECT_THAT([&] { Train(setup, TinyData(), TrainStart::kFresh); },
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("flow.split_prob")));
 }
 

@@ -1,0 +1,23 @@
+#pragma once
+
+// Small text helpers shared by error messages, logs and JSON reports.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace flowplan {
+
+/// "(2, 64, 4)" for a shape.
+std::string ShapeText(const std::vector<int64_t>& shape);
+
+/// The first line of a (possibly multi-line) message, e.g. LibTorch's errors.
+std::string FirstLine(const std::string& text);
+
+/// A JSON number with up to 7 significant digits; "null" for NaN and infinities.
+std::string JsonNumber(double value);
+
+/// A JSON string literal, quoted and escaped.
+std::string JsonString(const std::string& text);
+
+}  // namespace flowplan

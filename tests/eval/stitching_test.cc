@@ -1,0 +1,73 @@
+#include "eval/stitching.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "models/model_config.h"
+
+namespace flowplan::eval {
+namespace {
+
+TEST(StitchingTest, ErrorIsTheMeanPositionGapBesideTheEnds) {
+  // D = 4: positions are dims 0-1; velocities must not count.
+  torch::Tensor plans = torch::zeros({1, 5, 4});
+  plans[0][1] = torch::tensor({3.0f, 4.0f, 100.0f, 100.0f});  // 5 away from the start (0, 0)
+  plans[0][3] = torch::tensor({1.0f, 1.0f, -7.0f, 9.0f});     // 1 away from the goal (1, 0)
+  const torch::Tensor start = torch::zeros({1, 4});
+  const torch::Tensor goal = torch::tensor({{1.0f, 0.0f, 5.0f, 5.0f}});
+  EXPECT_FLOAT_EQ(StitchingErrors(plans, start, goal)[0].item<float>(), 0.5f * (5.0f + 1.0f));
+}
+
+planning::FlowPlanner SmallPlanner() {
+  torch::manual_seed(0);
+  models::ModelConfig config;
+  config.unet.down_dims = {8, 16};
+  auto net = models::MakeVelocityNet(config, 4, 0);
+  models::MinMaxNormalizer normalizer(torch::zeros({4}) - 1, torch::ones({4}));
+  return planning::FlowPlanner(net, normalizer, planning::Conditioning::kInpaint, 16,
+                               planning::SamplerConfig{3, planning::Splitting::kMidpoint});
+}
+
+datasets::EvalPairTensors Pairs() {
+  return {torch::tensor({{0.f, 0.f, 0.f, 0.f}, {0.f, 1.f, 0.f, 0.f}}),
+          torch::tensor({{1.f, 0.f, 0.f, 0.f}, {1.f, 1.f, 0.f, 0.f}}), {"a->b", "c->d"}};
+}
+
+TEST(StitchingTest, ResultDoesNotDependOnTheThreadCount) {
+  at::set_num_threads(1);
+  const planning::FlowPlanner planner = SmallPlanner();
+  EvalConfig config;
+  config.num_plans = 40;  // three chunks of 16, the last one short
+  const StitchingResult one = EvaluateStitching(planner, Pairs(), "test", config, 1);
+  const StitchingResult three = EvaluateStitching(planner, Pairs(), "test", config, 3);
+  EXPECT_TRUE(torch::equal(one.plans, three.plans));
+  EXPECT_EQ(one.mean, three.mean);
+  ASSERT_EQ(one.plans.size(0), 40);
+  // Plan i targets pair i mod 2.
+  EXPECT_TRUE(torch::equal(one.plans[3][15], Pairs().goal[1]));
+  EXPECT_EQ(one.pair_names, (std::vector<std::string>{"a->b", "c->d"}));
+  EXPECT_GT(one.mean, 0.0);
+}
+
+TEST(StitchingTest, JsonReportEscapesNamesAndWritesNaNAsNull) {
+  StitchingResult result;
+  result.pairs = "test";
+  result.mean = 0.25;
+  result.stddev = NAN;
+  result.pair_names = {"a \"quoted\" pair"};
+  result.pair_means = {NAN};
+  EXPECT_EQ(ToJson(result),
+            "{\"pairs\": \"test\", \"mean\": 0.25, \"stddev\": null, \"num_plans\": 0, "
+            "\"per_pair\": {\"a \\\"quoted\\\" pair\": null}}");
+}
+
+TEST(StitchingTest, NoPairsIsAClearError) {
+  const planning::FlowPlanner planner = SmallPlanner();
+  datasets::EvalPairTensors none{torch::zeros({0, 4}), torch::zeros({0, 4}), {}};
+  EXPECT_THAT([&] { EvaluateStitching(planner, none, "test", EvalConfig{}); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("defines no test pairs")));
+}
+
+}  // namespace
+}  // namespace flowplan::eval
