@@ -12,6 +12,7 @@
 
 #include "checkpoints/checkpoint.h"
 #include "models/model_config.h"
+#include "tests/support/scratch_dir.h"
 
 namespace flowplan {
 namespace {
@@ -40,9 +41,7 @@ std::string Tiny() { return std::string(FLOWPLAN_SOURCE_DIR) + "/tests/cli/tiny.
 class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) / ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = flowplan::testing::ScratchDir();
   }
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
   std::string Paths(const std::string& run = "run") const {

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "core/error.h"
+#include "tests/support/scratch_dir.h"
 
 namespace flowplan {
 namespace {
@@ -16,8 +17,7 @@ using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
 TEST(AtomicFileTest, UncommittedWriteLeavesOldFileAndNoTemporary) {
-  const fs::path dir = fs::path(::testing::TempDir()) / "atomic_uncommitted";
-  fs::create_directories(dir);
+  const fs::path dir = flowplan::testing::ScratchDir();
   const std::string path = (dir / "data.txt").string();
   WriteFileAtomically(path, "good");
   {
@@ -32,7 +32,7 @@ TEST(AtomicFileTest, UncommittedWriteLeavesOldFileAndNoTemporary) {
 }
 
 TEST(AtomicFileTest, CommitReplaces) {
-  const std::string path = ::testing::TempDir() + "/atomic_commit.txt";
+  const std::string path = (flowplan::testing::ScratchDir() / "atomic_commit.txt").string();
   WriteFileAtomically(path, "one");
   WriteFileAtomically(path, "two");
   EXPECT_EQ(ReadFile(path), "two");

@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "tests/support/scratch_dir.h"
+
 namespace flowplan {
 namespace {
 
@@ -48,7 +50,7 @@ struct Outer {
 };
 
 std::string WriteTemp(const std::string& text) {
-  std::string path = ::testing::TempDir() + "/config_test.yaml";
+  std::string path = (flowplan::testing::ScratchDir() / "config_test.yaml").string();
   std::ofstream(path) << text;
   return path;
 }

@@ -7,6 +7,7 @@
 #include "core/atomic_file.h"
 #include "datasets/particle_task.h"
 #include "datasets/trajectory_dataset.h"
+#include "tests/support/scratch_dir.h"
 
 namespace flowplan::datasets {
 namespace {
@@ -23,8 +24,8 @@ GenerateOptions Options(int64_t episodes, int threads) {
 
 TEST(GeneratorTest, ThreadCountDoesNotChangeTheBytes) {
   ParticleCrossTask task{sim::ParticleConfig{}};
-  const std::string one = ::testing::TempDir() + "/gen_1_thread.h5";
-  const std::string two = ::testing::TempDir() + "/gen_2_threads.h5";
+  const std::string one = (flowplan::testing::ScratchDir() / "gen_1_thread.h5").string();
+  const std::string two = (flowplan::testing::ScratchDir() / "gen_2_threads.h5").string();
   WriteDataset(one, GenerateDataset(task, Options(200, 1)));
   WriteDataset(two, GenerateDataset(task, Options(200, 2)));
   EXPECT_EQ(ReadFile(one), ReadFile(two));
@@ -39,8 +40,8 @@ TEST(GeneratorTest, MergedShardsEqualTheWholeFile) {
     o.shard_count = 3;
     shards.push_back(GenerateDataset(task, o));
   }
-  const std::string whole = ::testing::TempDir() + "/gen_whole.h5";
-  const std::string merged = ::testing::TempDir() + "/gen_merged.h5";
+  const std::string whole = (flowplan::testing::ScratchDir() / "gen_whole.h5").string();
+  const std::string merged = (flowplan::testing::ScratchDir() / "gen_merged.h5").string();
   WriteDataset(whole, GenerateDataset(task, Options(100, 1)));
   WriteDataset(merged, MergeDatasets(shards, {"s0", "s1", "s2"}));
   EXPECT_EQ(ReadFile(whole), ReadFile(merged));

@@ -10,6 +10,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "datasets/h5.h"
+#include "tests/support/scratch_dir.h"
 
 namespace flowplan::datasets {
 namespace {
@@ -43,7 +44,7 @@ TrajectoryDataset SmallDataset() {
   return d;
 }
 
-std::string TempPath(const std::string& name) { return ::testing::TempDir() + "/" + name; }
+std::string TempPath(const std::string& name) { return (flowplan::testing::ScratchDir() / name).string(); }
 
 TEST(TrajectoryDatasetTest, RoundTripKeepsEverything) {
   const TrajectoryDataset d = SmallDataset();

@@ -5,12 +5,12 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <torch/script.h>
 
 #include <cstdlib>
 #include <fstream>
 
 #include "models/model_config.h"
+#include "tests/support/scratch_dir.h"
 
 namespace flowplan::planning {
 namespace {
@@ -60,7 +60,7 @@ class ExportTest : public ::testing::TestWithParam<Variant> {
 
 TEST_P(ExportTest, TorchScriptMatchesTheInProcessPlannerInCpp) {
   const FlowPlanner planner = Planner();
-  const std::string path = ::testing::TempDir() + "/planner_cpp.pt";
+  const std::string path = (flowplan::testing::ScratchDir() / "planner_cpp.pt").string();
   ExportPlanner(planner, Metadata(), path);
   torch::jit::Module loaded = torch::jit::load(path);
   const Request r = MakeRequest();
@@ -77,7 +77,7 @@ TEST_P(ExportTest, TorchScriptMatchesTheInProcessPlannerInCpp) {
 
 TEST_P(ExportTest, TorchScriptMatchesTheInProcessPlannerInPython) {
   const FlowPlanner planner = Planner();
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = flowplan::testing::ScratchDir().string();
   const std::string path = dir + "/planner_py.pt";
   ExportPlanner(planner, Metadata(), path);
   const Request r = MakeRequest();

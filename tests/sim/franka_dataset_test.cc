@@ -8,6 +8,7 @@
 #include "datasets/generate_config.h"
 #include "datasets/generator.h"
 #include "datasets/trajectory_dataset.h"
+#include "tests/support/scratch_dir.h"
 
 namespace flowplan::datasets {
 namespace {
@@ -26,8 +27,8 @@ GenerateOptions Options(int64_t episodes, int threads) {
 
 TEST(FrankaDatasetTest, ThreadCountDoesNotChangeTheBytes) {
   FrankaTask task(FrankaGoals::kCross, FrankaTaskConfig{});
-  const std::string one = ::testing::TempDir() + "/franka_1_thread.h5";
-  const std::string two = ::testing::TempDir() + "/franka_2_threads.h5";
+  const std::string one = (flowplan::testing::ScratchDir() / "franka_1_thread.h5").string();
+  const std::string two = (flowplan::testing::ScratchDir() / "franka_2_threads.h5").string();
   WriteDataset(one, GenerateDataset(task, Options(16, 1)));
   WriteDataset(two, GenerateDataset(task, Options(16, 2)));
   EXPECT_EQ(ReadFile(one), ReadFile(two));
@@ -44,8 +45,8 @@ TEST(FrankaDatasetTest, MergedShardsEqualTheWholeFile) {
     o.shard_count = 3;
     shards.push_back(GenerateDataset(task, o));
   }
-  const std::string whole = ::testing::TempDir() + "/franka_whole.h5";
-  const std::string merged = ::testing::TempDir() + "/franka_merged.h5";
+  const std::string whole = (flowplan::testing::ScratchDir() / "franka_whole.h5").string();
+  const std::string merged = (flowplan::testing::ScratchDir() / "franka_merged.h5").string();
   WriteDataset(whole, GenerateDataset(task, Options(12, 1)));
   WriteDataset(merged, MergeDatasets(shards, {"s0", "s1", "s2"}));
   EXPECT_EQ(ReadFile(whole), ReadFile(merged));

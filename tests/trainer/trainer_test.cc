@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "datasets/generator.h"
 #include "datasets/particle_task.h"
+#include "tests/support/scratch_dir.h"
 #include "trainer/run_dir.h"
 #include "trainer/sharded_gradient.h"
 
@@ -31,7 +32,7 @@ datasets::TrajectorySplits TinyData() {
 
 TrainingSetup TinySetup(const std::string& name) {
   TrainingSetup setup;
-  setup.run_dir = ::testing::TempDir() + "/" + name;
+  setup.run_dir = (flowplan::testing::ScratchDir() / name).string();
   fs::remove_all(setup.run_dir);
   setup.config_yaml = "tiny: true\n";
   setup.seed = 3;
