@@ -117,10 +117,16 @@ void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
   spdlog::info("training {} on {} ({} threads) into {}", config::internal::EnumName(config.model.architecture),
                config.data.path, threads, config.run_dir);
   const trainer::TrainResult result = trainer::Train(setup, data, request.start);
-  spdlog::info("trained {} steps in {:.1f} s: loss {:.5f}, val loss {:.5f}, stitching error test {:.4f} ± {:.4f}; "
+  if (result.steps == result.first_step) {
+    spdlog::info("nothing left to train: the run ended at step {}; val loss {:.5f}, stitching error test {:.4f} ± "
+                 "{:.4f}; checkpoint {}",
+                 result.steps, result.val_loss, result.test.mean, result.test.stddev, result.checkpoint);
+    return;
+  }
+  spdlog::info("trained {} steps, to step {}, in {:.1f} s: loss {:.5f}, val loss {:.5f}, stitching error test {:.4f} ± {:.4f}; "
                "checkpoint {}",
-               result.steps, result.seconds, result.train_loss, result.val_loss, result.test.mean, result.test.stddev,
-               result.checkpoint);
+               result.steps - result.first_step, result.steps, result.seconds, result.train_loss, result.val_loss, result.test.mean,
+               result.test.stddev, result.checkpoint);
 }
 
 void CheckSameNetwork(const ExperimentConfig& trained, const ExperimentConfig& changed, const std::string& where) {

@@ -18,7 +18,15 @@ for config in configs/particle_cross.yaml configs/particle_cross_no_noise.yaml; 
   data=$("$FLOWPLAN" config show --config "$config" --log-level warn | sed -n 's/^  out: //p' | head -1)
   echo "=== $config: dataset $data, run $run"
   "$FLOWPLAN" generate --config "$config"
-  "$FLOWPLAN" train --config "$config"
+  # A run left by an earlier demo with this very config is continued (a finished
+  # one is left as it is); one made with another config is replaced.
+  if [ -d "$run/checkpoints" ] && cmp -s <("$FLOWPLAN" config show --config "$config" --log-level warn) "$run/config.yaml"; then
+    "$FLOWPLAN" train --resume "$run"
+  else
+    [ -d "$run" ] && echo "replacing $run (made with another config)"
+    rm -rf "$run"
+    "$FLOWPLAN" train --config "$config"
+  fi
   "$FLOWPLAN" eval stitching --ckpt "$run"
   "$FLOWPLAN" eval stitching --ckpt "$run" sampler.splitting=midpoint --out "$run/eval_stitching_split.json"
   "$FLOWPLAN" export --ckpt "$run"

@@ -165,6 +165,7 @@ class TrainingRun {
     const auto started = std::chrono::steady_clock::now();
     const int64_t last_step =
         setup_.stop_at_step > 0 ? std::min(setup_.stop_at_step, config_.steps) : config_.steps;
+    result_.first_step = step_;
     ProgressMeter progress("train", config_.steps, "steps", 0.0);
     progress.Update(step_);
     net_->train();

@@ -27,7 +27,8 @@ struct TrainingSetup {
 
 /// What a finished run reports.
 struct TrainResult {
-  int64_t steps = 0;
+  int64_t first_step = 0;       // the step this call started from (> 0 when resumed)
+  int64_t steps = 0;            // the step it stopped at
   double train_loss = 0.0;       // mean loss over the last logging window
   double val_loss = 0.0;         // EMA weights, NaN without a validation split
   eval::StitchingResult test;    // EMA weights, test (stitching) pairs; mean NaN if none

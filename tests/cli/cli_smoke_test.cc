@@ -100,6 +100,11 @@ TEST_F(CliTest, ResumeAfterAStopEqualsOneRun) {
   const Outcome resumed = Flowplan("train --resume " + Path("stopped"));
   ExpectOk(resumed);
   EXPECT_THAT(resumed.output, HasSubstr("resuming"));
+  EXPECT_THAT(resumed.output, HasSubstr("trained 3 steps, to step 6"));
+  const Outcome finished = Flowplan("train --resume " + Path("stopped"));
+  ExpectOk(finished);
+  EXPECT_THAT(finished.output, HasSubstr("nothing left to train: the run ended at step 6"));
+  EXPECT_FALSE(fs::exists(Path("stopped/checkpoints/step_00000007.pt")));
 
   models::ModelConfig model;
   model.unet.down_dims = {8, 16};
