@@ -42,12 +42,12 @@ both() {  # both NAME OVERRIDES...: the variant on the noisy data and on the noi
   variant "${name}_no_noise" configs/particle_cross_no_noise.yaml "$@"
 }
 both unet2
+both unet4 "model.unet.down_dims=[32,64,128,256]"
 # The spread from the training seed alone (the data stays the same file).
 both unet2_seed1 seed=1
 both unet2_seed2 seed=2
+both unet3 "model.unet.down_dims=[32,64,128]"
 both unet2_direct flow.conditioning=direct
 both unet2_nosplit flow.split_prob=0
-both unet3 "model.unet.down_dims=[32,64,128]"
-both unet4 "model.unet.down_dims=[32,64,128,256]"
 "$PYTHON" scripts/summarize_ablation.py "$OUT" > "$OUT/summary.md"
 cat "$OUT/summary.md"
