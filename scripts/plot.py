@@ -50,7 +50,7 @@ def command_dataset(args):
         title = draw_dataset(ax, f, args.episodes)
         ax.set_title(f"{title} ({min(args.episodes, f['states'].shape[0])} of {f['states'].shape[0]} episodes)")
     fig.tight_layout()
-    fig.savefig(args.out, dpi=120)
+    fig.savefig(args.out, dpi=args.dpi)
     print(f"wrote {args.out}")
 
 
@@ -72,9 +72,9 @@ def command_plans(args):
             ax.plot(*x[chosen[0], 0, :2], "ko", ms=5)
             ax.plot(*x[chosen[0], -1, :2], "k*", ms=9)
         ax.legend(loc="upper center", fontsize=8)
-        ax.set_title("stitching: plans between pairs no training episode connects")
+        ax.set_title(args.title or "stitching: plans between pairs no training episode connects", fontsize=10)
     fig.tight_layout()
-    fig.savefig(args.out, dpi=120)
+    fig.savefig(args.out, dpi=args.dpi)
     print(f"wrote {args.out}")
 
 
@@ -91,7 +91,10 @@ def main():
     p.add_argument("--data", required=True)
     p.add_argument("--out", required=True)
     p.add_argument("--episodes", type=int, default=200)
+    p.add_argument("--title", help="figure title (default: says what the plans are)")
     p.set_defaults(run=command_plans)
+    for p in sub.choices.values():
+        p.add_argument("--dpi", type=int, default=120, help="resolution of the 6 x 6 inch PNG")
     args = parser.parse_args()
     args.run(args)
 
