@@ -27,6 +27,12 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
   }
   temp_path_ = (folder / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid())))
                    .string();
+  // Creating the temporary file now catches what access() cannot see (a
+  // read-only file system, a pseudo file system, root's W_OK on any folder)
+  // before any work is done; writers truncate it.
+  std::FILE* probe = std::fopen(temp_path_.c_str(), "wb");
+  if (probe == nullptr) throw Error(path_ + ": cannot write: " + std::strerror(errno));
+  std::fclose(probe);
 }
 
 AtomicFile::~AtomicFile() {

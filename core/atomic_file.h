@@ -13,7 +13,8 @@ namespace flowplan {
 ///   file.Commit();
 class AtomicFile {
  public:
-  /// @throws flowplan::Error if the destination folder does not exist or is not writable.
+  /// Creates the (empty) temporary file.
+  /// @throws flowplan::Error if the destination folder does not exist or the file cannot be created there.
   explicit AtomicFile(std::string path);
   ~AtomicFile();
   AtomicFile(const AtomicFile&) = delete;

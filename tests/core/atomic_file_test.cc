@@ -43,5 +43,11 @@ TEST(AtomicFileTest, MissingFolderIsAClearError) {
               ThrowsMessage<Error>(AllOf(HasSubstr("/nonexistent_folder/x.h5"), HasSubstr("does not exist"))));
 }
 
+TEST(AtomicFileTest, FolderThatRefusesNewFilesIsAClearErrorBeforeAnyWrite) {
+  // /proc takes no new files, even from root, whom access(W_OK) always allows.
+  EXPECT_THAT([] { AtomicFile file("/proc/flowplan_atomic_file_test.h5"); },
+              ThrowsMessage<Error>(AllOf(HasSubstr("/proc/flowplan_atomic_file_test.h5: cannot write"))));
+}
+
 }  // namespace
 }  // namespace flowplan
