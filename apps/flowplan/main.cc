@@ -44,6 +44,7 @@ void ParseShard(const std::string& text, flowplan::experiment::GenerateRequest& 
 }
 
 int Main(int argc, char** argv) {
+  flowplan::SetUpLogging("info");  // the line format, also for errors found while parsing
   CLI::App app{"flowplan: flow-matching trajectory planners that stitch, from data to TorchScript"};
   app.require_subcommand(1);
   app.fallthrough();  // --log-level also after the subcommand
@@ -120,8 +121,13 @@ int Main(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::Success& e) {  // --help
     return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // One line and status 1, like every other error (CLI11's own would add a
+    // second line and exit with its internal code).
+    spdlog::error("{} (see flowplan --help)", e.what());
+    return 1;
   }
   flowplan::SetUpLogging(log_level);
   flowplan::InstallInterruptHandler();
