@@ -170,20 +170,24 @@ class TrainingRun {
     progress.Update(step_);
     net_->train();
     while (step_ < last_step) {
-      if (InterruptRequested()) {
-        throw Error("interrupted at step " + std::to_string(step_) + "; checkpoint " + Save() +
-                    "; continue with: flowplan train --resume " + setup_.run_dir);
-      }
+      if (InterruptRequested()) StopInterrupted(Save());
       const double lr = CosineLearningRate(config_, step_);
       const double loss = Step(lr);
       window_loss_ += loss;
       ++window_steps_;
       if (step_ % config_.log_every == 0 || step_ == last_step) LogProgress(lr, progress.Rate(step_));
+      // The checkpoint comes first, so that an evaluation cut short by Ctrl-C loses nothing.
+      const bool checkpoint_due = step_ % config_.checkpoint_every == 0 || step_ == last_step;
+      if (checkpoint_due) result_.checkpoint = Save();
       if ((config_.eval_every > 0 && step_ % config_.eval_every == 0) || step_ == last_step) {
-        Evaluate();
+        try {
+          Evaluate();
+        } catch (const Error&) {
+          if (!InterruptRequested()) throw;
+          StopInterrupted(checkpoint_due ? result_.checkpoint : Save());
+        }
         LogEvaluation();
       }
-      if (step_ % config_.checkpoint_every == 0 || step_ == last_step) result_.checkpoint = Save();
     }
     if (result_.checkpoint.empty()) {
       // Resumed at the final step: nothing left to train, and its metrics are logged already.
@@ -210,6 +214,11 @@ class TrainingRun {
     step_ = header.step;
     TruncateMetrics(run_.metrics(), step_);
     spdlog::info("resuming {} at step {}", path, step_);
+  }
+
+  [[noreturn]] void StopInterrupted(const std::string& checkpoint) const {
+    throw Error("interrupted at step " + std::to_string(step_) + "; checkpoint " + checkpoint +
+                "; continue with: flowplan train --resume " + setup_.run_dir);
   }
 
   /// One optimizer step at learning rate `lr`; returns the batch loss.
