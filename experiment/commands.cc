@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "checkpoints/checkpoint.h"
@@ -141,12 +142,41 @@ void CheckSameNetwork(const ExperimentConfig& trained, const ExperimentConfig& c
   }
 }
 
+void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& changed, const std::string& where) {
+  // What a resumed run may change without becoming another run: its length,
+  // how often it logs, evaluates and saves, the threads (results do not depend
+  // on them), and how evaluations sample.
+  static const std::vector<std::string> kMayChange = {
+      "threads",          "train.steps",      "train.log_every", "train.eval_every", "train.checkpoint_every",
+      "train.keep_checkpoints", "train.val_batch_size", "sampler.", "eval."};
+  const auto before = config::ListKeys(trained), after = config::ListKeys(changed);
+  for (size_t i = 0; i < before.size(); ++i) {
+    const std::string& key = before[i].key;
+    if (before[i].default_value == after[i].default_value) continue;
+    const bool may_change = std::any_of(kMayChange.begin(), kMayChange.end(), [&](const std::string& allowed) {
+      return allowed.back() == '.' ? key.rfind(allowed, 0) == 0 : key == allowed;
+    });
+    if (!may_change) {
+      throw Error(key + ": the run was trained with " + before[i].default_value + " (" + where + "), got " +
+                  after[i].default_value + "; a resumed run can change only its length, intervals, threads, "
+                  "sampler.* and eval.* (start a new run_dir for the rest)");
+    }
+    if (key == "train.steps") {
+      spdlog::warn("train.steps: {} -> {}: the cosine learning-rate schedule now spans {} steps, so the rate "
+                   "jumps to that schedule's value at the current step (a warm restart, not the run that "
+                   "train.steps={} from the start would have been)",
+                   before[i].default_value, after[i].default_value, after[i].default_value,
+                   after[i].default_value);
+    }
+  }
+}
+
 void RunResume(const std::string& run_dir, const std::vector<std::string>& overrides, int64_t until_step) {
   const std::string stored = run_dir + "/config.yaml";
   const std::string text = ReadFile(stored);
   const ExperimentConfig trained = LoadExperimentText(text, stored, "", {});
   ExperimentConfig config = LoadExperimentText(text, stored, "", overrides);
-  CheckSameNetwork(trained, config, stored);
+  CheckResumable(trained, config, stored);
   config.run_dir = run_dir;
   RunTrain(config, TrainRequest{trainer::TrainStart::kResume, until_step});
 }

@@ -41,8 +41,15 @@ void RunTrain(const ExperimentConfig& config, const TrainRequest& request);
 
 /// `flowplan train --resume RUN_DIR`: the run's stored config with `overrides`
 /// (e.g. train.steps=8000 to train longer).
-/// @throws flowplan::Error if an override changes the network or its conditioning.
+/// @throws flowplan::Error if an override changes what CheckResumable() forbids.
 void RunResume(const std::string& run_dir, const std::vector<std::string>& overrides, int64_t until_step);
+
+/// Throws, naming the key, if `changed` differs from `trained` in anything but
+/// what a resumed run may change: threads, train.steps, the log / eval /
+/// checkpoint intervals, keep_checkpoints, val_batch_size, sampler.* and eval.*.
+/// Anything else (data, seed, optimizer, batch, network, flow) would make the
+/// resumed run a different one. `where` names the stored config in the message.
+void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& changed, const std::string& where);
 
 /// Throws, naming the key, if `changed` differs from `trained` in anything that
 /// shapes the trained network (model.*, flow.conditioning). `where` names the

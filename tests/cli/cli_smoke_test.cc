@@ -135,10 +135,16 @@ TEST_F(CliTest, TrainedNetworkCannotBeChangedByOverridesOrRetrainedInPlace) {
                      "model.unet.groups: the network was trained with 8");
   ExpectCleanFailure(Flowplan("export --ckpt " + Path("run") + " flow.conditioning=direct"), "flow.conditioning");
   ExpectCleanFailure(Flowplan("train --resume " + Path("run") + " model.unet.kernel_size=3"), "model.unet.kernel_size");
+  // Nor can a resumed run change its data, seed or optimizer: it would be another run.
+  ExpectCleanFailure(Flowplan("train --resume " + Path("run") + " train.lr=0.01"), "train.lr: the run was trained with");
+  ExpectCleanFailure(Flowplan("train --resume " + Path("run") + " seed=7"), "seed: the run was trained with 1");
+  ExpectCleanFailure(Flowplan("train --resume " + Path("run") + " data.val_fraction=0.5"), "data.val_fraction");
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + Paths()), "holds checkpoints of an earlier run");
   // What may change: the sampler, the evaluation, and the length of training.
   ExpectOk(Flowplan("eval stitching --ckpt " + Path("run") + " sampler.steps=4 sampler.splitting=midpoint"));
-  ExpectOk(Flowplan("train --resume " + Path("run") + " train.steps=8"));
+  const Outcome longer = Flowplan("train --resume " + Path("run") + " train.steps=8 threads=1 eval.num_plans=2");
+  ExpectOk(longer);
+  EXPECT_THAT(longer.output, HasSubstr("warm restart"));
   EXPECT_TRUE(fs::exists(Path("run/checkpoints/step_00000008.pt")));
 }
 
@@ -153,6 +159,18 @@ TEST_F(CliTest, CtrlCDuringTrainingWritesACheckpointToResumeFrom) {
   EXPECT_THAT(stopped.output, HasSubstr("flowplan train --resume"));
   const auto checkpoints = fs::directory_iterator(Path("run/checkpoints"));
   EXPECT_NE(checkpoints, fs::directory_iterator()) << "no checkpoint written on interrupt";
+}
+
+TEST_F(CliTest, CtrlCDuringAnEvaluationStillLeavesTheStepsCheckpoint) {
+  ExpectOk(Generate());
+  // The evaluation after step 1 plans 400,000 times (many seconds); SIGINT arrives during it.
+  const Outcome stopped =
+      Flowplan("train --config " + Tiny() + Paths() + " train.steps=100000 train.eval_every=1 "
+               "train.checkpoint_every=100000 eval.num_plans=400000 & pid=$!; sleep 3; kill -INT $pid; wait $pid");
+  EXPECT_NE(stopped.exit_code, 0) << stopped.output;
+  EXPECT_THAT(stopped.output, HasSubstr("interrupted at step 1; checkpoint "));
+  EXPECT_TRUE(fs::exists(Path("run/checkpoints/step_00000001.pt"))) << stopped.output;
+  ExpectOk(Flowplan("train --resume " + Path("run") + " --until 2 eval.num_plans=4"));
 }
 
 TEST_F(CliTest, BadConfigKeyValueAndFile) {
