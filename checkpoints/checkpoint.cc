@@ -104,6 +104,17 @@ CheckpointHeader ReadCheckpointHeader(const std::string& path) {
     header.rng_state = ReadTensor(archive, path, "rng_state");
   } catch (const c10::Error& e) {
     throw Error(path + ": malformed checkpoint entry: " + FirstLine(e.what_without_backtrace()));
+  } catch (const Error& e) {  // e.g. a normalizer with hi <= lo
+    throw Error(path + ": malformed checkpoint entry: " + e.what());
+  }
+  // A CPU generator's state is a flat byte tensor of a fixed size; check it
+  // here so that a foreign one is named, not rejected deep inside LibTorch.
+  const int64_t state_bytes = at::detail::getDefaultCPUGenerator().get_state().numel();
+  if (header.rng_state.scalar_type() != torch::kUInt8 || header.rng_state.dim() != 1 ||
+      header.rng_state.numel() != state_bytes) {
+    throw Error(path + ": malformed checkpoint entry \"rng_state\": expected (" + std::to_string(state_bytes) +
+                ",) uint8, got " + ShapeText(header.rng_state.sizes().vec()) + " " +
+                std::string(c10::toString(header.rng_state.scalar_type())));
   }
   return header;
 }

@@ -10,6 +10,14 @@ torch::Tensor SplitHalves(const torch::Tensor& x) {
   return torch::cat({x.slice(1, 0, T / 2), x.slice(1, T / 2, T)}, 0);
 }
 
+torch::Tensor DrawTrainingTrajectories(const torch::Tensor& data, int64_t batch_size, double split_prob,
+                                       at::Generator& generator) {
+  const torch::Tensor index = torch::randint(data.size(0), {batch_size}, generator, torch::kInt64);
+  torch::Tensor x1 = data.index_select(0, index);  // (B, T, D)
+  if (torch::rand({1}, generator).item<double>() < split_prob) x1 = SplitHalves(x1);
+  return x1;
+}
+
 torch::Tensor InterpolateOt(const torch::Tensor& x0, const torch::Tensor& x1, const torch::Tensor& t) {
   const torch::Tensor tb = t.view({-1, 1, 1});
   return tb * x1 + (1.0 - tb) * x0;

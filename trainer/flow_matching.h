@@ -13,6 +13,13 @@ namespace flowplan::trainer {
 /// @throws flowplan::Error if T is odd.
 torch::Tensor SplitHalves(const torch::Tensor& x);
 
+/// The data of one training step (split-batch mixing, SPEC section 2):
+/// `batch_size` trajectories drawn uniformly with replacement from `data`, and,
+/// with probability `split_prob`, every one of them cut into its halves.
+/// data: (N, T, D) normalized -> (B, T, D), or (2B, T/2, D) when split.
+torch::Tensor DrawTrainingTrajectories(const torch::Tensor& data, int64_t batch_size, double split_prob,
+                                       at::Generator& generator);
+
 /// The conditional OT path x_t = t x1 + (1 - t) x0 (t = 0 noise, t = 1 data).
 /// x0, x1: (B, T, D); t: (B,) -> (B, T, D).
 torch::Tensor InterpolateOt(const torch::Tensor& x0, const torch::Tensor& x1, const torch::Tensor& t);

@@ -224,9 +224,7 @@ class TrainingRun {
   /// One optimizer step at learning rate `lr`; returns the batch loss.
   double Step(double lr) {
     SetLearningRate(optimizer_, lr);
-    const torch::Tensor index = torch::randint(train_n_.size(0), {config_.batch_size}, generator_, torch::kInt64);
-    torch::Tensor x1 = train_n_.index_select(0, index);  // (B, T, D) normalized
-    if (torch::rand({1}, generator_).item<double>() < setup_.flow.split_prob) x1 = SplitHalves(x1);
+    const torch::Tensor x1 = DrawTrainingTrajectories(train_n_, config_.batch_size, setup_.flow.split_prob, generator_);
     const double loss = gradient_->Compute(DrawFlowMatchingBatch(x1, generator_), setup_.flow.conditioning);
     if (config_.grad_clip > 0.0) torch::nn::utils::clip_grad_norm_(net_->parameters(), config_.grad_clip);
     optimizer_.step();

@@ -77,6 +77,50 @@ TEST(TrainerTest, ResumingGivesTheSameWeightsAsOneRun) {
                            checkpoints::ReadCheckpointHeader(b.checkpoint).rng_state));
 }
 
+TEST(TrainerTest, NormalizerIsFittedOnTheTrainingSplitOnly) {
+  datasets::TrajectorySplits data = TinyData();
+  data.val = data.val * 10.0 + 5.0;  // far outside the training range
+  const TrainingSetup setup = TinySetup("normalizer");
+  const auto header = checkpoints::ReadCheckpointHeader(Train(setup, data, TrainStart::kFresh).checkpoint);
+  const auto expected = models::MinMaxNormalizer::Fit(data.train);
+  EXPECT_TRUE(torch::equal(header.normalizer.lo(), expected.lo()));
+  EXPECT_TRUE(torch::equal(header.normalizer.hi(), expected.hi()));
+}
+
+TEST(TrainerTest, EmaFollowsTheWeightsWithWarmUp) {
+  // After step n (n = 1, 2, ...) the EMA is d ema + (1 - d) w with d = min(ema_decay, n / (9 + n)).
+  const auto data = TinyData();
+  TrainingSetup setup = TinySetup("ema");
+  setup.train.checkpoint_every = 1;
+  setup.train.keep_checkpoints = 100;
+  setup.train.ema_decay = 0.2;  // reached at step 3: 3 / 12 = 0.25 > 0.2
+  setup.stop_at_step = 4;
+  Train(setup, data, TrainStart::kFresh);
+  RunDir run(setup.run_dir);
+  const size_t P = models::MakeVelocityNet(setup.model, 4, 0)->parameters().size();
+  for (int64_t n = 2; n <= 4; ++n) {
+    const auto before = Weights(run.checkpoint(n - 1), setup), after = Weights(run.checkpoint(n), setup);
+    const double d = std::min(0.2, static_cast<double>(n) / (9.0 + static_cast<double>(n)));
+    for (size_t i = 0; i < P; ++i) {
+      const torch::Tensor expected = d * before[P + i] + (1.0 - d) * after[i];
+      EXPECT_TRUE(torch::allclose(after[P + i], expected, 1e-5, 1e-6)) << "step " << n << ", parameter " << i;
+    }
+  }
+}
+
+TEST(TrainerTest, ForeignGeneratorStateIsNamed) {
+  const TrainingSetup setup = TinySetup("foreign_rng");
+  const std::string path = Train(setup, TinyData(), TrainStart::kFresh).checkpoint;
+  checkpoints::CheckpointHeader header = checkpoints::ReadCheckpointHeader(path);
+  header.rng_state = torch::zeros({3}, torch::kUInt8);
+  auto net = models::MakeVelocityNet(setup.model, 4, 0);
+  const std::string foreign = (fs::path(setup.run_dir) / "foreign.pt").string();
+  checkpoints::SaveCheckpoint(foreign, header, {net.get(), net.get(), nullptr});
+  EXPECT_THAT([&] { checkpoints::ReadCheckpointHeader(foreign); },
+              ::testing::ThrowsMessage<Error>(::testing::AllOf(::testing::HasSubstr("foreign.pt"),
+                                                               ::testing::HasSubstr("rng_state"))));
+}
+
 TEST(TrainerTest, ThreadCountDoesNotChangeTheWeights) {
   const auto data = TinyData();
   TrainingSetup one = TinySetup("one_thread");
