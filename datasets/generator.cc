@@ -107,7 +107,13 @@ TrajectoryDataset GenerateDataset(const EpisodeTask& task, const GenerateOptions
   // Evaluation pairs from the noise-free nominal rollout of each family.
   const std::vector<Family> families = task.Families();
   std::vector<EpisodeRecord> nominal;
-  for (size_t f = 0; f < families.size(); ++f) nominal.push_back(workers[0]->RunNominal(static_cast<int>(f)));
+  for (size_t f = 0; f < families.size(); ++f) {
+    nominal.push_back(workers[0]->RunNominal(static_cast<int>(f)));
+    if (nominal.back().rejected) {  // its states would be a stopped rollout, not the family's start and goal
+      throw Error("generate " + layout.env + ": the noise-free rollout of family " + families[f].name +
+                  ", which gives the evaluation pairs, was rejected: " + nominal.back().reject_reason);
+    }
+  }
   auto add_pair = [&](EvalPairs& pairs, size_t from, size_t to, const std::string& name) {
     AppendState(nominal[from].states, 0, D, pairs.start);
     AppendState(nominal[to].states, T - 1, D, pairs.goal);

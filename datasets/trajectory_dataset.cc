@@ -76,9 +76,10 @@ void TrajectoryDataset::CheckConsistent(const std::string& where) const {
   expect("commanded_goal", commanded_goal.size(), num_episodes * point_dim);
   expect("family", family.size(), num_episodes);
   for (const auto& [name, array] : extras) {
-    if (array.shape.empty() || array.shape[0] != num_episodes) {
-      throw Error(where + ": " + name + ": expected " + std::to_string(num_episodes) +
-                  " episodes, got shape " + ShapeText(array.shape));
+    // Per-step arrays: (N, T, k), as docs/dataset_format.md promises readers.
+    if (array.shape.size() != 3 || array.shape[0] != num_episodes || array.shape[1] != horizon) {
+      throw Error(where + ": /extras/" + name + ": expected shape (" + std::to_string(num_episodes) + ", " +
+                  std::to_string(horizon) + ", k), got " + ShapeText(array.shape));
     }
     expect(name.c_str(), array.values.size(), Count(array.shape));
   }

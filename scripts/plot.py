@@ -66,6 +66,8 @@ def command_plans(args):
         colors = plt.get_cmap("tab10")
         for p, name in enumerate(names):
             chosen = np.flatnonzero(index == p)
+            if len(chosen) == 0:  # fewer plans than pairs
+                continue
             for k, i in enumerate(chosen):
                 ax.plot(x[i, :, 0], x[i, :, 1], color=colors(p + 2), lw=1.0, alpha=0.8,
                         label=f"plan {name}" if k == 0 else None)

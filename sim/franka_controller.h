@@ -60,7 +60,7 @@ struct OscConfig {
             config::Positive());
     v.Field("speed_guard", speed_guard,
             "brake a joint once its speed exceeds this fraction of its velocity limit (.inf: never)",
-            config::Positive());
+            config::PositiveOrInfinite());
     v.Field("nullspace_stiffness", nullspace_stiffness, "null-space posture stiffness (1/s^2)",
             config::NonNegative());
     v.Field("nullspace_damping_ratio", nullspace_damping_ratio, "null-space damping ratio",

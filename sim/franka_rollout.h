@@ -67,7 +67,9 @@ struct FrankaRolloutConfig {
   int record_every = 2;       // control steps between recorded states
   int horizon = 64;           // recorded states per episode, T
   Integrator integrator = Integrator::kEuler;
-  double reject_velocity_factor = 2.0;  // reject an episode once |q̇_j| > factor · limit_j
+  // Reject an episode once |q̇_j| > factor · limit_j at a physics step: at 1, kept
+  // data respects the arm's velocity limits (a real Panda stops when it breaks one).
+  double reject_velocity_factor = 1.0;
   OscConfig controller;
   AugmentationConfig augmentation;
 
@@ -82,7 +84,8 @@ struct FrankaRolloutConfig {
     v.Field("horizon", horizon, "recorded states per episode", config::AtLeast(2));
     v.Field("integrator", integrator, "physics integrator");
     v.Field("reject_velocity_factor", reject_velocity_factor,
-            "reject an episode once a joint speed exceeds this many times its limit", config::Positive());
+            "reject an episode once a joint speed exceeds this many times its limit (1: kept data obeys the "
+            "limits)", config::Positive());
     v.Field("controller", controller, "operational-space controller");
     v.Field("augmentation", augmentation, "how episodes are randomized");
   }

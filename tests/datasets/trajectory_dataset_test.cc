@@ -123,6 +123,12 @@ TEST(TrajectoryDatasetTest, InconsistentDatasetIsNotWritten) {
   std::remove(path.c_str());
   EXPECT_THAT([&] { WriteDataset(path, d); }, ThrowsMessage<Error>(HasSubstr("states")));
   EXPECT_FALSE(std::filesystem::exists(path));
+  // A per-step array must be (N, T, k).
+  TrajectoryDataset flat = SmallDataset();
+  flat.extras["tcp"] = {{3, 15}, std::vector<float>(45, 0.5f)};
+  EXPECT_THAT([&] { WriteDataset(path, flat); },
+              ThrowsMessage<Error>(HasSubstr("/extras/tcp: expected shape (3, 5, k), got (3, 15)")));
+  EXPECT_FALSE(std::filesystem::exists(path));
 }
 
 TEST(TrajectoryDatasetTest, MergeConcatenatesAndChecksCompatibility) {

@@ -89,6 +89,8 @@ TEST(FrankaDatasetTest, CrossLayoutFamiliesAndEvaluationPairs) {
 TEST(FrankaDatasetTest, ReachDrawsReachablePointsInTheBox) {
   FrankaTaskConfig config;
   config.rollout.augmentation.scheme = sim::Augmentation::kRandomForce;
+  // Gentle pushes: at the preset's 15-20 N most reach episodes exceed a joint's velocity limit.
+  config.rollout.augmentation.force_range = {2.0, 4.0};
   FrankaTask task(FrankaGoals::kReach, config);
   EXPECT_TRUE(task.Families().empty());
   const TrajectoryDataset d = GenerateDataset(task, Options(6, 2));
@@ -169,8 +171,19 @@ TEST(FrankaDatasetTest, ShippedConfigsLoadAndGenerate) {
     EXPECT_EQ(root["data"]["path"].as<std::string>(), generate.out) << path;
     EXPECT_EQ(generate.episodes, 10000) << path;
     const std::unique_ptr<EpisodeTask> task = MakeTask(generate);
-    const TrajectoryDataset d = GenerateDataset(*task, Options(4, 2));
-    EXPECT_EQ(d.num_episodes + d.rejected_episodes, 4) << path;
+    const TrajectoryDataset d = GenerateDataset(*task, Options(8, 2));
+    ASSERT_GT(d.num_episodes, 0) << path;
+    // Kept episodes obey the arm's velocity limits (recorded states included).
+    const sim::FrankaLimits limits = sim::LoadFrankaModel().limits();
+    for (int64_t i = 0; i < d.num_episodes * d.horizon; ++i) {
+      for (int j = 0; j < 7; ++j) {
+        ASSERT_LE(std::abs(d.states[static_cast<size_t>(i * 14 + 7 + j)]), limits.velocity[j] + 1e-6)
+            << path << ", joint " << j + 1;
+      }
+    }
+    EXPECT_EQ(d.extras.count("external_force") == 1,
+              generate.franka.rollout.augmentation.scheme == sim::Augmentation::kRandomForce)
+        << path;
   }
 }
 

@@ -55,6 +55,34 @@ TEST_F(FrankaRolloutTest, NoiseFreeControllerReachesTheTargetInAStraightLine) {
   }
 }
 
+TEST_F(FrankaRolloutTest, PerJointNoiseIsIndependentAndSameNoiseIsShared) {
+  // State 0 is the same rest pose under every scheme, so the first recorded
+  // torque differs from the noise-free one by exactly the first step's noise:
+  // sigma_j z_j with independent z_j, or sigma_j z with one z for every joint.
+  FrankaSimulator simulator(model_, config_);
+  auto first_noise = [&](Augmentation scheme) {  // (7,) noise / sigma of the first physics step
+    FrankaEpisode none, noisy;
+    Rng rng_none(4), rng(4);
+    simulator.Rollout(start_q_, goal_, Augmentation::kNone, rng_none, &none);
+    simulator.Rollout(start_q_, goal_, scheme, rng, &noisy);
+    std::vector<double> z(7);
+    for (int j = 0; j < 7; ++j) {
+      z[j] = (noisy.torques[j] - none.torques[j]) / config_.augmentation.torque_noise_sigma[j];
+    }
+    return z;
+  };
+  const std::vector<double> shared = first_noise(Augmentation::kSameNoise);
+  const std::vector<double> independent = first_noise(Augmentation::kPerJointNoise);
+  double spread_shared = 0.0, spread_independent = 0.0;
+  for (int j = 1; j < 7; ++j) {
+    spread_shared = std::max(spread_shared, std::abs(shared[j] - shared[0]));
+    spread_independent = std::max(spread_independent, std::abs(independent[j] - independent[0]));
+  }
+  EXPECT_GT(std::abs(shared[0]), 1e-3);
+  EXPECT_LT(spread_shared, 1e-9);
+  EXPECT_GT(spread_independent, 0.1);
+}
+
 TEST_F(FrankaRolloutTest, TorquesStayWithinLimitsUnderEveryScheme) {
   FrankaSimulator simulator(model_, config_);
   FrankaEpisode episode;
