@@ -87,6 +87,15 @@ struct KeyInfo {
   std::string help;
 };
 
+/// The config name of an enum value (its EnumEntries() name), e.g. "inpaint".
+template <class E>
+const char* EnumName(E value) {
+  for (const auto& [v, name] : EnumEntries(E{})) {
+    if (v == value) return name;
+  }
+  return "?";
+}
+
 namespace internal {
 
 template <class T, class = void>
@@ -127,14 +136,6 @@ std::string EnumChoices() {
     out += name;
   }
   return out;
-}
-
-template <class E>
-const char* EnumName(E value) {
-  for (const auto& [v, name] : EnumEntries(E{})) {
-    if (v == value) return name;
-  }
-  return "?";
 }
 
 template <class T>

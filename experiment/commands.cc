@@ -79,7 +79,7 @@ void RunGenerate(const ExperimentConfig& config, const GenerateRequest& request)
   options.shard_count = request.shard_count;
   options.config_yaml = DatasetConfigYaml(config);
   spdlog::info("generating {} episodes of {} on {} threads{}", config.generate.episodes,
-               config::internal::EnumName(config.generate.dataset), threads,
+               config::EnumName(config.generate.dataset), threads,
                request.shard_count > 1 ? " (shard " + std::to_string(request.shard_index) + "/" +
                                              std::to_string(request.shard_count) + ")"
                                        : std::string());
@@ -115,7 +115,7 @@ void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
   setup.sampler = config.sampler;
   setup.eval = config.eval;
   setup.stop_at_step = request.until_step;
-  spdlog::info("training {} on {} ({} threads) into {}", config::internal::EnumName(config.model.architecture),
+  spdlog::info("training {} on {} ({} threads) into {}", config::EnumName(config.model.architecture),
                config.data.path, threads, config.run_dir);
   const trainer::TrainResult result = trainer::Train(setup, data, request.start);
   if (result.steps == result.first_step) {
@@ -224,7 +224,7 @@ void RunEvalStitching(const EvalRequest& request) {
       "{\"checkpoint\": " + JsonString(loaded.checkpoint) + ", \"step\": " + std::to_string(loaded.step) +
       ", \"data\": " + JsonString(loaded.config.data.path) +
       ", \"sampler_steps\": " + std::to_string(loaded.config.sampler.steps) +
-      ", \"sampler_splitting\": " + JsonString(config::internal::EnumName(loaded.config.sampler.splitting)) +
+      ", \"sampler_splitting\": " + JsonString(config::EnumName(loaded.config.sampler.splitting)) +
       ", \"test\": " + eval::ToJson(test) + ", \"train\": " + eval::ToJson(train) + "}\n";
   WriteFileAtomically(out, json);
   const std::string plans = fs::path(out).replace_extension(".plans.h5").string();

@@ -97,11 +97,11 @@ torch::jit::Module BuildScriptPlanner(const FlowPlanner& planner, const ExportMe
   module.register_attribute("state_dim", c10::IntType::get(), planner.state_dim());
   module.register_attribute("steps", c10::IntType::get(), static_cast<int64_t>(planner.sampler().steps));
   module.register_attribute("splitting", c10::StringType::get(),
-                            std::string(config::internal::EnumName(planner.sampler().splitting)));
+                            std::string(config::EnumName(planner.sampler().splitting)));
   module.register_attribute("dt", c10::FloatType::get(), metadata.dt);
   module.register_attribute("env", c10::StringType::get(), metadata.env);
   module.register_attribute("conditioning", c10::StringType::get(),
-                            std::string(config::internal::EnumName(planner.conditioning())));
+                            std::string(config::EnumName(planner.conditioning())));
   c10::List<std::string> labels;
   for (const auto& label : metadata.state_labels) labels.push_back(label);
   module.register_attribute("state_labels", c10::ListType::ofStrings(), labels);
