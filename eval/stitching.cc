@@ -10,6 +10,15 @@
 namespace flowplan::eval {
 
 torch::Tensor StitchingErrors(const torch::Tensor& plans, const torch::Tensor& start, const torch::Tensor& goal) {
+  if (plans.dim() != 3 || plans.size(1) < 3) {
+    throw Error("stitching error: plans: expected (N, T, D) with T >= 3, got " + models::ShapeString(plans));
+  }
+  for (const auto& [name, ends] : {std::pair{"start", &start}, std::pair{"goal", &goal}}) {
+    if (ends->dim() != 2 || ends->size(0) != plans.size(0) || ends->size(1) != plans.size(2)) {
+      throw Error(std::string("stitching error: ") + name + ": expected (" + std::to_string(plans.size(0)) + ", " +
+                  std::to_string(plans.size(2)) + "), got " + models::ShapeString(*ends));
+    }
+  }
   const int64_t T = plans.size(1), positions = plans.size(2) / 2;
   const torch::Tensor first = plans.select(1, 1).slice(1, 0, positions);
   const torch::Tensor last = plans.select(1, T - 2).slice(1, 0, positions);

@@ -1,10 +1,12 @@
 #include "trainer/flow_matching.h"
 
 #include "core/error.h"
+#include "core/format.h"
 
 namespace flowplan::trainer {
 
 torch::Tensor SplitHalves(const torch::Tensor& x) {
+  if (x.dim() != 3) throw Error("trajectory splitting: expected (B, T, D), got " + models::ShapeString(x));
   const int64_t T = x.size(1);
   if (T % 2 != 0) throw Error("trajectory splitting: expected an even horizon, got " + std::to_string(T));
   return torch::cat({x.slice(1, 0, T / 2), x.slice(1, T / 2, T)}, 0);

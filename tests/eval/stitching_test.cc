@@ -62,6 +62,13 @@ TEST(StitchingTest, JsonReportEscapesNamesAndWritesNaNAsNull) {
             "\"per_pair\": {\"a \\\"quoted\\\" pair\": null}}");
 }
 
+TEST(StitchingTest, WrongShapesAreNamed) {
+  EXPECT_THAT([] { StitchingErrors(torch::zeros({4, 8}), torch::zeros({4, 4}), torch::zeros({4, 4})); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("plans: expected (N, T, D) with T >= 3, got (4, 8)")));
+  EXPECT_THAT([] { StitchingErrors(torch::zeros({4, 8, 4}), torch::zeros({4, 4}), torch::zeros({3, 4})); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("goal: expected (4, 4), got (3, 4)")));
+}
+
 TEST(StitchingTest, NoPairsIsAClearError) {
   const planning::FlowPlanner planner = SmallPlanner();
   datasets::EvalPairTensors none{torch::zeros({0, 4}), torch::zeros({0, 4}), {}};
