@@ -84,7 +84,7 @@ class UNet1D : public VelocityNet {
   struct Level {
     std::shared_ptr<internal::ResidualBlock> block0, block1;
     torch::nn::Conv1d down{nullptr};           // null on the last down level
-    torch::nn::ConvTranspose1d up{nullptr};    // null on the last up level
+    torch::nn::ConvTranspose1d up{nullptr};    // every up level has one (there is one up level fewer than down)
   };
 
   torch::Tensor TimeFeature(const torch::Tensor& t) const;
