@@ -3,7 +3,7 @@
 # data's noise augmentation and its scale, inpainting vs direct conditioning,
 # training length, and inference splitting. Every variant is
 # configs/particle_cross.yaml (or its no-noise twin) with one change; the tables
-# go to runs/ablation/summary.md. About two and a half hours on two cores; a
+# go to runs/ablation/summary.md. About three hours on two cores; a
 # second call continues stopped runs and skips finished ones.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -60,6 +60,12 @@ for accel in 0.2 0.5 1 2; do
   overrides=("generate.particle.accel_noise=$accel" "generate.out=$data" "data.path=$data")
   [ -f "$data" ] || "$FLOWPLAN" generate --config configs/particle_cross.yaml "${overrides[@]}"
   variant "unet2_accel${accel}" configs/particle_cross.yaml "${overrides[@]}"
+  # The spread from the training seed at the levels where the error falls.
+  if [ "$accel" = 0.5 ] || [ "$accel" = 1 ]; then
+    for seed in 1 2; do
+      variant "unet2_accel${accel}_seed${seed}" configs/particle_cross.yaml "${overrides[@]}" seed=$seed
+    done
+  fi
 done
 "$PYTHON" scripts/summarize_ablation.py "$OUT" > "$OUT/summary.md"
 cat "$OUT/summary.md"

@@ -26,13 +26,17 @@ _crossing = {}
 
 
 def crossing(path):
-    """Velocities of the states within 0.05 of the centre (0.5, 0.5), per family:
-    (vy std pooled over the families, separation of the families' vy means in
-    pooled standard deviations, accel_noise of the file's config)."""
+    """What the data offers for stitching: (vy std among the states within 0.05
+    of the centre (0.5, 0.5), pooled over the two families; how many of those
+    standard deviations apart the families' mean vy are; how close the nearest
+    training episode comes to connecting a test pair (mean over the test pairs
+    of the smallest ½(|first position − start| + |last position − goal|));
+    accel_noise of the file's config)."""
     if path not in _crossing:
         with h5py.File(path, "r") as f:
             states, family = f["states"][...], f["family"][...]
             config = f.attrs["config"]
+            test_start, test_goal = f["eval/test_pairs/start"][...], f["eval/test_pairs/goal"][...]
         vy = []
         for k in (0, 1):
             x = states[family == k]
@@ -40,9 +44,13 @@ def crossing(path):
             vy.append(x[..., 3][near])
         pooled = float(np.sqrt((vy[0].var() + vy[1].var()) / 2))
         separation = abs(float(vy[0].mean() - vy[1].mean())) / pooled
+        first, last = states[:, 0, :2], states[:, -1, :2]
+        nearest = float(np.mean([
+            (0.5 * (np.linalg.norm(first - a[:2], axis=1) + np.linalg.norm(last - b[:2], axis=1))).min()
+            for a, b in zip(test_start, test_goal)]))
         accel = next(line.split(":")[1].strip() for line in config.splitlines()
                      if line.strip().startswith("accel_noise:"))
-        _crossing[path] = (pooled, separation, accel)
+        _crossing[path] = (pooled, separation, nearest, accel)
     return _crossing[path]
 
 
@@ -57,7 +65,8 @@ with open(os.path.join(out, "variants.txt")) as f:
         data = "no noise" if "no_noise" in config else "noise"
         if name.startswith("unet2_seed") or name in ("unet2_noise", "unet2_no_noise"):
             seeds[data].append((plain["test"]["mean"], split["test"]["mean"]))
-        if name in ("unet2_noise", "unet2_no_noise") or name.startswith("unet2_accel"):
+        if name in ("unet2_noise", "unet2_no_noise") or name.startswith("unet2_accel") \
+                or name.startswith("unet2_seed"):
             scales.append((crossing(plain["data"]), plain, split))
         print(f"| {name} | {os.path.basename(plain['data'])} | {overrides or '—'} | {plain['step']} | "
               f"{cell(plain['test'])} | {cell(split['test'])} | {cell(plain['train'])} |")
@@ -77,12 +86,21 @@ for data, runs in seeds.items():
 
 if scales:
     print()
-    print("Noise scale (default network, seed 0): the acceleration noise of the data, the spread of vy "
-          "among the states within 0.05 of the crossing (0.5, 0.5), and how many of those standard "
-          "deviations apart the two families' mean vy are (the families overlap in the full state only "
-          "when this is small).")
+    print("Noise scale (default network): the acceleration noise of the data; the spread of vy among the "
+          "states within 0.05 of the crossing (0.5, 0.5); how many of those standard deviations apart the "
+          "two families' mean vy are (the families overlap in the full state only when this is small); how "
+          "close the nearest training episode comes to connecting a test pair (mean endpoint distance; "
+          "0 would be a training episode that joins them); the test-pair stitching error, mean over the "
+          "training seeds of each run's mean (min–max).")
     print()
-    print("| accel_noise | vy std at the crossing | family separation (std) | test pairs | test pairs, split |")
-    print("|---|---|---|---|---|")
-    for (pooled, separation, accel), plain, split in sorted(scales, key=lambda r: float(r[0][2])):
-        print(f"| {accel} | {pooled:.3f} | {separation:.1f} | {cell(plain['test'])} | {cell(split['test'])} |")
+    print("| accel_noise | vy std at the crossing | family separation (std) | nearest training episode | seeds "
+          "| test pairs | test pairs, split |")
+    print("|---|---|---|---|---|---|---|")
+    levels = {}
+    for stats, plain, split in scales:
+        levels.setdefault(stats, []).append((plain["test"]["mean"], split["test"]["mean"]))
+    for (pooled, separation, nearest, accel), runs in sorted(levels.items(), key=lambda r: float(r[0][3])):
+        plain, split = [r[0] for r in runs], [r[1] for r in runs]
+        span = lambda v: f"{statistics.mean(v):.3f}" + (f" ({min(v):.3f}–{max(v):.3f})" if len(v) > 1 else "")
+        print(f"| {accel} | {pooled:.3f} | {separation:.1f} | {nearest:.3f} | {len(runs)} | {span(plain)} | "
+              f"{span(split)} |")
