@@ -146,9 +146,15 @@ void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& cha
   // What a resumed run may change without becoming another run: its length,
   // how often it logs, evaluates and saves, the threads (results do not depend
   // on them), and how evaluations sample.
-  static const std::vector<std::string> kMayChange = {
-      "threads",          "train.steps",      "train.log_every", "train.eval_every", "train.checkpoint_every",
-      "train.keep_checkpoints", "train.val_batch_size", "sampler.", "eval."};
+  static const std::vector<std::string> kMayChange = {"threads",
+                                                       "train.steps",
+                                                       "train.log_every",
+                                                       "train.eval_every",
+                                                       "train.checkpoint_every",
+                                                       "train.keep_checkpoints",
+                                                       "train.val_batch_size",
+                                                       "sampler.",  // a trailing dot: every key below
+                                                       "eval."};
   const auto before = config::ListKeys(trained), after = config::ListKeys(changed);
   for (size_t i = 0; i < before.size(); ++i) {
     const std::string& key = before[i].key;
