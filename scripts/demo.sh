@@ -47,6 +47,10 @@ start, goal = torch.tensor([0.0, 0.0, 0.0, 0.0]), torch.tensor([1.0, 0.0, 0.0, 0
 plans = planner.sample(start, goal, 8)
 print(f"{sys.argv[1]}: sample(start, goal, 8) -> {tuple(plans.shape)}; "
       f"first state {plans[0, 0].tolist()}, last state {plans[0, -1].tolist()}")
+ends = max((plans[:, 0] - start).abs().max().item(), (plans[:, -1] - goal).abs().max().item())
+if ends > 1e-6:
+    sys.exit(f"{sys.argv[1]}: the plans' ends are {ends} away from the requested start and goal")
+print(f"all 8 plans start and end at the requested states (largest difference {ends})")
 PY
 
 echo
