@@ -58,6 +58,7 @@ void WriteFileAtomically(const std::string& path, const std::string& text) {
 }
 
 std::string ReadFile(const std::string& path) {
+  if (fs::is_directory(path)) throw Error(path + ": is a folder, not a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open");
   std::stringstream text;

@@ -4,7 +4,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 namespace flowplan::config {
@@ -84,8 +86,13 @@ Location YamlReader::Where(const std::string& name, const YAML::Node& child) con
 
 void YamlReader::Finish() const {
   if (!node_.IsMap()) return;
+  std::set<std::string> keys;
   for (const auto& entry : node_) {
     const std::string key = entry.first.Scalar();
+    if (!keys.insert(key).second) {  // yaml-cpp keeps the first and drops the rest without a word
+      const Location where{source_, prefix_.empty() ? key : prefix_ + "." + key, internal::LineOf(entry.first)};
+      throw Error(where.Prefix() + ": key given twice");
+    }
     if (seen_.count(key) != 0) continue;
     std::string known;
     for (const auto& name : seen_) known += (known.empty() ? "" : ", ") + name;
@@ -104,6 +111,7 @@ YAML::Node ParseYamlText(const std::string& text, const std::string& source) {
 }
 
 YAML::Node ParseYamlFile(const std::string& path) {
+  if (std::filesystem::is_directory(path)) throw Error(path + ": is a folder, not a config file");
   std::ifstream in(path);
   if (!in) throw Error(path + ": cannot open config file");
   std::stringstream text;

@@ -137,6 +137,21 @@ TEST(ConfigTest, MalformedOverrideAndMissingFile) {
               ThrowsMessage<Error>(AllOf(HasSubstr(path), HasSubstr("not valid YAML"))));
 }
 
+TEST(ConfigTest, KeyGivenTwiceIsAnErrorNotTheFirstValue) {
+  const std::string path = WriteTemp("steps: 5\ntrainer:\n  lr: 0.1\nsteps: 7\n");
+  EXPECT_THAT([&] { config::Load<Outer>(path, {}); },
+              ThrowsMessage<Error>(AllOf(HasSubstr(path + ":4"), HasSubstr("steps: key given twice"))));
+  const std::string nested = WriteTemp("trainer:\n  lr: 0.1\n  lr: 0.2\n");
+  EXPECT_THAT([&] { config::Load<Outer>(nested, {}); },
+              ThrowsMessage<Error>(AllOf(HasSubstr(nested + ":3"), HasSubstr("trainer.lr: key given twice"))));
+}
+
+TEST(ConfigTest, AFolderIsNotAConfigFile) {
+  const std::string folder = flowplan::testing::ScratchDir().string();
+  EXPECT_THAT([&] { config::Load<Outer>(folder, {}); },
+              ThrowsMessage<Error>(AllOf(HasSubstr(folder), HasSubstr("is a folder"))));
+}
+
 TEST(ConfigTest, EmptyFileKeepsDefaults) {
   const std::string path = WriteTemp("");
   EXPECT_EQ(config::Load<Outer>(path, {}).steps, 10);
