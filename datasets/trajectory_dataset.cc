@@ -1,5 +1,7 @@
 #include "datasets/trajectory_dataset.h"
 
+#include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "core/atomic_file.h"
@@ -162,6 +164,14 @@ TrajectoryDataset ReadDataset(const std::string& path) {
   if (static_cast<int64_t>(dataset.state_labels.size()) != dataset.state_dim) {
     throw Error(path + ": attribute state_labels names " + std::to_string(dataset.state_labels.size()) +
                 " dimensions, /states has " + std::to_string(dataset.state_dim));
+  }
+  const auto bad = std::find_if(dataset.states.begin(), dataset.states.end(), [](float v) { return !std::isfinite(v); });
+  if (bad != dataset.states.end()) {
+    const int64_t at = bad - dataset.states.begin(), d = at % dataset.state_dim;
+    throw Error(path + ": /states: " + std::to_string(*bad) + " at episode " +
+                std::to_string(at / (dataset.horizon * dataset.state_dim)) + ", step " +
+                std::to_string(at / dataset.state_dim % dataset.horizon) + ", dimension " + std::to_string(d) + " (" +
+                dataset.state_labels[static_cast<size_t>(d)] + "); states must be finite");
   }
   dataset.commanded_start = file.ReadFloat64("/commanded_start", &shape);
   if (shape.size() != 2 || shape[0] != n) {

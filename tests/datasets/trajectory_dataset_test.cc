@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -114,6 +115,18 @@ TEST(TrajectoryDatasetTest, AttributeOfTheWrongKindIsAClearError) {
   }
   EXPECT_THAT([&] { ReadDataset(path); },
               ThrowsMessage<Error>(AllOf(HasSubstr(path), HasSubstr("'seed': expected a single integer"))));
+}
+
+TEST(TrajectoryDatasetTest, NonFiniteStateIsNamedByEpisodeStepAndDimension) {
+  // A file edited or made by another tool: training on it would fail later
+  // with a message that names neither the file nor the place.
+  TrajectoryDataset d = SmallDataset();
+  d.states[(1 * 5 + 2) * 4 + 3] = std::numeric_limits<float>::quiet_NaN();
+  const std::string path = TempPath("nan_state.h5");
+  WriteDataset(path, d);
+  EXPECT_THAT([&] { ReadDataset(path); },
+              ThrowsMessage<Error>(AllOf(HasSubstr(path), HasSubstr("/states"),
+                                         HasSubstr("episode 1, step 2, dimension 3 (vy)"))));
 }
 
 TEST(TrajectoryDatasetTest, InconsistentDatasetIsNotWritten) {
