@@ -17,8 +17,20 @@ std::string PlannerSource(const FlowPlanner& planner, const std::string& velocit
   const std::string T = std::to_string(planner.horizon());
   const std::string H = std::to_string(planner.horizon() / 2);
   std::string s;
-  s += "def velocity(self, x: Tensor, t: Tensor, cond: Optional[Tensor]) -> Tensor:\n";
+  // net_velocity is the network alone, called by the Euler loop; velocity is
+  // the same for callers, with its arguments checked.
+  s += "def net_velocity(self, x: Tensor, t: Tensor, cond: Optional[Tensor]) -> Tensor:\n";
   s += velocity_body;
+  s += R"PY(
+def velocity(self, x: Tensor, t: Tensor, cond: Optional[Tensor]) -> Tensor:
+    assert x.dim() == 3 and x.size(1) == )PY" + T + " and x.size(2) == " + D + R"PY(, "velocity: x: expected (B, )PY" + T + ", " + D + R"PY(), normalized"
+    assert t.dim() == 1 and t.size(0) == x.size(0), "velocity: t: expected (B,) with the B of x"
+)PY";
+  s += inpaint ? "    assert cond is None, \"velocity: cond: this planner conditions by inpainting; pass None\"\n"
+               : "    assert cond is not None and cond.dim() == 2 and cond.size(0) == x.size(0) and cond.size(1) == " +
+                     std::to_string(2 * planner.state_dim()) + ", \"velocity: cond: expected (B, " +
+                     std::to_string(2 * planner.state_dim()) + "), the normalized start and goal\"\n";
+  s += "    return self.net_velocity(x, t, cond)\n";
   s += R"PY(
 def normalize(self, x: Tensor) -> Tensor:
     return (x - self.lo) / (self.hi - self.lo) * 2.0 - 1.0
@@ -37,10 +49,10 @@ def integrate(self, x: Tensor, s: Tensor, g: Tensor, t0: float, steps: int) -> T
   s += "    for i in range(steps):\n";
   s += "        t = torch.full([x.size(0)], t0 + i * h, dtype=x.dtype, device=x.device)\n";
   if (inpaint) {
-    s += "        x = x + h * self.velocity(self.inpaint(x, s, g), t, cond)\n";
+    s += "        x = x + h * self.net_velocity(self.inpaint(x, s, g), t, cond)\n";
     s += "        x = self.inpaint(x, s, g)\n";
   } else {
-    s += "        x = x + h * self.velocity(x, t, cond)\n";
+    s += "        x = x + h * self.net_velocity(x, t, cond)\n";
   }
   s += "    return x\n";
   s += R"PY(

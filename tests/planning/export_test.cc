@@ -115,6 +115,29 @@ TEST(ExportTest, BadShapesAreRejectedByTheScript) {
               ::testing::ThrowsMessage<std::exception>(::testing::HasSubstr("plan: start: expected (B, 4)")));
 }
 
+TEST(ExportTest, VelocityIsTheNetworkAndChecksItsArguments) {
+  for (const Conditioning conditioning : {Conditioning::kInpaint, Conditioning::kDirect}) {
+    const FlowPlanner planner = MakePlanner(conditioning);
+    torch::jit::Module module = BuildScriptPlanner(planner, Metadata());
+    torch::manual_seed(3);
+    const torch::Tensor x = torch::randn({2, 64, 4}), t = torch::rand({2});
+    const torch::Tensor cond = conditioning == Conditioning::kDirect ? torch::rand({2, 8}) : torch::Tensor();
+    torch::NoGradGuard no_grad;
+    const torch::Tensor expected = planner.net()->Forward(x, t, cond);
+    const torch::jit::IValue script_cond = cond.defined() ? torch::jit::IValue(cond) : torch::jit::IValue();
+    const torch::Tensor got = module.run_method("velocity", x, t, script_cond).toTensor();
+    EXPECT_LT((got - expected).abs().max().item<float>(), 1e-5);
+    using ::testing::HasSubstr;
+    using ::testing::ThrowsMessage;
+    EXPECT_THAT([&] { module.run_method("velocity", torch::zeros({2, 63, 4}), t, script_cond); },
+                ThrowsMessage<std::exception>(HasSubstr("velocity: x: expected (B, 64, 4)")));
+    EXPECT_THAT([&] { module.run_method("velocity", x, torch::zeros({3}), script_cond); },
+                ThrowsMessage<std::exception>(HasSubstr("velocity: t: expected (B,)")));
+    EXPECT_THAT([&] { module.run_method("velocity", x, t, torch::zeros({2, 5})); },
+                ThrowsMessage<std::exception>(HasSubstr("velocity: cond")));
+  }
+}
+
 TEST(ExportTest, SampleStartsAndEndsAtTheRequest) {
   const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, Splitting::kMidpoint);
   torch::jit::Module module = BuildScriptPlanner(planner, Metadata());
