@@ -4,6 +4,9 @@
 #include <torch/torch.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 
 #include "checkpoints/checkpoint.h"
@@ -97,7 +100,8 @@ void RunMerge(const std::vector<std::string>& inputs, const std::string& out) {
   EnsureParentFolder(out);
   const datasets::TrajectoryDataset merged = datasets::MergeDatasets(shards, inputs);
   datasets::WriteDataset(out, merged);
-  spdlog::info("wrote {}: {} episodes from {} shards", out, merged.num_episodes, inputs.size());
+  spdlog::info("wrote {}: {} episodes from {} shard{}", out, merged.num_episodes, inputs.size(),
+               inputs.size() == 1 ? "" : "s");
 }
 
 void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
@@ -179,6 +183,9 @@ void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& cha
 
 void RunResume(const std::string& run_dir, const std::vector<std::string>& overrides, int64_t until_step) {
   const std::string stored = run_dir + "/config.yaml";
+  if (!std::filesystem::is_regular_file(stored)) {
+    throw Error(run_dir + ": not a run folder (it has no config.yaml); --resume takes the run_dir of a training run");
+  }
   const std::string text = ReadFile(stored);
   const ExperimentConfig trained = LoadExperimentText(text, stored, "", {});
   ExperimentConfig config = LoadExperimentText(text, stored, "", overrides);
@@ -260,8 +267,38 @@ void RunExport(const EvalRequest& request) {
 
 namespace flowplan::experiment {
 
+std::vector<double> ParseJointAngles(const std::string& text) {
+  std::vector<double> q;
+  size_t begin = 0;
+  while (true) {
+    const size_t end = text.find(',', begin);
+    const std::string field = text.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+    const std::string where = "--q value " + std::to_string(q.size() + 1) + " \"" + field + "\"";
+    char* rest = nullptr;
+    errno = 0;
+    const double value = std::strtod(field.c_str(), &rest);
+    if (field.empty() || rest != field.c_str() + field.size() || field.find_first_of(" \t") != std::string::npos) {
+      throw Error(where + ": not a number (expected 7 comma-separated angles in rad)");
+    }
+    if (errno == ERANGE || !std::isfinite(value)) throw Error(where + ": not a finite number");
+    q.push_back(value);
+    if (end == std::string::npos) break;
+    begin = end + 1;
+  }
+  if (q.size() != sim::kFrankaJoints) {
+    throw Error("--q: expected 7 joint angles, got " + std::to_string(q.size()) + " in \"" + text + "\"");
+  }
+  return q;
+}
+
 void RunFrankaFk(const std::vector<double>& q) {
   const sim::FrankaModel model = sim::LoadFrankaModel();
+  const sim::FrankaLimits& limits = model.limits();
+  for (size_t j = 0; j < q.size() && j < static_cast<size_t>(sim::kFrankaJoints); ++j) {
+    if (q[j] < limits.q_lower[j] || q[j] > limits.q_upper[j]) {
+      spdlog::warn("q{} = {} is outside the joint's limits [{}, {}]", j + 1, q[j], limits.q_lower[j], limits.q_upper[j]);
+    }
+  }
   const sim::FrankaPose pose = sim::FrankaForwardKinematics(model, q);
   const kinematics::ForwardKinematics fk(model.description());
   const torch::Tensor tcp = fk.TcpPosition(torch::tensor(q, torch::kFloat64).view({1, -1}))[0];

@@ -87,8 +87,14 @@ void RunEvalStitching(const EvalRequest& request);
 /// `flowplan export`: writes the TorchScript planner (default RUN_DIR/planner.pt).
 void RunExport(const EvalRequest& request);
 
+/// The joint angles of `flowplan fk --q=…`: exactly 7 comma-separated finite numbers.
+/// @throws flowplan::Error naming the field that is empty, not a number or not finite,
+///   or the count when it is not 7.
+std::vector<double> ParseJointAngles(const std::string& text);
+
 /// `flowplan fk`: prints the Franka's TCP and flange positions for joint angles
-/// `q` (7 values, rad) through MuJoCo and through the LibTorch kinematics.
+/// `q` (7 values, rad) through MuJoCo and through the LibTorch kinematics; warns
+/// about angles outside the joint limits.
 /// @throws flowplan::Error for a wrong number of joint values.
 void RunFrankaFk(const std::vector<double>& q);
 

@@ -43,6 +43,25 @@ void ParseShard(const std::string& text, flowplan::experiment::GenerateRequest& 
   }
 }
 
+// The first word on the command line that is neither an option nor a known
+// command, when no command was recognized: what the user meant as the command.
+std::string UnknownCommand(CLI::App& app, int argc, char** argv) {
+  const auto commands = app.get_subcommands([](const CLI::App*) { return true; });
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--log-level") {
+      ++i;  // its value
+      continue;
+    }
+    if (arg.empty() || arg[0] == '-') continue;
+    for (const CLI::App* command : commands) {
+      if (command->get_name() == arg) return "";
+    }
+    return arg;
+  }
+  return "";
+}
+
 int Main(int argc, char** argv) {
   flowplan::SetUpLogging("info");  // the line format, also for errors found while parsing
   CLI::App app{"flowplan: flow-matching trajectory planners that stitch, from data to TorchScript"};
@@ -56,7 +75,8 @@ int Main(int argc, char** argv) {
   std::vector<std::string> overrides;
   auto add_config = [&](CLI::App* command, bool required) {
     auto* option = command->add_option("--config", config_path, "experiment config (YAML)");
-    if (required) option->required()->check(CLI::ExistingFile);
+    option->check(CLI::ExistingFile);
+    if (required) option->required();
     command->add_option("overrides", overrides, kOverrideHelp);
   };
 
@@ -114,10 +134,9 @@ int Main(int argc, char** argv) {
 
   // fk
   auto* fk = app.add_subcommand("fk", "print the Franka TCP position of joint angles (MuJoCo and LibTorch)");
-  std::vector<double> joint_angles;
+  std::string joint_angles;
   fk->add_option("--q", joint_angles, "7 joint angles in rad, comma-separated: --q=0,-0.785,0,-2.356,0,1.571,0.785")
-      ->required()
-      ->delimiter(',');
+      ->required();
 
   try {
     app.parse(argc, argv);
@@ -126,7 +145,16 @@ int Main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // One line and status 1, like every other error (CLI11's own would add a
     // second line and exit with its internal code).
-    spdlog::error("{} (see flowplan --help)", e.what());
+    const std::string unknown = app.get_subcommands().empty() ? UnknownCommand(app, argc, argv) : "";
+    if (!unknown.empty()) {
+      std::string known;
+      for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; })) {
+        known += (known.empty() ? "" : ", ") + command->get_name();
+      }
+      spdlog::error("unknown command \"{}\" (commands: {})", unknown, known);
+    } else {
+      spdlog::error("{} (see flowplan --help)", e.what());
+    }
     return 1;
   }
   flowplan::SetUpLogging(log_level);
@@ -157,7 +185,7 @@ int Main(int argc, char** argv) {
   } else if (show->parsed()) {
     std::cout << flowplan::experiment::ToYaml(flowplan::experiment::LoadExperiment(config_path, overrides));
   } else if (fk->parsed()) {
-    flowplan::experiment::RunFrankaFk(joint_angles);
+    flowplan::experiment::RunFrankaFk(flowplan::experiment::ParseJointAngles(joint_angles));
   } else if (keys->parsed()) {
     std::cout << flowplan::config::FormatKeys(flowplan::config::ListKeys(ExperimentConfig{}));
   }

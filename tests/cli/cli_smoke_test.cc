@@ -203,6 +203,12 @@ TEST_F(CliTest, BadFilesAreNamed) {
   ExpectCleanFailure(Flowplan("eval stitching --ckpt " + Path("garbage.pt")), "garbage.pt");
   ExpectCleanFailure(Flowplan("export --ckpt " + Path("nothing_here.pt")), "nothing_here.pt");
   ExpectCleanFailure(Flowplan("train --resume " + Path("no_run")), "no_run");
+  std::filesystem::create_directories(Path("empty_folder"));
+  ExpectCleanFailure(Flowplan("train --resume " + Path("empty_folder")), "empty_folder: not a run folder");
+  // A folder given as the config would otherwise read as an empty file: all defaults.
+  ExpectCleanFailure(Flowplan("train --config " + Path("empty_folder")), "empty_folder");
+  ExpectCleanFailure(Flowplan("config show --config " + Path("empty_folder")), "empty_folder");
+  ExpectCleanFailure(Flowplan("genrate --config " + Tiny()), "unknown command \"genrate\"");
   std::ofstream(Path("text.h5")) << "hello";
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + Paths() + " data.path=" + Path("text.h5")), "not an HDF5 file");
 }
@@ -253,7 +259,13 @@ TEST_F(CliTest, FkPrintsTheReadyPoseThroughMujocoAndLibTorch) {
   // Flange of the ready pose (libfranka / MoveIt), TCP 0.107 m below it.
   EXPECT_THAT(ready.output, HasSubstr("flange (MuJoCo):  (0.306890567, 0.000000000, 0.590282052)"));
   EXPECT_THAT(ready.output, HasSubstr("TCP (LibTorch):   (0.306890567, 0.000000000, 0.483282052)"));
-  ExpectCleanFailure(Flowplan("fk --q=1,2"), "expected 7 joint values, got 2");
+  ExpectCleanFailure(Flowplan("fk --q=1,2"), "--q: expected 7 joint angles, got 2");
+  ExpectCleanFailure(Flowplan("fk --q=nan,0,0,-1,0,1,0"), "--q value 1 \"nan\": not a finite number");
+  ExpectCleanFailure(Flowplan("fk --q=0,,0,-1,0,1,0,0"), "--q value 2 \"\": not a number");
+  ExpectCleanFailure(Flowplan("fk --q=0,0,0,-1,0,1,zero"), "--q value 7 \"zero\": not a number");
+  const Outcome outside = Flowplan("fk --q=10,0,0,-1,0,1,0");
+  ExpectOk(outside);
+  EXPECT_THAT(outside.output, HasSubstr("q1 = 10 is outside the joint's limits"));
 }
 
 TEST_F(CliTest, HelpListsSubcommandsAndKeys) {
