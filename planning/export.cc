@@ -8,7 +8,7 @@ namespace flowplan::planning {
 namespace {
 
 // Bumped whenever the methods or attributes of the exported module change.
-constexpr int64_t kExportFormatVersion = 1;
+constexpr int64_t kExportFormatVersion = 2;  // 2: velocity() checks its arguments
 
 std::string PlannerSource(const FlowPlanner& planner, const std::string& velocity_body) {
   const bool inpaint = planner.conditioning() == Conditioning::kInpaint;

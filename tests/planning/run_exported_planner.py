@@ -12,7 +12,7 @@ planner = torch.jit.load(sys.argv[1])
 folder, batch = sys.argv[2], int(sys.argv[3])
 T, D = planner.horizon, planner.state_dim
 assert len(planner.state_labels) == D, planner.state_labels
-assert planner.dt > 0 and planner.steps > 0 and planner.format_version == 1
+assert planner.dt > 0 and planner.steps > 0 and planner.format_version == 2
 
 
 def read(name, shape):
