@@ -20,8 +20,11 @@
 #include <yaml-cpp/yaml.h>
 
 #include <array>
+#include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <set>
 #include <string>
@@ -144,11 +147,20 @@ void DecodeScalar(const YAML::Node& node, T& out, const Location& where, const B
     if (!node.IsScalar() || !YAML::convert<bool>::decode(node, out))
       ThrowExpected(where, "true or false", node);
   } else if constexpr (std::is_integral_v<T>) {
+    // Decimal only: yaml-cpp would read 010 as octal 8 and 0x10 as 16.
     long long value = 0;
-    if (!node.IsScalar() || !YAML::convert<long long>::decode(node, value) ||
+    const std::string text = node.IsScalar() ? node.Scalar() : "";
+    char* end = nullptr;
+    errno = 0;
+    if (!text.empty()) value = std::strtoll(text.c_str(), &end, 10);
+    const bool decimal = !text.empty() && end == text.c_str() + text.size() && errno != ERANGE &&
+                         !std::isspace(static_cast<unsigned char>(text.front())) &&
+                         text.find_first_not_of("+-0123456789") == std::string::npos;
+    if (!decimal || (text.size() > 1 && text[0] == '0') ||
+        (text.size() > 2 && (text[0] == '-' || text[0] == '+') && text[1] == '0') ||
         value < static_cast<long long>(std::numeric_limits<T>::min()) ||
         value > static_cast<long long>(std::numeric_limits<T>::max()))
-      ThrowExpected(where, "an integer", node);
+      ThrowExpected(where, "a decimal integer", node);
     if (!bounds.Contains(static_cast<double>(value))) ThrowExpected(where, bounds.Describe(), node);
     out = static_cast<T>(value);
   } else if constexpr (std::is_floating_point_v<T>) {

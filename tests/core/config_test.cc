@@ -103,8 +103,18 @@ TEST(ConfigTest, UnknownKeyNamesFileLineAndKey) {
 TEST(ConfigTest, WrongTypeNamesKeyAndValue) {
   const std::string path = WriteTemp("steps: abc\n");
   EXPECT_THAT([&] { config::Load<Outer>(path, {}); },
-              ThrowsMessage<Error>(AllOf(HasSubstr(path + ":1: steps"), HasSubstr("expected an integer"),
+              ThrowsMessage<Error>(AllOf(HasSubstr(path + ":1: steps"), HasSubstr("expected a decimal integer"),
                                          HasSubstr("\"abc\""))));
+}
+
+TEST(ConfigTest, IntegersAreDecimal) {
+  // yaml-cpp alone would read 010 as octal 8 and 0x10 as 16.
+  for (const char* text : {"010", "0x10", "1e3", "12abc"}) {
+    EXPECT_THAT([&] { config::Load<Outer>("", {std::string("steps=") + text}); },
+                ThrowsMessage<Error>(AllOf(HasSubstr("steps: expected a decimal integer"), HasSubstr(text))))
+        << text;
+  }
+  EXPECT_EQ(config::Load<Outer>("", {"steps=+12"}).steps, 12);
 }
 
 TEST(ConfigTest, OutOfBoundsValueIsRejected) {
