@@ -1,5 +1,6 @@
 #include "core/config.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -69,6 +70,17 @@ int LineOf(const YAML::Node& node) {
   if (!node.IsDefined()) return -1;
   const YAML::Mark mark = node.Mark();
   return mark.is_null() ? -1 : mark.line + 1;
+}
+
+bool ParseDecimal(const std::string& text, long long& value) {
+  const size_t first_digit = !text.empty() && (text[0] == '+' || text[0] == '-') ? 1 : 0;
+  if (first_digit == text.size() || text.find_first_not_of("0123456789", first_digit) != std::string::npos) {
+    return false;
+  }
+  if (text[first_digit] == '0' && text.size() > first_digit + 1) return false;  // a leading zero
+  errno = 0;
+  value = std::strtoll(text.c_str(), nullptr, 10);
+  return errno != ERANGE;
 }
 
 void ThrowExpected(const Location& where, const std::string& expected, const YAML::Node& got) {

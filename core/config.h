@@ -20,11 +20,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include <array>
-#include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <limits>
 #include <set>
 #include <string>
@@ -131,6 +128,11 @@ std::string Describe(const YAML::Node& node);
                                 const YAML::Node& got);
 int LineOf(const YAML::Node& node);
 
+/// Reads `text` as a decimal integer: an optional sign, then 0 or digits
+/// without a leading zero (yaml-cpp alone would read 010 as octal 8 and 0x10
+/// as 16). False for anything else and for values outside long long.
+bool ParseDecimal(const std::string& text, long long& value);
+
 template <class E>
 std::string EnumChoices() {
   std::string out;
@@ -147,17 +149,8 @@ void DecodeScalar(const YAML::Node& node, T& out, const Location& where, const B
     if (!node.IsScalar() || !YAML::convert<bool>::decode(node, out))
       ThrowExpected(where, "true or false", node);
   } else if constexpr (std::is_integral_v<T>) {
-    // Decimal only: yaml-cpp would read 010 as octal 8 and 0x10 as 16.
     long long value = 0;
-    const std::string text = node.IsScalar() ? node.Scalar() : "";
-    char* end = nullptr;
-    errno = 0;
-    if (!text.empty()) value = std::strtoll(text.c_str(), &end, 10);
-    const bool decimal = !text.empty() && end == text.c_str() + text.size() && errno != ERANGE &&
-                         !std::isspace(static_cast<unsigned char>(text.front())) &&
-                         text.find_first_not_of("+-0123456789") == std::string::npos;
-    if (!decimal || (text.size() > 1 && text[0] == '0') ||
-        (text.size() > 2 && (text[0] == '-' || text[0] == '+') && text[1] == '0') ||
+    if (!node.IsScalar() || !ParseDecimal(node.Scalar(), value) ||
         value < static_cast<long long>(std::numeric_limits<T>::min()) ||
         value > static_cast<long long>(std::numeric_limits<T>::max()))
       ThrowExpected(where, "a decimal integer", node);
