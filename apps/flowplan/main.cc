@@ -3,8 +3,10 @@
 
 #include <CLI/CLI.hpp>
 #include <c10/util/Exception.h>
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <iostream>
 #include <regex>
 #include <string>
@@ -43,10 +45,9 @@ void ParseShard(const std::string& text, flowplan::experiment::GenerateRequest& 
   }
 }
 
-// The first word on the command line that is neither an option nor a known
-// command, when no command was recognized: what the user meant as the command.
-std::string UnknownCommand(CLI::App& app, int argc, char** argv) {
-  const auto commands = app.get_subcommands([](const CLI::App*) { return true; });
+// The first word on the command line that is neither an option nor one of
+// `commands`: what the user meant as the command ("" if there is none).
+std::string UnknownCommand(const std::vector<std::string>& commands, int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--log-level") {
@@ -54,10 +55,7 @@ std::string UnknownCommand(CLI::App& app, int argc, char** argv) {
       continue;
     }
     if (arg.empty() || arg[0] == '-') continue;
-    for (const CLI::App* command : commands) {
-      if (command->get_name() == arg) return "";
-    }
-    return arg;
+    return std::find(commands.begin(), commands.end(), arg) == commands.end() ? arg : "";
   }
   return "";
 }
@@ -145,13 +143,13 @@ int Main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // One line and status 1, like every other error (CLI11's own would add a
     // second line and exit with its internal code).
-    const std::string unknown = app.get_subcommands().empty() ? UnknownCommand(app, argc, argv) : "";
+    std::vector<std::string> commands;
+    for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; })) {
+      commands.push_back(command->get_name());
+    }
+    const std::string unknown = app.get_subcommands().empty() ? UnknownCommand(commands, argc, argv) : "";
     if (!unknown.empty()) {
-      std::string known;
-      for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; })) {
-        known += (known.empty() ? "" : ", ") + command->get_name();
-      }
-      spdlog::error("unknown command \"{}\" (commands: {})", unknown, known);
+      spdlog::error("unknown command \"{}\" (commands: {})", unknown, fmt::join(commands, ", "));
     } else {
       spdlog::error("{} (see flowplan --help)", e.what());
     }
