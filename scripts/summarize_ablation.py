@@ -18,6 +18,11 @@ def load(name, file):
         return json.load(f)
 
 
+def span(values):
+    """Mean of per-run errors, with (min–max) when there are several runs."""
+    return f"{statistics.mean(values):.3f}" + (f" ({min(values):.3f}–{max(values):.3f})" if len(values) > 1 else "")
+
+
 def cell(r):
     return f"{r['mean']:.3f} ± {r['stddev']:.3f}"
 
@@ -81,8 +86,7 @@ for data, runs in seeds.items():
     if not runs:
         continue
     plain, split = [r[0] for r in runs], [r[1] for r in runs]
-    print(f"| {data} | {len(runs)} | {statistics.mean(plain):.3f} ({min(plain):.3f}–{max(plain):.3f}) | "
-          f"{statistics.mean(split):.3f} ({min(split):.3f}–{max(split):.3f}) |")
+    print(f"| {data} | {len(runs)} | {span(plain)} | {span(split)} |")
 
 if scales:
     print()
@@ -101,6 +105,5 @@ if scales:
         levels.setdefault(stats, []).append((plain["test"]["mean"], split["test"]["mean"]))
     for (pooled, separation, nearest, accel), runs in sorted(levels.items(), key=lambda r: float(r[0][3])):
         plain, split = [r[0] for r in runs], [r[1] for r in runs]
-        span = lambda v: f"{statistics.mean(v):.3f}" + (f" ({min(v):.3f}–{max(v):.3f})" if len(v) > 1 else "")
         print(f"| {accel} | {pooled:.3f} | {separation:.1f} | {nearest:.3f} | {len(runs)} | {span(plain)} | "
               f"{span(split)} |")
