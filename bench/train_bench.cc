@@ -52,8 +52,8 @@ void BM_Plan(benchmark::State& state) {
   const planning::FlowPlanner planner(net, models::MinMaxNormalizer(-torch::ones({D}), torch::ones({D})),
                                       planning::Conditioning::kInpaint, 64, planning::SamplerConfig{});
   const torch::Tensor start = torch::zeros({64, D}), goal = torch::full({64, D}, 0.5);
-  auto generator = at::make_generator<at::CPUGeneratorImpl>(0);
-  for (auto _ : state) benchmark::DoNotOptimize(eval::PlanInChunks(planner, start, goal, generator, threads));
+  const planning::PlanRequest request{start, goal, torch::Tensor(), 0, std::nullopt};
+  for (auto _ : state) benchmark::DoNotOptimize(planning::PlanInChunks(planner, request, threads));
   state.counters["plans/s"] = benchmark::Counter(64.0 * static_cast<double>(state.iterations()),
                                                  benchmark::Counter::kIsRate);
 }

@@ -59,6 +59,8 @@ void SaveCheckpoint(const std::string& path, const CheckpointHeader& header, con
   archive.write("env", c10::IValue(header.env));
   archive.write("dt", c10::IValue(header.dt));
   archive.write("horizon", c10::IValue(header.horizon));
+  archive.write("robot", c10::IValue(kinematics::RobotToYaml(header.robot)));
+  archive.write("data_fingerprint", c10::IValue(header.data_fingerprint));
   c10::List<std::string> labels;
   for (const auto& label : header.state_labels) labels.push_back(label);
   archive.write("state_labels", c10::IValue(labels));
@@ -96,6 +98,8 @@ CheckpointHeader ReadCheckpointHeader(const std::string& path) {
     header.env = Read(archive, path, "env").toStringRef();
     header.dt = Read(archive, path, "dt").toDouble();
     header.horizon = Read(archive, path, "horizon").toInt();
+    header.robot = kinematics::RobotFromYaml(Read(archive, path, "robot").toStringRef(), path + ": entry \"robot\"");
+    header.data_fingerprint = Read(archive, path, "data_fingerprint").toStringRef();
     for (const auto& label : Read(archive, path, "state_labels").toListRef()) {
       header.state_labels.push_back(label.toStringRef());
     }

@@ -6,12 +6,13 @@
 #include <string>
 #include <vector>
 
+#include "kinematics/robot_description.h"
 #include "models/normalizer.h"
 
 namespace flowplan::checkpoints {
 
 inline constexpr const char* kCheckpointFormatName = "flowplan.checkpoint";
-inline constexpr int64_t kCheckpointFormatVersion = 1;
+inline constexpr int64_t kCheckpointFormatVersion = 2;  // 2: robot description, data fingerprint
 
 /// Everything in a checkpoint besides module and optimizer weights.
 struct CheckpointHeader {
@@ -23,6 +24,8 @@ struct CheckpointHeader {
   double dt = 0.0;                        // s between states
   std::vector<std::string> state_labels;  // (D,)
   int64_t horizon = 0;                    // T the network is trained for
+  kinematics::RobotDescription robot;     // the dataset's robot, for guidance and clearances
+  std::string data_fingerprint;           // datasets::DatasetFingerprint() of the training data
 };
 
 /// The trainable pieces a checkpoint stores; any may be null when loading.

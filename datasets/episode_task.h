@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "kinematics/robot_description.h"
+
 namespace flowplan::datasets {
 
 /// What a task records, identical for every episode.
@@ -20,6 +22,7 @@ struct EpisodeLayout {
   std::vector<std::string> state_labels;   // (D,)
   int64_t point_dim = 0;                   // P: size of a commanded start/goal point
   std::map<std::string, int64_t> extras;   // name -> k for per-episode (T, k) arrays
+  kinematics::RobotDescription robot;      // what moves: its positions are the first J state entries
   int64_t state_dim() const { return static_cast<int64_t>(state_labels.size()); }
 };
 

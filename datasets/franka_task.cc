@@ -194,6 +194,7 @@ EpisodeLayout FrankaTask::Layout() const {
   for (int j = 1; j <= sim::kFrankaJoints; ++j) layout.state_labels.push_back("q" + std::to_string(j));
   for (int j = 1; j <= sim::kFrankaJoints; ++j) layout.state_labels.push_back("dq" + std::to_string(j));
   layout.point_dim = 3;
+  layout.robot = model_->description();
   layout.extras["tcp"] = 3;
   layout.extras["torques"] = sim::kFrankaJoints;
   if (config_.rollout.augmentation.scheme == Augmentation::kRandomForce) layout.extras["external_force"] = 3;

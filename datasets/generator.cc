@@ -67,6 +67,7 @@ TrajectoryDataset GenerateDataset(const EpisodeTask& task, const GenerateOptions
   dataset.env = layout.env;
   dataset.dt = layout.dt;
   dataset.state_labels = layout.state_labels;
+  dataset.robot = layout.robot;
   dataset.horizon = T;
   dataset.state_dim = D;
   dataset.point_dim = layout.point_dim;

@@ -46,6 +46,7 @@ EpisodeLayout ParticleCrossTask::Layout() const {
   layout.horizon = config_.horizon;
   layout.state_labels = {"x", "y", "vx", "vy"};
   layout.point_dim = 2;
+  layout.robot = kinematics::PointRobot("particle_disc", 2, config_.radius, 0.0, 1.0);
   return layout;
 }
 

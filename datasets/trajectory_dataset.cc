@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "core/atomic_file.h"
@@ -74,6 +75,11 @@ void TrajectoryDataset::CheckConsistent(const std::string& where) const {
   };
   expect("states", states.size(), num_episodes * horizon * state_dim);
   expect("state_labels", state_labels.size(), state_dim);
+  robot.Validate(where);
+  if (robot.num_joints > state_dim) {
+    throw Error(where + ": robot \"" + robot.name + "\" has " + std::to_string(robot.num_joints) +
+                " joints, more than the " + std::to_string(state_dim) + " state dimensions");
+  }
   expect("commanded_start", commanded_start.size(), num_episodes * point_dim);
   expect("commanded_goal", commanded_goal.size(), num_episodes * point_dim);
   expect("family", family.size(), num_episodes);
@@ -101,6 +107,7 @@ void WriteDataset(const std::string& path, const TrajectoryDataset& dataset) {
     file.SetAttribute("/", "env", dataset.env);
     file.SetAttribute("/", "dt", dataset.dt);
     file.SetAttribute("/", "state_labels", Join(dataset.state_labels, ','));
+    file.SetAttribute("/", "robot", kinematics::RobotToYaml(dataset.robot));
     file.SetAttribute("/", "config", dataset.config_yaml);
     file.SetAttribute("/", "seed", static_cast<int64_t>(dataset.seed));
     file.SetAttribute("/", "first_episode", dataset.first_episode);
@@ -144,6 +151,7 @@ TrajectoryDataset ReadDataset(const std::string& path) {
   dataset.env = file.GetStringAttribute("/", "env");
   dataset.dt = file.GetDoubleAttribute("/", "dt");
   dataset.state_labels = Split(file.GetStringAttribute("/", "state_labels"), ',');
+  dataset.robot = kinematics::RobotFromYaml(file.GetStringAttribute("/", "robot"), path + ": attribute robot");
   dataset.config_yaml = file.GetStringAttribute("/", "config");
   dataset.seed = static_cast<uint64_t>(file.GetIntAttribute("/", "seed"));
   dataset.first_episode = file.GetIntAttribute("/", "first_episode");
@@ -197,6 +205,52 @@ TrajectoryDataset ReadDataset(const std::string& path) {
   return dataset;
 }
 
+namespace {
+
+class Fnv1a {
+ public:
+  void Bytes(const void* data, size_t size) {
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < size; ++i) hash_ = (hash_ ^ bytes[i]) * 0x100000001b3ULL;
+  }
+  void Text(const std::string& text) {
+    const uint64_t size = text.size();
+    Bytes(&size, sizeof(size));
+    Bytes(text.data(), text.size());
+  }
+  template <class T>
+  void Array(const std::vector<T>& values) {
+    const uint64_t size = values.size();
+    Bytes(&size, sizeof(size));
+    Bytes(values.data(), values.size() * sizeof(T));
+  }
+  uint64_t hash() const { return hash_; }
+
+ private:
+  uint64_t hash_ = 0xcbf29ce484222325ULL;
+};
+
+}  // namespace
+
+std::string DatasetFingerprint(const TrajectoryDataset& dataset) {
+  Fnv1a fnv;
+  fnv.Text(dataset.env);
+  fnv.Bytes(&dataset.dt, sizeof(dataset.dt));
+  fnv.Text(Join(dataset.state_labels, ','));
+  fnv.Text(kinematics::RobotToYaml(dataset.robot));
+  const int64_t shape[3] = {dataset.num_episodes, dataset.horizon, dataset.state_dim};
+  fnv.Bytes(shape, sizeof(shape));
+  fnv.Array(dataset.states);
+  for (const EvalPairs* pairs : {&dataset.train_pairs, &dataset.test_pairs}) {
+    fnv.Array(pairs->start);
+    fnv.Array(pairs->goal);
+    fnv.Text(Join(pairs->names, ';'));
+  }
+  char text[17];
+  std::snprintf(text, sizeof(text), "%016llx", static_cast<unsigned long long>(fnv.hash()));
+  return text;
+}
+
 TrajectoryDataset MergeDatasets(const std::vector<TrajectoryDataset>& shards,
                                 const std::vector<std::string>& names) {
   if (shards.empty()) throw Error("merge: no input files");
@@ -221,6 +275,7 @@ TrajectoryDataset MergeDatasets(const std::vector<TrajectoryDataset>& shards,
     require(shard.env == merged.env, "env");
     require(shard.dt == merged.dt, "dt");
     require(shard.state_labels == merged.state_labels, "state_labels");
+    require(kinematics::RobotToYaml(shard.robot) == kinematics::RobotToYaml(merged.robot), "robot");
     require(shard.horizon == merged.horizon && shard.state_dim == merged.state_dim, "/states shape");
     require(shard.point_dim == merged.point_dim, "/commanded_start shape");
     require(shard.config_yaml == merged.config_yaml, "config");

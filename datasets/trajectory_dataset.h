@@ -8,10 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "kinematics/robot_description.h"
+
 namespace flowplan::datasets {
 
 /// The file format this build writes; readers accept exactly this version.
-inline constexpr int kDatasetFormatVersion = 1;
+inline constexpr int kDatasetFormatVersion = 2;  // 2: the robot description
 inline constexpr const char* kDatasetFormatName = "flowplan.trajectories";
 
 /// A row-major float array with its shape.
@@ -34,6 +36,7 @@ struct TrajectoryDataset {
   std::string env;                       // "particle", "franka"
   double dt = 0.0;                       // s between recorded states
   std::vector<std::string> state_labels;  // (D,) e.g. "x", "y", "vx", "vy"
+  kinematics::RobotDescription robot;     // what moves: kinematics, TCP, collision spheres
   int64_t num_episodes = 0;               // N
   int64_t horizon = 0;                    // T
   int64_t state_dim = 0;                  // D
@@ -65,6 +68,11 @@ void WriteDataset(const std::string& path, const TrajectoryDataset& dataset);
 /// @throws flowplan::Error naming the file and the dataset/attribute at fault for
 /// missing files, foreign files, other format versions and inconsistent shapes.
 TrajectoryDataset ReadDataset(const std::string& path);
+
+/// A 64-bit FNV-1a hash, as 16 hex digits, of everything a model learns from
+/// or is evaluated on: states, labels, dt, robot, evaluation pairs, horizon.
+/// Checkpoints record it, so that a resumed run notices a changed data file.
+std::string DatasetFingerprint(const TrajectoryDataset& dataset);
 
 /// Joins the shards of one dataset in the order given: episodes are
 /// concatenated, counters summed; header, config and evaluation pairs must

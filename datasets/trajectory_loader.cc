@@ -49,6 +49,8 @@ TrajectorySplits SplitTrajectories(const TrajectoryDataset& dataset, double val_
   splits.env = dataset.env;
   splits.dt = dataset.dt;
   splits.state_labels = dataset.state_labels;
+  splits.robot = dataset.robot;
+  splits.fingerprint = DatasetFingerprint(dataset);
   return splits;
 }
 

@@ -41,6 +41,8 @@ struct TrajectorySplits {
   std::string env;
   double dt = 0.0;
   std::vector<std::string> state_labels;  // (D,)
+  kinematics::RobotDescription robot;
+  std::string fingerprint;                // DatasetFingerprint() of the file
   int64_t horizon() const { return train.size(1); }
   int64_t state_dim() const { return train.size(2); }
 };

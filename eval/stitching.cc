@@ -4,8 +4,7 @@
 
 #include "core/error.h"
 #include "core/format.h"
-#include "core/interrupt.h"
-#include "core/parallel.h"
+#include "models/velocity_net.h"
 
 namespace flowplan::eval {
 
@@ -25,37 +24,20 @@ torch::Tensor StitchingErrors(const torch::Tensor& plans, const torch::Tensor& s
   return 0.5 * ((first - start.slice(1, 0, positions)).norm(2, 1) + (last - goal.slice(1, 0, positions)).norm(2, 1));
 }
 
-torch::Tensor PlanInChunks(const planning::FlowPlanner& planner, const torch::Tensor& start, const torch::Tensor& goal,
-                           at::Generator& generator, int threads, int64_t chunk) {
-  at::globalContext().setFlushDenormal(true);  // as in training; worker threads inherit it
-  const int64_t N = start.size(0);
-  const std::vector<int64_t> shape = {N, planner.horizon(), planner.state_dim()};
-  const torch::Tensor noise = torch::randn(shape, generator, torch::kFloat32);
-  const torch::Tensor renoise = planner.sampler().splitting == planning::Splitting::kNone
-                                    ? torch::Tensor()
-                                    : torch::randn(shape, generator, torch::kFloat32);
-  const int chunks = static_cast<int>((N + chunk - 1) / chunk);
-  std::vector<torch::Tensor> plans(static_cast<size_t>(chunks));
-  ParallelFor(chunks, threads, [&](int, int c) {
-    ThrowIfInterrupted();
-    const int64_t begin = c * chunk, end = std::min(N, begin + chunk);
-    plans[c] = planner.Plan(start.slice(0, begin, end), goal.slice(0, begin, end), noise.slice(0, begin, end),
-                            renoise.defined() ? renoise.slice(0, begin, end) : renoise);
-  });
-  return chunks > 0 ? torch::cat(plans, 0) : torch::empty(shape);
-}
-
-StitchingResult EvaluateStitching(const planning::FlowPlanner& planner, const datasets::EvalPairTensors& pairs,
+StitchingResult EvaluateStitching(const planning::Planner& planner, const datasets::EvalPairTensors& pairs,
                                   const std::string& label, const EvalConfig& config, int threads) {
   const int64_t P = pairs.start.defined() ? pairs.start.size(0) : 0;
   if (P == 0) throw Error("stitching evaluation: the dataset defines no " + label + " pairs");
   const torch::Tensor pair_index = torch::arange(config.num_plans, torch::kInt64) % P;
   const torch::Tensor start = pairs.start.index_select(0, pair_index);
   const torch::Tensor goal = pairs.goal.index_select(0, pair_index);
-  auto generator = at::make_generator<at::CPUGeneratorImpl>(static_cast<uint64_t>(config.seed));
   StitchingResult result;
   result.pairs = label;
-  result.plans = PlanInChunks(planner, start, goal, generator, threads);
+  planning::PlanRequest request;
+  request.start = start;
+  request.goal = goal;
+  request.seed = static_cast<uint64_t>(config.seed);
+  result.plans = planning::PlanInChunks(planner, request, threads).plans;
   result.pair_index = pair_index;
   const torch::Tensor errors = StitchingErrors(result.plans, start, goal).to(torch::kFloat64);
   result.mean = errors.mean().item<double>();

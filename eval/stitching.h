@@ -7,7 +7,7 @@
 
 #include "core/config.h"
 #include "datasets/trajectory_loader.h"
-#include "planning/flow_planner.h"
+#include "planning/planner.h"
 
 namespace flowplan::eval {
 
@@ -39,18 +39,14 @@ struct StitchingResult {
 /// Per-plan stitching errors. plans: (N, T, D); start, goal: (N, D) raw -> (N,).
 torch::Tensor StitchingErrors(const torch::Tensor& plans, const torch::Tensor& start, const torch::Tensor& goal);
 
-/// Plans `config.num_plans` times between the pairs and scores them. All noise
-/// is drawn first from `config.seed`; `threads` workers then plan fixed chunks
-/// of the plans, so the result does not depend on the thread count (call with
-/// LibTorch's intra-op threads set to 1).
+/// Plans `config.num_plans` times between the pairs (without obstacles) and
+/// scores them. `threads` workers plan fixed chunks of the plans, each seeded
+/// from `config.seed` and its index (planning::PlanInChunks), so the result
+/// does not depend on the thread count (call with LibTorch's intra-op threads
+/// set to 1).
 /// @throws flowplan::Error if there are no pairs.
-StitchingResult EvaluateStitching(const planning::FlowPlanner& planner, const datasets::EvalPairTensors& pairs,
+StitchingResult EvaluateStitching(const planning::Planner& planner, const datasets::EvalPairTensors& pairs,
                                   const std::string& label, const EvalConfig& config, int threads = 1);
-
-/// Plans for many requests, in fixed chunks of `chunk` plans spread over `threads`
-/// workers. start, goal: (N, D) raw; returns (N, T, D) raw. Noise comes from `generator`.
-torch::Tensor PlanInChunks(const planning::FlowPlanner& planner, const torch::Tensor& start, const torch::Tensor& goal,
-                           at::Generator& generator, int threads, int64_t chunk = 16);
 
 /// {"pairs": "test", "mean": …, "stddev": …, "num_plans": …, "per_pair": {"name": mean, …}};
 /// NaN (no plans) is written as null.

@@ -18,7 +18,7 @@
 #include "datasets/h5.h"
 #include "datasets/trajectory_dataset.h"
 #include "eval/stitching.h"
-#include "kinematics/forward_kinematics.h"
+#include "kinematics/arm_kinematics.h"
 #include "planning/export.h"
 #include "sim/franka_model.h"
 #include "trainer/run_dir.h"
@@ -111,6 +111,7 @@ void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
   trainer::TrainingSetup setup;
   setup.run_dir = config.run_dir;
   setup.config_yaml = ToYaml(config);
+  setup.data_path = config.data.path;
   setup.seed = static_cast<uint64_t>(config.seed);
   setup.threads = threads;
   setup.model = config.model;
@@ -158,7 +159,9 @@ void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& cha
                                                        "train.keep_checkpoints",
                                                        "train.val_batch_size",
                                                        "sampler.",  // a trailing dot: every key below
-                                                       "eval."};
+                                                       "eval.",
+                                                       "guidance.",
+                                                       "scene."};
   const auto before = config::ListKeys(trained), after = config::ListKeys(changed);
   for (size_t i = 0; i < before.size(); ++i) {
     const std::string& key = before[i].key;
@@ -169,7 +172,7 @@ void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& cha
     if (!may_change) {
       throw Error(key + ": the run was trained with " + before[i].default_value + " (" + where + "), got " +
                   after[i].default_value + "; a resumed run can change only its length, intervals, threads, "
-                  "sampler.* and eval.* (start a new run_dir for the rest)");
+                  "sampler.*, eval.*, guidance.* and scene.* (start a new run_dir for the rest)");
     }
     if (key == "train.steps") {
       spdlog::warn("train.steps: {} -> {}: the cosine learning-rate schedule now spans {} steps, so the rate "
@@ -211,8 +214,10 @@ LoadedPlanner LoadPlanner(const std::string& ckpt, const std::string& overlay_pa
       loaded.config.model, D, planning::ConditionDim(loaded.config.flow.conditioning, D));
   checkpoints::LoadCheckpointWeights(loaded.checkpoint, {nullptr, net.get(), nullptr});
   net->eval();
-  loaded.planner = std::make_unique<planning::FlowPlanner>(net, header.normalizer, loaded.config.flow.conditioning,
-                                                           header.horizon, loaded.config.sampler);
+  loaded.robot = kinematics::MakeRobot(header.robot, loaded.checkpoint);
+  loaded.planner = std::make_unique<planning::FlowPlanner>(
+      net, header.normalizer, loaded.config.flow.conditioning, header.horizon, loaded.config.sampler,
+      planning::GuidanceSetup{loaded.robot, header.dt, loaded.config.guidance});
   return loaded;
 }
 
@@ -300,8 +305,8 @@ void RunFrankaFk(const std::vector<double>& q) {
     }
   }
   const sim::FrankaPose pose = sim::FrankaForwardKinematics(model, q);
-  const kinematics::ForwardKinematics fk(model.description());
-  const torch::Tensor tcp = fk.TcpPosition(torch::tensor(q, torch::kFloat64).view({1, -1}))[0];
+  const kinematics::ArmKinematics fk(model.description());
+  const torch::Tensor tcp = fk.Tcp(torch::tensor(q, torch::kFloat64).view({1, -1}))[0];
   const Eigen::Vector3d torch_tcp(tcp[0].item<double>(), tcp[1].item<double>(), tcp[2].item<double>());
   auto text = [](const Eigen::Vector3d& p) { return fmt::format("({:.9f}, {:.9f}, {:.9f})", p.x(), p.y(), p.z()); };
   fmt::print("TCP (MuJoCo):     {} m\n", text(pose.tcp_position));

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "experiment/experiment_config.h"
+#include "kinematics/robot.h"
 #include "planning/flow_planner.h"
 #include "trainer/trainer.h"
 
@@ -46,7 +47,8 @@ void RunResume(const std::string& run_dir, const std::vector<std::string>& overr
 
 /// Throws, naming the key, if `changed` differs from `trained` in anything but
 /// what a resumed run may change: threads, train.steps, the log / eval /
-/// checkpoint intervals, keep_checkpoints, val_batch_size, sampler.* and eval.*.
+/// checkpoint intervals, keep_checkpoints, val_batch_size, sampler.*, eval.*,
+/// guidance.* and scene.*.
 /// Anything else (data, seed, optimizer, batch, network, flow) would make the
 /// resumed run a different one. `where` names the stored config in the message.
 void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& changed, const std::string& where);
@@ -65,6 +67,7 @@ struct LoadedPlanner {
   std::string env;
   double dt = 0.0;
   std::vector<std::string> state_labels;
+  std::shared_ptr<const kinematics::Robot> robot;
 };
 
 /// Loads `ckpt` (a checkpoint file or a run folder = its newest checkpoint); the

@@ -8,6 +8,8 @@
 #include "datasets/generate_config.h"
 #include "datasets/trajectory_loader.h"
 #include "eval/stitching.h"
+#include "guidance/guide.h"
+#include "guidance/scene.h"
 #include "models/model_config.h"
 #include "planning/flow_planner.h"
 #include "trainer/trainer_config.h"
@@ -26,6 +28,8 @@ struct ExperimentConfig {
   trainer::TrainerConfig train;
   planning::SamplerConfig sampler;
   eval::EvalConfig eval;
+  guidance::GuidanceConfig guidance;
+  guidance::Scene scene;
 
   template <class V>
   void Visit(V& v) {
@@ -40,6 +44,8 @@ struct ExperimentConfig {
     v.Field("train", train, "optimization");
     v.Field("sampler", sampler, "sampling");
     v.Field("eval", eval, "evaluation");
+    v.Field("guidance", guidance, "guidance around obstacles (planning)");
+    v.Field("scene", scene, "obstacles of `flowplan plan` when no --scene is given");
   }
 };
 

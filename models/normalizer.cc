@@ -48,4 +48,20 @@ torch::Tensor MinMaxNormalizer::Denormalize(const torch::Tensor& x) const {
   return DenormalizeUnclamped(x.clamp(-1.0, 1.0));
 }
 
+void MinMaxNormalizer::WriteScript(jit::ScriptModule& module) const {
+  FLOWPLAN_DEMAND(fitted());
+  module.Buffer("lo", lo_);
+  module.Buffer("hi", hi_);
+  module.Define(R"PY(
+def normalize(self, x: Tensor) -> Tensor:
+    return (x - self.lo) / (self.hi - self.lo) * 2.0 - 1.0
+
+def denormalize_unclamped(self, x: Tensor) -> Tensor:
+    return (x + 1.0) * 0.5 * (self.hi - self.lo) + self.lo
+
+def denormalize(self, x: Tensor) -> Tensor:
+    return self.denormalize_unclamped(torch.clamp(x, -1.0, 1.0))
+)PY");
+}
+
 }  // namespace flowplan::models

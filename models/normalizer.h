@@ -2,6 +2,8 @@
 
 #include <torch/torch.h>
 
+#include "jit/script_writer.h"
+
 namespace flowplan::models {
 
 /// Per-dimension min–max normalization to [-1, 1] (SPEC section 2). Fitted on
@@ -22,6 +24,10 @@ class MinMaxNormalizer {
   torch::Tensor Denormalize(const torch::Tensor& x) const;
   /// [-1, 1] -> raw without clamping (for costs that need gradients through it).
   torch::Tensor DenormalizeUnclamped(const torch::Tensor& x) const;
+
+  /// Adds the buffers lo, hi (D,) and the methods normalize(x), denormalize(x)
+  /// (clamping first) and denormalize_unclamped(x), x (..., D), to an exported module.
+  void WriteScript(jit::ScriptModule& module) const;
 
   const torch::Tensor& lo() const { return lo_; }  // (D,)
   const torch::Tensor& hi() const { return hi_; }  // (D,)

@@ -31,14 +31,14 @@ ConvBlock::ConvBlock(int in, int out, int kernel, int groups) : padding_(kernel 
 
 torch::Tensor ConvBlock::Forward(const torch::Tensor& x) { return torch::mish(norm_(conv_(x))); }
 
-std::string ConvBlock::WriteScript(ScriptWriter& w, const std::string& prefix, const std::string& x) const {
+std::string ConvBlock::WriteScript(jit::ScriptWriter& w, const std::string& prefix, const std::string& x) const {
   const std::string c = w.Let("torch.conv1d(" + x + ", " + w.Tensor(prefix + ".conv.weight", conv_->weight) +
                               ", " + w.Tensor(prefix + ".conv.bias", conv_->bias) + ", 1, " +
                               std::to_string(padding_) + ")");
   const std::string n = w.Let("torch.group_norm(" + c + ", " + std::to_string(groups_) + ", " +
                               w.Tensor(prefix + ".norm.weight", norm_->weight) + ", " +
                               w.Tensor(prefix + ".norm.bias", norm_->bias) + ", " +
-                              ScriptFloat(norm_->options.eps()) + ")");
+                              jit::ScriptFloat(norm_->options.eps()) + ")");
   return w.Let("torch.mish(" + n + ")");
 }
 
@@ -59,7 +59,7 @@ torch::Tensor ResidualBlock::Forward(const torch::Tensor& x, const torch::Tensor
   return h + (residual_ ? residual_(x) : x);
 }
 
-std::string ResidualBlock::WriteScript(ScriptWriter& w, const std::string& prefix, const std::string& x,
+std::string ResidualBlock::WriteScript(jit::ScriptWriter& w, const std::string& prefix, const std::string& x,
                                        const std::string& cond) const {
   std::string h = block0_->WriteScript(w, prefix + ".block0", x);
   const std::string film = w.Let("torch.linear(torch.mish(" + cond + "), " +
@@ -163,8 +163,8 @@ torch::Tensor UNet1D::Forward(const torch::Tensor& x, const torch::Tensor& t, co
   return h.transpose(1, 2);  // (B, T, D)
 }
 
-std::string UNet1D::WriteScript(ScriptWriter& w) const {
-  const std::string angles = w.Let("(t * " + ScriptFloat(config_.time_scale) + ").unsqueeze(-1) * " +
+std::string UNet1D::WriteScript(jit::ScriptWriter& w) const {
+  const std::string angles = w.Let("(t * " + jit::ScriptFloat(config_.time_scale) + ").unsqueeze(-1) * " +
                                    w.Tensor("frequencies", frequencies_) + ".unsqueeze(0)");
   const std::string embedding = w.Let("torch.cat([torch.sin(" + angles + "), torch.cos(" + angles + ")], -1)");
   const std::string hidden = w.Let("torch.mish(torch.linear(" + embedding + ", " + w.Tensor("time_in.weight", time_in_->weight) +

@@ -40,7 +40,7 @@ class ConvBlock : public torch::nn::Module {
  public:
   ConvBlock(int in, int out, int kernel, int groups);
   torch::Tensor Forward(const torch::Tensor& x);
-  std::string WriteScript(ScriptWriter& w, const std::string& prefix, const std::string& x) const;
+  std::string WriteScript(jit::ScriptWriter& w, const std::string& prefix, const std::string& x) const;
 
  private:
   torch::nn::Conv1d conv_{nullptr};
@@ -56,7 +56,7 @@ class ResidualBlock : public torch::nn::Module {
   ResidualBlock(int in, int out, int cond_dim, int kernel, int groups);
   /// x: (B, in, T), cond: (B, cond_dim) -> (B, out, T)
   torch::Tensor Forward(const torch::Tensor& x, const torch::Tensor& cond);
-  std::string WriteScript(ScriptWriter& w, const std::string& prefix, const std::string& x,
+  std::string WriteScript(jit::ScriptWriter& w, const std::string& prefix, const std::string& x,
                           const std::string& cond) const;
 
  private:
@@ -76,7 +76,7 @@ class UNet1D : public VelocityNet {
   torch::Tensor Forward(const torch::Tensor& x, const torch::Tensor& t,
                         const torch::Tensor& cond) override;
   void CheckHorizon(int64_t horizon) const override;
-  std::string WriteScript(ScriptWriter& writer) const override;
+  std::string WriteScript(jit::ScriptWriter& writer) const override;
   int64_t state_dim() const override { return state_dim_; }
   int64_t cond_dim() const override { return cond_dim_; }
 

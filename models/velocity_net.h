@@ -5,7 +5,7 @@
 #include <memory>
 #include <string>
 
-#include "models/script_writer.h"
+#include "jit/script_writer.h"
 
 namespace flowplan::models {
 
@@ -28,7 +28,7 @@ class VelocityNet : public torch::nn::Module {
   /// Mirrors Forward() as TorchScript. Reads the variables `x` (B, T, D), `t` (B,)
   /// and `cond` (Optional[Tensor], (B, C)) and returns the name of the variable
   /// holding the velocity (B, T, D).
-  virtual std::string WriteScript(ScriptWriter& writer) const = 0;
+  virtual std::string WriteScript(jit::ScriptWriter& writer) const = 0;
 
   virtual int64_t state_dim() const = 0;
   virtual int64_t cond_dim() const = 0;

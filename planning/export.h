@@ -5,11 +5,15 @@
 #include <string>
 #include <vector>
 
-#include "planning/flow_planner.h"
+#include "planning/planner.h"
 
 namespace flowplan::planning {
 
-/// What an exported planner carries besides its weights, for its users.
+/// Bumped whenever the methods or attributes of an exported module change.
+/// 3: guidance (obstacles and scale arguments), tcp(), collision_spheres(), the robot description.
+inline constexpr int64_t kExportFormatVersion = 3;
+
+/// What an exported planner carries besides what its components write, for its users.
 struct ExportMetadata {
   std::string env;                        // "particle", "franka"
   double dt = 0.0;                        // s between states of a plan
@@ -17,16 +21,15 @@ struct ExportMetadata {
   std::string config_yaml;                // the training run's resolved config
 };
 
-/// Builds a self-contained TorchScript module computing FlowPlanner::Plan with
-/// nothing from flowplan: weights and normalizer statistics are buffers, the
-/// network, normalization, inpainting and the Euler loop are TorchScript
-/// methods. See docs/export.md for its methods:
-///   plan(start (B, D), goal (B, D), noise (B, T, D)) -> (B, T, D)
-///   sample(start (D,), goal (D,), num_samples: int) -> (num_samples, T, D)
-torch::jit::Module BuildScriptPlanner(const FlowPlanner& planner, const ExportMetadata& metadata);
+/// A self-contained TorchScript module computing `planner` with nothing from
+/// flowplan: each component (network, normalizer, robot, costs, sampler)
+/// writes its own methods and buffers (Planner::WriteScript), and the metadata
+/// becomes attributes. See docs/export.md.
+/// @throws flowplan::Error if the planner cannot be exported.
+torch::jit::Module BuildScriptPlanner(const Planner& planner, const ExportMetadata& metadata);
 
 /// Writes BuildScriptPlanner() to `path` atomically.
 /// @throws flowplan::Error if the file cannot be written.
-void ExportPlanner(const FlowPlanner& planner, const ExportMetadata& metadata, const std::string& path);
+void ExportPlanner(const Planner& planner, const ExportMetadata& metadata, const std::string& path);
 
 }  // namespace flowplan::planning

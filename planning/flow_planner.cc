@@ -1,36 +1,43 @@
 #include "planning/flow_planner.h"
 
+#include <chrono>
+
 #include "core/error.h"
+#include "guidance/scene.h"
 
 namespace flowplan::planning {
 
 using models::ShapeString;
 
 FlowPlanner::FlowPlanner(models::VelocityNetPtr net, models::MinMaxNormalizer normalizer,
-                         Conditioning conditioning, int64_t horizon, SamplerConfig sampler)
+                         Conditioning conditioning, int64_t horizon, SamplerConfig sampler, GuidanceSetup guidance)
     : net_(std::move(net)),
       normalizer_(std::move(normalizer)),
       conditioning_(conditioning),
       horizon_(horizon),
-      sampler_(sampler) {
+      sampler_(sampler),
+      guidance_(std::move(guidance)) {
   FLOWPLAN_DEMAND(net_ != nullptr);
   FLOWPLAN_DEMAND(normalizer_.dim() == net_->state_dim());
   FLOWPLAN_DEMAND(net_->cond_dim() == ConditionDim(conditioning_, net_->state_dim()));
   net_->CheckHorizon(horizon_);
   if (sampler_.steps < 1) throw Error("sampler.steps: expected a positive value, got " + std::to_string(sampler_.steps));
   if (sampler_.splitting != Splitting::kNone) models::CheckHalfHorizon(*net_, horizon_, "sampler.splitting plans");
+  if (guidance_.robot && guidance_.robot->num_joints() > state_dim()) {
+    throw Error("robot \"" + guidance_.robot->description().name + "\" has " +
+                std::to_string(guidance_.robot->num_joints()) + " joints, more than the " +
+                std::to_string(state_dim()) + " state dimensions the planner plans");
+  }
 }
 
 void FlowPlanner::CheckRequest(const torch::Tensor& start, const torch::Tensor& goal, const torch::Tensor& noise,
                                const torch::Tensor& renoise) const {
-  const int64_t D = state_dim();
-  const std::string want = "(B, " + std::to_string(D) + ")";
-  if (!start.defined() || start.dim() != 2 || start.size(1) != D) throw Error("plan: start: expected " + want + ", got " + ShapeString(start));
-  if (!goal.defined() || goal.sizes() != start.sizes()) throw Error("plan: goal: expected " + ShapeString(start) + ", got " + ShapeString(goal));
-  const std::string want_noise =
-      "(" + std::to_string(start.size(0)) + ", " + std::to_string(horizon_) + ", " + std::to_string(D) + ")";
+  CheckEnds(start, goal, state_dim(), "plan");
+  const std::string want_noise = "(" + std::to_string(start.size(0)) + ", " + std::to_string(horizon_) + ", " +
+                                 std::to_string(state_dim()) + ")";
   auto noise_ok = [&](const torch::Tensor& n) {
-    return n.defined() && n.dim() == 3 && n.size(0) == start.size(0) && n.size(1) == horizon_ && n.size(2) == D;
+    return n.defined() && n.dim() == 3 && n.size(0) == start.size(0) && n.size(1) == horizon_ &&
+           n.size(2) == state_dim();
   };
   if (!noise_ok(noise)) throw Error("plan: noise: expected " + want_noise + ", got " + ShapeString(noise));
   if (sampler_.splitting != Splitting::kNone && !noise_ok(renoise)) {
@@ -47,18 +54,25 @@ VelocityField FlowPlanner::Velocity(const torch::Tensor& start_n, const torch::T
 }
 
 torch::Tensor FlowPlanner::Integrate(const torch::Tensor& x, const torch::Tensor& start_n, const torch::Tensor& goal_n,
-                                     const TimeGrid& grid) const {
-  StateHook hook;
+                                     const TimeGrid& grid, const guidance::Guide* guide, const torch::Tensor& obstacles,
+                                     double scale) const {
+  StateProjection project;
   if (conditioning_ == Conditioning::kInpaint) {
-    hook = [&](const torch::Tensor& state, double) { return Inpaint(state, start_n, goal_n); };
+    project = [&](const torch::Tensor& state) { return Inpaint(state, start_n, goal_n); };
   }
-  return IntegrateEuler(x, Velocity(start_n, goal_n), grid, hook);
+  StepCorrection correct;
+  if (guide != nullptr) {
+    correct = [&](const torch::Tensor& state, double t) { return guide->Step(state, t, obstacles, scale); };
+  }
+  return IntegrateEuler(x, Velocity(start_n, goal_n), grid, project, correct);
 }
 
 torch::Tensor FlowPlanner::PlanNormalized(const torch::Tensor& start_n, const torch::Tensor& goal_n,
-                                          const torch::Tensor& noise, const torch::Tensor& renoise) const {
+                                          const torch::Tensor& noise, const torch::Tensor& renoise,
+                                          const guidance::Guide* guide, const torch::Tensor& obstacles,
+                                          double scale) const {
   CheckRequest(start_n, goal_n, noise, renoise);
-  torch::Tensor x = Integrate(noise, start_n, goal_n, TimeGrid{0.0, 1.0, sampler_.steps});
+  torch::Tensor x = Integrate(noise, start_n, goal_n, TimeGrid{0.0, 1.0, sampler_.steps}, guide, obstacles, scale);
   if (sampler_.splitting == Splitting::kNone) return x;
 
   // Midpoint splitting: the states on either side of the middle become the
@@ -69,30 +83,157 @@ torch::Tensor FlowPlanner::PlanNormalized(const torch::Tensor& start_n, const to
   const torch::Tensor halves = torch::cat({x.slice(1, 0, half), x.slice(1, half, horizon_)}, 0);  // (2B, T/2, D)
   const torch::Tensor starts = torch::cat({start_n, after_mid}, 0);
   const torch::Tensor goals = torch::cat({before_mid, goal_n}, 0);
-  const torch::Tensor refined = Integrate(halves, starts, goals, TimeGrid{0.5, 1.0, SplitSteps(sampler_)});
+  const torch::Tensor refined =
+      Integrate(halves, starts, goals, TimeGrid{0.5, 1.0, SplitSteps(sampler_)}, guide, obstacles, scale);
   return torch::cat({refined.slice(0, 0, B), refined.slice(0, B, 2 * B)}, 1);
 }
 
-torch::Tensor FlowPlanner::Plan(const torch::Tensor& start, const torch::Tensor& goal, const torch::Tensor& noise,
-                                const torch::Tensor& renoise) const {
+torch::Tensor FlowPlanner::PlanWithNoise(const torch::Tensor& start, const torch::Tensor& goal,
+                                         const torch::Tensor& noise, const torch::Tensor& renoise,
+                                         const torch::Tensor& obstacles,
+                                         const guidance::GuidanceConfig* settings) const {
   CheckRequest(start, goal, noise, renoise);
   torch::NoGradGuard no_grad;
+  const guidance::GuidanceConfig& config = settings != nullptr ? *settings : guidance_.config;
+  std::unique_ptr<guidance::Guide> guide;
+  if (obstacles.defined() && obstacles.numel() > 0 && config.scale != 0.0) {
+    if (!guidance_.robot) throw Error("plan: obstacles: this planner has no robot description to guide with");
+    guidance::CheckObstacles(obstacles, static_cast<int>(guidance_.robot->workspace_dim()), "plan: obstacles");
+    guide = std::make_unique<guidance::Guide>(guidance::MakeGuidanceCost(config, guidance_.robot, guidance_.dt),
+                                              normalizer_, config);
+  }
   const torch::Tensor start_raw = start.to(torch::kFloat32), goal_raw = goal.to(torch::kFloat32);
+  const torch::Tensor obstacles_f = guide ? obstacles.to(torch::kFloat32) : torch::Tensor();
   const torch::Tensor plan_n =
       PlanNormalized(normalizer_.Normalize(start_raw), normalizer_.Normalize(goal_raw), noise.to(torch::kFloat32),
-                     renoise.defined() ? renoise.to(torch::kFloat32) : renoise);
+                     renoise.defined() ? renoise.to(torch::kFloat32) : renoise, guide.get(), obstacles_f, config.scale);
   const torch::Tensor plan = normalizer_.Denormalize(plan_n);
   // The ends are the requested states exactly, not their normalize/clamp round trip.
   return conditioning_ == Conditioning::kInpaint ? Inpaint(plan, start_raw, goal_raw) : plan;
 }
 
-torch::Tensor FlowPlanner::Sample(const torch::Tensor& start, const torch::Tensor& goal, at::Generator& generator) const {
-  if (!start.defined() || start.dim() != 2) throw Error("plan: start: expected (B, D), got " + ShapeString(start));
-  const std::vector<int64_t> shape = {start.size(0), horizon_, state_dim()};
+PlanResult FlowPlanner::Plan(const PlanRequest& request) const {
+  const auto started = std::chrono::steady_clock::now();
+  CheckEnds(request.start, request.goal, state_dim(), "plan");
+  auto generator = at::make_generator<at::CPUGeneratorImpl>(request.seed);
+  const std::vector<int64_t> shape = {request.start.size(0), horizon_, state_dim()};
   const torch::Tensor noise = torch::randn(shape, generator, torch::kFloat32);
   const torch::Tensor renoise =
       sampler_.splitting == Splitting::kNone ? torch::Tensor() : torch::randn(shape, generator, torch::kFloat32);
-  return Plan(start, goal, noise, renoise);
+  PlanResult result;
+  result.plans = PlanWithNoise(request.start, request.goal, noise, renoise, request.obstacles,
+                               request.guidance ? &*request.guidance : nullptr);
+  result.found = torch::ones({request.start.size(0)}, torch::kBool);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  result.seconds.assign(static_cast<size_t>(request.start.size(0)), seconds);
+  return result;
+}
+
+void FlowPlanner::WriteScript(jit::ScriptModule& module) const {
+  if (!guidance_.robot) throw Error("export: the planner has no robot description (retrain with a current dataset)");
+  const bool inpaint = conditioning_ == Conditioning::kInpaint;
+  const bool splitting = sampler_.splitting != Splitting::kNone;
+  const std::string D = std::to_string(state_dim());
+  const std::string T = std::to_string(horizon_);
+  const std::string H = std::to_string(horizon_ / 2);
+  const std::string C = std::to_string(2 * state_dim());
+  const std::string K1 = std::to_string(guidance_.robot->workspace_dim() + 1);
+
+  // The network, and the same for callers with its arguments checked.
+  jit::ScriptWriter net_writer(module, "p_");
+  const std::string out = net_->WriteScript(net_writer);
+  net_writer.Line("return " + out);
+  module.Define("def net_velocity(self, x: Tensor, t: Tensor, cond: Optional[Tensor]) -> Tensor:\n" +
+                net_writer.Body(1));
+  std::string s = R"PY(
+def velocity(self, x: Tensor, t: Tensor, cond: Optional[Tensor]) -> Tensor:
+    assert x.dim() == 3 and x.size(1) == )PY" + T + " and x.size(2) == " + D + R"PY(, "velocity: x: expected (B, )PY" + T + ", " + D + R"PY(), normalized"
+    assert t.dim() == 1 and t.size(0) == x.size(0), "velocity: t: expected (B,) with the B of x"
+)PY";
+  s += inpaint ? "    assert cond is None, \"velocity: cond: this planner conditions by inpainting; pass None\"\n"
+               : "    assert cond is not None and cond.dim() == 2 and cond.size(0) == x.size(0) and cond.size(1) == " + C +
+                     ", \"velocity: cond: expected (B, " + C + "), the normalized start and goal\"\n";
+  s += "    return self.net_velocity(x, t, cond)\n";
+  module.Define(s);
+
+  normalizer_.WriteScript(module);
+  guidance_.robot->WriteScript(module);
+  guidance::Guide(guidance::MakeGuidanceCost(guidance_.config, guidance_.robot, guidance_.dt), normalizer_,
+                  guidance_.config)
+      .WriteScript(module);
+
+  s = R"PY(
+def inpaint(self, x: Tensor, start: Tensor, goal: Tensor) -> Tensor:
+    return torch.cat([start.unsqueeze(1), x[:, 1:-1], goal.unsqueeze(1)], 1)
+
+def integrate(self, x: Tensor, s: Tensor, g: Tensor, t0: float, steps: int, obstacles: Optional[Tensor], scale: float) -> Tensor:
+)PY";
+  s += inpaint ? "    cond: Optional[Tensor] = None\n    x = self.inpaint(x, s, g)\n"
+               : "    cond: Optional[Tensor] = torch.cat([s, g], -1)\n";
+  s += R"PY(    h = (1.0 - t0) / steps
+    for i in range(steps):
+        t = torch.full([x.size(0)], t0 + i * h, dtype=x.dtype, device=x.device)
+)PY";
+  s += inpaint ? "        x = x + h * self.net_velocity(self.inpaint(x, s, g), t, cond)\n"
+               : "        x = x + h * self.net_velocity(x, t, cond)\n";
+  s += R"PY(        if obstacles is not None:
+            x = self.guide(x, t0 + (i + 1) * h, obstacles, scale)
+)PY";
+  if (inpaint) s += "        x = self.inpaint(x, s, g)\n";
+  s += "    return x\n";
+  s += R"PY(
+def plan(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Tensor] = None, obstacles: Optional[Tensor] = None, scale: Optional[float] = None) -> Tensor:
+    assert start.dim() == 2 and start.size(1) == )PY" + D + R"PY(, "plan: start: expected (B, )PY" + D + R"PY()"
+    assert goal.dim() == 2 and goal.size(0) == start.size(0) and goal.size(1) == )PY" + D + R"PY(, "plan: goal: expected the shape of start"
+    assert noise.dim() == 3 and noise.size(0) == start.size(0) and noise.size(1) == )PY" + T + " and noise.size(2) == " + D + R"PY(, "plan: noise: expected (B, )PY" + T + ", " + D + R"PY()"
+    guidance_scale = self.guidance_scale if scale is None else scale
+    assert guidance_scale >= 0.0, "plan: scale: expected a non-negative guidance scale"
+    guided: Optional[Tensor] = None
+    if obstacles is not None:
+        assert obstacles.dim() == 2 and obstacles.size(1) == )PY" + K1 + R"PY(, "plan: obstacles: expected (K, )PY" + K1 + R"PY() rows of centre and radius"
+        assert bool(torch.isfinite(obstacles).all()), "plan: obstacles: expected finite values"
+        assert bool((obstacles[:, -1] >= 0).all()), "plan: obstacles: expected non-negative radii"
+        if obstacles.size(0) > 0 and guidance_scale != 0.0:
+            guided = obstacles.float()
+    start = start.float()
+    goal = goal.float()
+    s = self.normalize(start)
+    g = self.normalize(goal)
+    x = self.integrate(noise.float(), s, g, 0.0, )PY" + std::to_string(sampler_.steps) + R"PY(, guided, guidance_scale)
+)PY";
+  if (splitting) {
+    s += R"PY(    assert renoise is not None, "plan: renoise: this planner splits trajectories and needs re-noising noise (B, )PY" + T + ", " + D + R"PY()"
+    assert renoise.size() == noise.size(), "plan: renoise: expected the shape of noise"
+    B = x.size(0)
+    before_mid = x[:, )PY" + H + R"PY( - 1]
+    after_mid = x[:, )PY" + H + R"PY(]
+    x = 0.5 * renoise.float() + 0.5 * x
+    halves = torch.cat([x[:, 0:)PY" + H + "], x[:, " + H + ":" + T + R"PY(]], 0)
+    refined = self.integrate(halves, torch.cat([s, after_mid], 0), torch.cat([before_mid, g], 0), 0.5, )PY" +
+         std::to_string(SplitSteps(sampler_)) + R"PY(, guided, guidance_scale)
+    x = torch.cat([refined[0:B], refined[B:2 * B]], 1)
+)PY";
+  }
+  s += inpaint ? "    return self.inpaint(self.denormalize(x), start, goal)\n" : "    return self.denormalize(x)\n";
+  s += R"PY(
+def sample(self, start: Tensor, goal: Tensor, num_samples: int, obstacles: Optional[Tensor] = None, scale: Optional[float] = None) -> Tensor:
+    assert start.dim() == 1 and goal.dim() == 1, "sample: expected start and goal of shape (D,)"
+    noise = torch.randn([num_samples, )PY" + T + ", " + D + R"PY(], dtype=self.lo.dtype, device=self.lo.device)
+)PY";
+  s += splitting ? "    renoise: Optional[Tensor] = torch.randn([num_samples, " + T + ", " + D +
+                       "], dtype=self.lo.dtype, device=self.lo.device)\n"
+                 : "    renoise: Optional[Tensor] = None\n";
+  s += "    return self.plan(start.unsqueeze(0).expand(num_samples, -1), goal.unsqueeze(0).expand(num_samples, -1), "
+       "noise, renoise, obstacles, scale)\n";
+  module.Define(s);
+
+  module.Attribute("horizon", c10::IntType::get(), horizon_);
+  module.Attribute("state_dim", c10::IntType::get(), state_dim());
+  module.Attribute("steps", c10::IntType::get(), static_cast<int64_t>(sampler_.steps));
+  module.Attribute("splitting", c10::StringType::get(), std::string(config::EnumName(sampler_.splitting)));
+  module.Attribute("conditioning", c10::StringType::get(), std::string(config::EnumName(conditioning_)));
+  module.Attribute("guidance_scale", c10::FloatType::get(), guidance_.config.scale);
+  module.Attribute("guidance", c10::StringType::get(), config::ToYaml(guidance_.config));
 }
 
 }  // namespace flowplan::planning

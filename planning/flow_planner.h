@@ -4,12 +4,17 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <memory>
 
 #include "core/config.h"
+#include "guidance/guide.h"
+#include "jit/script_writer.h"
+#include "kinematics/robot.h"
 #include "models/normalizer.h"
 #include "models/velocity_net.h"
 #include "planning/conditioning.h"
 #include "planning/euler.h"
+#include "planning/planner.h"
 
 namespace flowplan::planning {
 
@@ -18,7 +23,7 @@ enum class Splitting {
   kNone,
   // After the full loop: re-noise the plan to t = 0.5, cut it into halves that
   // take the states beside the midpoint as their missing boundary conditions,
-  // and integrate each half from t = 0.5 to 1 with half the steps.
+  // and integrate each half from t = 0.5 to 1 with half the steps (guided too).
   kMidpoint,
 };
 
@@ -42,57 +47,81 @@ struct SamplerConfig {
 /// Euler steps of the second (t = 0.5 -> 1) stage of splitting: half the steps, at least one.
 inline int SplitSteps(const SamplerConfig& sampler) { return std::max(1, sampler.steps / 2); }
 
-/// A trained flow planner: network, normalizer, conditioning and sampler.
-/// Planning does not change it, and Plan() (which runs without autograd) may be
-/// called from several threads at once.
-class FlowPlanner {
+/// What guidance needs besides the network: the robot whose collision spheres
+/// meet the obstacles, the time between states, and the default settings.
+struct GuidanceSetup {
+  std::shared_ptr<const kinematics::Robot> robot;  // null: the planner cannot be guided
+  double dt = 0.0;                                  // s between the states of a plan
+  guidance::GuidanceConfig config;                  // a call's settings unless it gives its own
+};
+
+/// A trained flow planner: network, normalizer, conditioning, Euler sampler
+/// with optional splitting, and guidance around obstacles. Planning does not
+/// change it, and may run from several threads at once. The network always
+/// runs without autograd; guidance takes the cost's gradient by formula.
+class FlowPlanner : public Planner {
  public:
   /// @param horizon T the network was trained for; @throws if the network cannot take it.
   FlowPlanner(models::VelocityNetPtr net, models::MinMaxNormalizer normalizer, Conditioning conditioning,
-              int64_t horizon, SamplerConfig sampler);
+              int64_t horizon, SamplerConfig sampler, GuidanceSetup guidance = {});
 
-  /// Plans from `start` to `goal` in raw units.
-  /// @param start    (B, D) raw start states
-  /// @param goal     (B, D) raw goal states
-  /// @param noise    (B, T, D) standard-normal initial noise
-  /// @param renoise  (B, T, D) standard-normal noise for splitting's re-noising; needed
-  ///                 only when sampler.splitting is not none
-  /// @returns        (B, T, D) raw plans, interior states clamped to the training range;
-  ///                 under inpainting states 0 and T-1 are exactly start and goal
-  /// @throws flowplan::Error on shape mismatches
-  torch::Tensor Plan(const torch::Tensor& start, const torch::Tensor& goal, const torch::Tensor& noise,
-                     const torch::Tensor& renoise = torch::Tensor()) const;
+  /// Plans with noise drawn from request.seed (noise, then renoise when splitting).
+  PlanResult Plan(const PlanRequest& request) const override;
 
-  /// Plan() with all noise drawn from `generator`.
-  torch::Tensor Sample(const torch::Tensor& start, const torch::Tensor& goal, at::Generator& generator) const;
+  /// Plans from `start` to `goal` in raw units from explicit noise: what the
+  /// exported planner's plan() computes.
+  /// @param start     (B, D) raw start states
+  /// @param goal      (B, D) raw goal states
+  /// @param noise     (B, T, D) standard-normal initial noise
+  /// @param renoise   (B, T, D) standard-normal noise for splitting's re-noising; needed
+  ///                  only when sampler.splitting is not none
+  /// @param obstacles (K, W+1) rows [centre, radius] to avoid; undefined or K = 0: unguided
+  /// @param settings  guidance settings of this call; null: the planner's
+  /// @returns         (B, T, D) raw plans, interior states clamped to the training range;
+  ///                  under inpainting states 0 and T-1 are exactly start and goal
+  /// @throws flowplan::Error on shape mismatches and bad obstacles
+  torch::Tensor PlanWithNoise(const torch::Tensor& start, const torch::Tensor& goal, const torch::Tensor& noise,
+                              const torch::Tensor& renoise = torch::Tensor(),
+                              const torch::Tensor& obstacles = torch::Tensor(),
+                              const guidance::GuidanceConfig* settings = nullptr) const;
 
-  /// The same in normalized units, without the final clamp.
+  /// The same in normalized units, without the final clamp; `guide` null: unguided.
   /// start_n, goal_n: (B, D); noise, renoise: (B, T, D) -> (B, T, D).
   torch::Tensor PlanNormalized(const torch::Tensor& start_n, const torch::Tensor& goal_n, const torch::Tensor& noise,
-                               const torch::Tensor& renoise = torch::Tensor()) const;
+                               const torch::Tensor& renoise, const guidance::Guide* guide,
+                               const torch::Tensor& obstacles, double scale) const;
 
   /// The network's velocity field with this planner's conditioning applied.
   VelocityField Velocity(const torch::Tensor& start_n, const torch::Tensor& goal_n) const;
 
+  /// Writes the whole planner into `module`: the network (net_velocity and the
+  /// checked velocity), the normalizer, the robot, the guidance cost and the
+  /// sampler (integrate, plan, sample). See docs/export.md.
+  /// @throws flowplan::Error if the planner has no robot description.
+  void WriteScript(jit::ScriptModule& module) const override;
+
+  int64_t horizon() const override { return horizon_; }
+  int64_t state_dim() const override { return normalizer_.dim(); }
   const models::VelocityNetPtr& net() const { return net_; }
   const models::MinMaxNormalizer& normalizer() const { return normalizer_; }
   Conditioning conditioning() const { return conditioning_; }
-  int64_t horizon() const { return horizon_; }
-  int64_t state_dim() const { return normalizer_.dim(); }
   const SamplerConfig& sampler() const { return sampler_; }
+  const GuidanceSetup& guidance() const { return guidance_; }
 
  private:
   void CheckRequest(const torch::Tensor& start, const torch::Tensor& goal, const torch::Tensor& noise,
                     const torch::Tensor& renoise) const;
   /// Integrates x (B, T', D) over `grid` with boundaries start_n, goal_n (B, D).
   torch::Tensor Integrate(const torch::Tensor& x, const torch::Tensor& start_n, const torch::Tensor& goal_n,
-                          const TimeGrid& grid) const;
+                          const TimeGrid& grid, const guidance::Guide* guide, const torch::Tensor& obstacles,
+                          double scale) const;
 
   models::VelocityNetPtr net_;
   models::MinMaxNormalizer normalizer_;
   Conditioning conditioning_;
   int64_t horizon_;
   SamplerConfig sampler_;
+  GuidanceSetup guidance_;
 };
 
 }  // namespace flowplan::planning

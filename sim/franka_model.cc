@@ -28,7 +28,7 @@ int RequireId(const mjModel& m, mjtObj type, const char* name, const char* what,
 std::array<double, 3> Vec3(const mjtNum* v) { return {v[0], v[1], v[2]}; }
 std::array<double, 4> Quat(const mjtNum* v) { return {v[0], v[1], v[2], v[3]}; }
 
-void AddCapsuleSpheres(const mjModel& m, int geom, int link, std::vector<CollisionSphere>& out) {
+void AddCapsuleSpheres(const mjModel& m, int geom, int link, std::vector<kinematics::RobotSphere>& out) {
   const double radius = m.geom_size[3 * geom];
   const double half_length = m.geom_size[3 * geom + 1];
   const int n = half_length > 0.0 ? static_cast<int>(std::ceil(2.0 * half_length / radius)) + 1 : 1;
@@ -40,7 +40,7 @@ void AddCapsuleSpheres(const mjModel& m, int geom, int link, std::vector<Collisi
   mju_rotVecQuat(axis, z, m.geom_quat + 4 * geom);
   for (int k = 0; k < n; ++k) {
     const double offset = n > 1 ? -half_length + k * spacing : 0.0;
-    CollisionSphere sphere;
+    kinematics::RobotSphere sphere;
     sphere.link = link;
     for (int i = 0; i < 3; ++i) sphere.centre[i] = m.geom_pos[3 * geom + i] + offset * axis[i];
     sphere.radius = covering_radius;
@@ -59,11 +59,14 @@ JointVector FrankaReadyPose() {
 
 Eigen::Matrix3d DownwardTcpRotation() { return Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal(); }
 
-KinematicDescription DescribeKinematics(const mjModel& m, const std::string& tcp_site,
-                                        int collision_group) {
-  KinematicDescription out;
+kinematics::RobotDescription DescribeKinematics(const mjModel& m, const std::string& name,
+                                               const std::string& tcp_site, int collision_group) {
+  kinematics::RobotDescription out;
+  out.name = name;
+  out.kind = kinematics::RobotKind::kArm;
+  out.workspace_dim = 3;
   for (int body = 1; body < m.nbody; ++body) {
-    KinematicLink link;
+    kinematics::RobotLink link;
     link.name = Name(m, mjOBJ_BODY, body);
     link.parent = m.body_parentid[body] - 1;
     link.pos = Vec3(m.body_pos + 3 * body);
@@ -161,7 +164,8 @@ FrankaModel::FrankaModel(MjModelPtr model, std::string source)
     }
     limits_.torque[j] = m.actuator_ctrlrange[2 * j + 1];
   }
-  description_ = DescribeKinematics(m, "tcp", kCollisionGeomGroup);
+  description_ = DescribeKinematics(m, "franka_panda", "tcp", kCollisionGeomGroup);
+  description_.Validate(source_);
 }
 
 FrankaModel FrankaModel::Clone() const { return FrankaModel(CopyModel(*model_), source_); }

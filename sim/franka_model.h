@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "core/config.h"
-#include "sim/kinematic_description.h"
+#include "kinematics/robot_description.h"
 #include "sim/mujoco_util.h"
 
 namespace flowplan::sim {
@@ -45,7 +45,8 @@ struct FrankaLimits {
   JointVector torque;    // N·m, |τ| limit
 };
 
-/// Extracts the kinematic tree of `m` (every body but the world), the TCP site
+/// Extracts the robot description (kinematics/robot_description.h) of `m`,
+/// named `name`: the kinematic tree (every body but the world), the TCP site
 /// `tcp_site` and collision spheres from the sphere and capsule geoms of geom
 /// group `collision_group`. A sphere geom gives one sphere. A capsule of radius
 /// r and half-length h gives n = ceil(2h / r) + 1 spheres spaced s = 2h / (n - 1)
@@ -54,7 +55,7 @@ struct FrankaLimits {
 /// @throws flowplan::Error if a body has more than one joint, a joint is not a
 ///   hinge through its body origin with qpos0 = 0, the site is missing, or a
 ///   collision geom is neither a sphere nor a capsule.
-KinematicDescription DescribeKinematics(const mjModel& m, const std::string& tcp_site,
+kinematics::RobotDescription DescribeKinematics(const mjModel& m, const std::string& tcp_site,
                                         int collision_group);
 
 /// The geom group of the collision capsules and spheres in franka_panda.xml.
@@ -83,7 +84,7 @@ class FrankaModel {
   const mjModel& mj() const { return *model_; }
   const FrankaLimits& limits() const { return limits_; }
   /// Kinematic tree and collision spheres, for the LibTorch kinematics.
-  const KinematicDescription& description() const { return description_; }
+  const kinematics::RobotDescription& description() const { return description_; }
   const std::string& source() const { return source_; }
   int tcp_site() const { return tcp_site_; }
   int flange_site() const { return flange_site_; }
@@ -98,7 +99,7 @@ class FrankaModel {
   MjModelPtr model_;
   std::string source_;
   FrankaLimits limits_;
-  KinematicDescription description_;
+  kinematics::RobotDescription description_;
   int tcp_site_ = -1;
   int flange_site_ = -1;
   int hand_body_ = -1;

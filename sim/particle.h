@@ -18,6 +18,7 @@ struct ParticleConfig {
   double accel_noise = 0.02;     // m/s², std of the acceleration noise per step and axis
   double position_noise = 0.01;  // m, std of the position noise per step and axis
   double start_jitter = 0.05;    // m, std of the start position around the commanded start
+  double radius = 0.03;          // m, the particle's disc, for collision costs and clearances
 
   template <class V>
   void Visit(V& v) {
@@ -30,6 +31,8 @@ struct ParticleConfig {
     v.Field("position_noise", position_noise, "std of the position noise (0: none)",
             config::NonNegative());
     v.Field("start_jitter", start_jitter, "std of the start position around the commanded start",
+            config::NonNegative());
+    v.Field("radius", radius, "radius of the particle's disc, for planning around obstacles",
             config::NonNegative());
   }
 };

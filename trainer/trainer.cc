@@ -152,8 +152,9 @@ class TrainingRun {
     WriteFileAtomically(run_.config(), setup.config_yaml);
     train_n_ = normalizer_.Normalize(data.train);
     val_n_ = data.val.size(0) > 0 ? normalizer_.Normalize(data.val) : data.val;
-    ema_planner_ = std::make_unique<planning::FlowPlanner>(ema_, normalizer_, setup.flow.conditioning, T_,
-                                                           setup.sampler);
+    ema_planner_ = std::make_unique<planning::FlowPlanner>(
+        ema_, normalizer_, setup.flow.conditioning, T_, setup.sampler,
+        planning::GuidanceSetup{kinematics::MakeRobot(data.robot, "training data"), data.dt, {}});
     gradient_ = std::make_unique<ShardedGradient>(*net_, [&] { return BuildNet(setup_, D_); }, config_.shards,
                                                   setup.threads);
     metrics_ = std::make_unique<MetricsLog>(run_.metrics());
@@ -207,6 +208,11 @@ class TrainingRun {
       throw Error(path + ": checkpoint was trained on (T, D) = (" + std::to_string(header.horizon) + ", " +
                   std::to_string(header.normalizer.dim()) + "), the data has (" + std::to_string(T_) + ", " +
                   std::to_string(D_) + ")");
+    }
+    if (header.data_fingerprint != data_.fingerprint) {
+      throw Error(path + ": was trained on data with fingerprint " + header.data_fingerprint + ", but " +
+                  setup_.data_path + " now has fingerprint " + data_.fingerprint +
+                  "; the data file changed since the run started (restore it, or train into a new run_dir)");
     }
     checkpoints::LoadCheckpointWeights(path, {net_.get(), ema_.get(), &optimizer_});
     normalizer_ = header.normalizer;
@@ -285,6 +291,8 @@ class TrainingRun {
     header.dt = data_.dt;
     header.state_labels = data_.state_labels;
     header.horizon = T_;
+    header.robot = data_.robot;
+    header.data_fingerprint = data_.fingerprint;
     const std::string path = run_.checkpoint(step_);
     checkpoints::SaveCheckpoint(path, header, {net_.get(), ema_.get(), &optimizer_});
     run_.PruneCheckpoints(config_.keep_checkpoints);

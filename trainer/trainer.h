@@ -15,6 +15,7 @@ namespace flowplan::trainer {
 struct TrainingSetup {
   std::string run_dir;
   std::string config_yaml;  // resolved experiment config, stored in the run and every checkpoint
+  std::string data_path;    // where the data came from, for messages
   uint64_t seed = 0;
   int threads = 1;  // worker threads; results do not depend on it
   models::ModelConfig model;

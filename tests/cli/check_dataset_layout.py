@@ -6,7 +6,8 @@ import numpy as np
 
 with h5py.File(sys.argv[1], "r") as f:
     assert f.attrs["format"] == "flowplan.trajectories", f.attrs["format"]
-    assert int(f.attrs["format_version"]) == 1
+    assert int(f.attrs["format_version"]) == 2
+    robot = f.attrs["robot"]
     env = f.attrs["env"]
     labels = f.attrs["state_labels"].split(",")
     states = f["states"]
@@ -29,8 +30,10 @@ with h5py.File(sys.argv[1], "r") as f:
     if env == "particle":
         assert labels == ["x", "y", "vx", "vy"], labels
         assert x[..., :2].min() >= 0 and x[..., :2].max() <= 1
+        assert "kind: point" in robot and "num_joints: 2" in robot and "workspace_dim: 2" in robot, robot
     if env == "franka":
         assert labels == [f"q{j}" for j in range(1, 8)] + [f"dq{j}" for j in range(1, 8)], labels
+        assert "name: franka_panda" in robot and "kind: arm" in robot and "num_joints: 7" in robot, robot
         assert f["extras"]["tcp"].shape == (n, t, 3) and f["extras"]["torques"].shape == (n, t, 7)
         limits = np.array([87.0] * 4 + [12.0] * 3)
         assert (np.abs(f["extras"]["torques"][...]) <= limits + 1e-3).all()

@@ -24,6 +24,7 @@ TrajectoryDataset SmallDataset() {
   d.env = "particle";
   d.dt = 0.05;
   d.state_labels = {"x", "y", "vx", "vy"};
+  d.robot = kinematics::PointRobot("disc", 2, 0.03, 0.0, 1.0);
   d.num_episodes = 3;
   d.horizon = 5;
   d.state_dim = 4;
@@ -43,6 +44,24 @@ TrajectoryDataset SmallDataset() {
   d.rejected_episodes = 2;
   d.simulator_warnings = 7;
   return d;
+}
+
+TEST(TrajectoryDatasetTest, FingerprintChangesWithTheDataAndNotWithBookkeeping) {
+  const TrajectoryDataset d = SmallDataset();
+  const std::string print = DatasetFingerprint(d);
+  EXPECT_EQ(print.size(), 16u);
+  TrajectoryDataset changed = d;
+  changed.states[17] += 1e-3f;
+  EXPECT_NE(DatasetFingerprint(changed), print);
+  changed = d;
+  changed.robot.point_radius = 0.05;
+  EXPECT_NE(DatasetFingerprint(changed), print);
+  changed = d;
+  changed.test_pairs.goal[0] = 2;
+  EXPECT_NE(DatasetFingerprint(changed), print);
+  changed = d;
+  changed.simulator_warnings = 0;  // does not change what a model learns
+  EXPECT_EQ(DatasetFingerprint(changed), print);
 }
 
 std::string TempPath(const std::string& name) { return (flowplan::testing::ScratchDir() / name).string(); }
@@ -68,6 +87,9 @@ TEST(TrajectoryDatasetTest, RoundTripKeepsEverything) {
   EXPECT_EQ(back.test_pairs.goal, d.test_pairs.goal);
   EXPECT_EQ(back.test_pairs.names, d.test_pairs.names);
   EXPECT_EQ(back.config_yaml, d.config_yaml);
+  EXPECT_EQ(kinematics::RobotToYaml(back.robot), kinematics::RobotToYaml(d.robot));
+  EXPECT_EQ(back.robot.point_radius, 0.03);
+  EXPECT_EQ(DatasetFingerprint(back), DatasetFingerprint(d));
   EXPECT_EQ(back.seed, 3u);
   EXPECT_EQ(back.rejected_episodes, 2);
   EXPECT_EQ(back.simulator_warnings, 7);

@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "models/model_config.h"
+#include "planning/flow_planner.h"
 
 namespace flowplan::eval {
 namespace {

@@ -29,17 +29,33 @@ TEST(EulerTest, LinearInTimeVelocityMatchesTheLeftRiemannSum) {
   EXPECT_NEAR(x1.item<double>(), (n - 1) / (2.0 * n), 1e-7);
 }
 
-TEST(EulerTest, HookRunsBeforeTheFirstStepAndAfterEachStepAtTheRightTimes) {
-  std::vector<double> times;
-  IntegrateEuler(torch::zeros({1, 2, 1}), [](const torch::Tensor& x, const torch::Tensor&) { return x; },
-                 TimeGrid{0.5, 1.0, 5}, [&](const torch::Tensor& x, double t) {
-                   times.push_back(t);
-                   return x;
-                 });
-  ASSERT_EQ(times.size(), 6u);
-  EXPECT_DOUBLE_EQ(times.front(), 0.5);
-  EXPECT_DOUBLE_EQ(times[1], 0.6);
-  EXPECT_DOUBLE_EQ(times.back(), 1.0);
+TEST(EulerTest, ProjectionRunsFirstAndAfterEveryStepAndCorrectionAfterEveryStepAtItsEndTime) {
+  std::vector<std::string> calls;
+  IntegrateEuler(
+      torch::zeros({1, 2, 1}), [](const torch::Tensor& x, const torch::Tensor&) { return x; }, TimeGrid{0.5, 1.0, 5},
+      [&](const torch::Tensor& x) {
+        calls.push_back("project");
+        return x;
+      },
+      [&](const torch::Tensor& x, double t) {
+        calls.push_back("correct " + std::to_string(t).substr(0, 3));
+        return x;
+      });
+  ASSERT_EQ(calls.size(), 11u);
+  EXPECT_EQ(calls[0], "project");
+  EXPECT_EQ(calls[1], "correct 0.6");
+  EXPECT_EQ(calls[2], "project");
+  EXPECT_EQ(calls[9], "correct 1.0");
+  EXPECT_EQ(calls[10], "project");
+}
+
+TEST(EulerTest, CorrectionChangesTheStateThatTheNextStepStartsFrom) {
+  // dx/dt = 0, and each correction adds t: the result is the sum of the step end times.
+  const torch::Tensor x = IntegrateEuler(
+      torch::zeros({1, 1, 1}, torch::kFloat64),
+      [](const torch::Tensor& state, const torch::Tensor&) { return torch::zeros_like(state); },
+      TimeGrid{0.0, 1.0, 4}, nullptr, [](const torch::Tensor& state, double t) { return state + t; });
+  EXPECT_NEAR(x.item<double>(), 0.25 + 0.5 + 0.75 + 1.0, 1e-12);
 }
 
 TEST(EulerTest, VelocitySeesTheGridTimes) {

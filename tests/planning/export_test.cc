@@ -1,5 +1,6 @@
 // The exported TorchScript planner against the in-process FlowPlanner, loaded
-// by LibTorch's torch::jit::load and by Python's torch.jit.load.
+// by LibTorch's torch::jit::load and by Python's torch.jit.load, unguided and
+// guided around obstacles, for a point robot (the particle) and the Franka.
 
 #include "planning/export.h"
 
@@ -9,34 +10,71 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "kinematics/arm_kinematics.h"
 #include "models/model_config.h"
+#include "planning/flow_planner.h"
+#include "sim/franka_model.h"
 #include "tests/support/scratch_dir.h"
 
 namespace flowplan::planning {
 namespace {
 
-FlowPlanner MakePlanner(Conditioning conditioning, Splitting splitting = Splitting::kNone) {
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
+
+std::shared_ptr<const kinematics::Robot> Disc() {
+  return kinematics::MakeRobot(kinematics::PointRobot("disc", 2, 0.05, 0.0, 1.0));
+}
+
+std::shared_ptr<const kinematics::Robot> Franka() {
+  static const auto robot = kinematics::MakeRobot(sim::LoadFrankaModel().description());
+  return robot;
+}
+
+FlowPlanner MakePlanner(Conditioning conditioning, Splitting splitting, std::shared_ptr<const kinematics::Robot> robot,
+                        std::vector<int> down_dims = {32, 64, 128, 256}) {
   torch::manual_seed(11);
-  models::ModelConfig config;  // the default UNet: every block type is exercised
-  auto net = models::MakeVelocityNet(config, 4, ConditionDim(conditioning, 4));
+  const int64_t J = robot->num_joints(), D = 2 * J;
+  models::ModelConfig config;  // the default UNet exercises every block type
+  config.unet.down_dims = down_dims;
+  auto net = models::MakeVelocityNet(config, D, ConditionDim(conditioning, D));
   // Random weights would make the velocity tiny; scale them up so that a
   // mistake anywhere in the script shows in the plan.
   torch::NoGradGuard no_grad;
   for (auto& p : net->parameters()) p.mul_(1.5);
-  models::MinMaxNormalizer normalizer(torch::tensor({0.f, 0.f, -2.f, -2.f}), torch::tensor({1.f, 1.f, 2.f, 2.f}));
-  return FlowPlanner(net, normalizer, conditioning, 64, SamplerConfig{10, splitting});
+  const auto& d = robot->description();
+  torch::Tensor lo = torch::full({D}, -2.0f), hi = torch::full({D}, 2.0f);
+  for (int64_t j = 0; j < J; ++j) {
+    lo[j] = static_cast<float>(d.joint_lower[j]);
+    hi[j] = static_cast<float>(d.joint_upper[j]);
+  }
+  guidance::GuidanceConfig guidance;
+  guidance.scale = 0.5;
+  guidance.clip = 5.0;  // exercised by the script too
+  return FlowPlanner(net, models::MinMaxNormalizer(lo, hi), conditioning, 64, SamplerConfig{10, splitting},
+                     GuidanceSetup{robot, 0.05, guidance});
 }
 
-ExportMetadata Metadata() { return ExportMetadata{"particle", 0.05, {"x", "y", "vx", "vy"}, "seed: 0\n"}; }
+ExportMetadata Metadata(int64_t D) {
+  std::vector<std::string> labels;
+  for (int64_t i = 0; i < D; ++i) labels.push_back("s" + std::to_string(i));
+  return ExportMetadata{"test", 0.05, labels, "seed: 0\n"};
+}
 
 struct Request {
-  torch::Tensor start, goal, noise, renoise;
+  torch::Tensor start, goal, noise, renoise, obstacles;
 };
 
-Request MakeRequest() {
+/// Starts and goals inside the normalizer's range, and obstacles between them.
+Request MakeRequest(const FlowPlanner& planner, int64_t B) {
   torch::manual_seed(5);
-  return {torch::rand({3, 4}) * torch::tensor({1.f, 1.f, 0.5f, 0.5f}), torch::rand({3, 4}), torch::randn({3, 64, 4}),
-          torch::randn({3, 64, 4})};
+  const int64_t D = planner.state_dim(), W = planner.guidance().robot->workspace_dim();
+  const torch::Tensor lo = planner.normalizer().lo(), hi = planner.normalizer().hi();
+  auto state = [&] { return lo + (hi - lo) * (0.3 + 0.4 * torch::rand({B, D})); };
+  Request r{state(), state(), torch::randn({B, 64, D}), torch::randn({B, 64, D}), torch::Tensor()};
+  r.obstacles = W == 2 ? torch::tensor({{0.5f, 0.5f, 0.2f}, {0.3f, 0.6f, 0.1f}})
+                       : torch::tensor({{0.5f, 0.0f, 0.4f, 0.15f}, {0.3f, 0.2f, 0.5f, 0.1f}});
+  return r;
 }
 
 void WriteFloats(const std::string& path, const torch::Tensor& t) {
@@ -52,45 +90,52 @@ torch::Tensor ReadFloats(const std::string& path, std::vector<int64_t> shape) {
   return t;
 }
 
+float MaxDifference(const torch::Tensor& a, const torch::Tensor& b) { return (a - b).abs().max().item<float>(); }
+
 using Variant = std::tuple<Conditioning, Splitting>;
 class ExportTest : public ::testing::TestWithParam<Variant> {
  protected:
-  FlowPlanner Planner() const { return MakePlanner(std::get<0>(GetParam()), std::get<1>(GetParam())); }
+  FlowPlanner Planner() const { return MakePlanner(std::get<0>(GetParam()), std::get<1>(GetParam()), Disc()); }
 };
 
 TEST_P(ExportTest, TorchScriptMatchesTheInProcessPlannerInCpp) {
   const FlowPlanner planner = Planner();
   const std::string path = (flowplan::testing::ScratchDir() / "planner_cpp.pt").string();
-  ExportPlanner(planner, Metadata(), path);
+  ExportPlanner(planner, Metadata(4), path);
   torch::jit::Module loaded = torch::jit::load(path);
-  const Request r = MakeRequest();
-  const torch::Tensor expected = planner.Plan(r.start, r.goal, r.noise, r.renoise);
+  const Request r = MakeRequest(planner, 3);
+  const torch::jit::IValue none;
+  const torch::Tensor expected = planner.PlanWithNoise(r.start, r.goal, r.noise, r.renoise);
   const torch::Tensor got = loaded.run_method("plan", r.start, r.goal, r.noise, r.renoise).toTensor();
   ASSERT_EQ(got.sizes(), expected.sizes());
-  EXPECT_LT((got - expected).abs().max().item<float>(), 1e-5);
+  EXPECT_LT(MaxDifference(got, expected), 1e-5);
   // The plan must actually depend on the network: compare with a plan of other noise.
-  EXPECT_GT((planner.Plan(r.start, r.goal, -r.noise, r.renoise) - expected).abs().max().item<float>(), 1e-2);
+  EXPECT_GT(MaxDifference(planner.PlanWithNoise(r.start, r.goal, -r.noise, r.renoise), expected), 1e-2);
+
+  // Guided, with the default scale and with one given per call.
+  const torch::Tensor guided = planner.PlanWithNoise(r.start, r.goal, r.noise, r.renoise, r.obstacles);
+  EXPECT_GT(MaxDifference(guided, expected), 1e-3) << "guidance changed nothing";
+  EXPECT_LT(MaxDifference(loaded.run_method("plan", r.start, r.goal, r.noise, r.renoise, r.obstacles).toTensor(),
+                          guided),
+            1e-5);
+  guidance::GuidanceConfig stronger = planner.guidance().config;
+  stronger.scale = 2.0;
+  const torch::Tensor strong = planner.PlanWithNoise(r.start, r.goal, r.noise, r.renoise, r.obstacles, &stronger);
+  EXPECT_LT(MaxDifference(loaded.run_method("plan", r.start, r.goal, r.noise, r.renoise, r.obstacles, 2.0).toTensor(),
+                          strong),
+            1e-5);
+  // No obstacles, or a scale of 0, is the unguided plan.
+  EXPECT_LT(MaxDifference(loaded.run_method("plan", r.start, r.goal, r.noise, r.renoise, torch::zeros({0, 3}))
+                              .toTensor(),
+                          expected),
+            1e-5);
+  EXPECT_LT(MaxDifference(loaded.run_method("plan", r.start, r.goal, r.noise, r.renoise, r.obstacles, 0.0).toTensor(),
+                          expected),
+            1e-5);
   EXPECT_EQ(loaded.attr("horizon").toInt(), 64);
   EXPECT_EQ(loaded.attr("state_dim").toInt(), 4);
-  EXPECT_EQ(loaded.attr("env").toStringRef(), "particle");
-}
-
-TEST_P(ExportTest, TorchScriptMatchesTheInProcessPlannerInPython) {
-  const FlowPlanner planner = Planner();
-  const std::string dir = flowplan::testing::ScratchDir().string();
-  const std::string path = dir + "/planner_py.pt";
-  ExportPlanner(planner, Metadata(), path);
-  const Request r = MakeRequest();
-  WriteFloats(dir + "/start.bin", r.start);
-  WriteFloats(dir + "/goal.bin", r.goal);
-  WriteFloats(dir + "/noise.bin", r.noise);
-  WriteFloats(dir + "/renoise.bin", r.renoise);
-  const std::string command = std::string(FLOWPLAN_PYTHON) + " " + FLOWPLAN_SOURCE_DIR +
-                              "/tests/planning/run_exported_planner.py " + path + " " + dir + " 3";
-  ASSERT_EQ(std::system(command.c_str()), 0) << command;
-  const torch::Tensor got = ReadFloats(dir + "/plan.bin", {3, 64, 4});
-  const torch::Tensor expected = planner.Plan(r.start, r.goal, r.noise, r.renoise);
-  EXPECT_LT((got - expected).abs().max().item<float>(), 1e-5);
+  EXPECT_EQ(loaded.attr("env").toStringRef(), "test");
+  EXPECT_EQ(loaded.attr("format_version").toInt(), kExportFormatVersion);
 }
 
 INSTANTIATE_TEST_SUITE_P(Variants, ExportTest,
@@ -101,24 +146,110 @@ INSTANTIATE_TEST_SUITE_P(Variants, ExportTest,
                                   (std::get<1>(info.param) == Splitting::kNone ? "" : "Split");
                          });
 
-TEST(ExportTest, SplittingPlannerWithoutRenoiseIsRejected) {
-  torch::jit::Module module = BuildScriptPlanner(MakePlanner(Conditioning::kInpaint, Splitting::kMidpoint), Metadata());
-  const Request r = MakeRequest();
-  EXPECT_THAT([&] { module.run_method("plan", r.start, r.goal, r.noise); },
-              ::testing::ThrowsMessage<std::exception>(::testing::HasSubstr("plan: renoise")));
+/// Runs tests/planning/run_exported_planner.py on `path` with the request
+/// written next to it; returns its guided plan (made under torch.inference_mode()).
+torch::Tensor PlanInPython(const std::string& dir, const std::string& path, const Request& r, int64_t D) {
+  WriteFloats(dir + "/start.bin", r.start);
+  WriteFloats(dir + "/goal.bin", r.goal);
+  WriteFloats(dir + "/noise.bin", r.noise);
+  WriteFloats(dir + "/renoise.bin", r.renoise);
+  WriteFloats(dir + "/obstacles.bin", r.obstacles);
+  const std::string command = std::string(FLOWPLAN_PYTHON) + " " + FLOWPLAN_SOURCE_DIR +
+                              "/tests/planning/run_exported_planner.py " + path + " " + dir + " " +
+                              std::to_string(r.start.size(0)) + " " + std::to_string(r.obstacles.size(0));
+  EXPECT_EQ(std::system(command.c_str()), 0) << command;
+  return ReadFloats(dir + "/plan.bin", {r.start.size(0), 64, D});
 }
 
-TEST(ExportTest, BadShapesAreRejectedByTheScript) {
-  const FlowPlanner planner = MakePlanner(Conditioning::kInpaint);
-  torch::jit::Module module = BuildScriptPlanner(planner, Metadata());
+TEST(ExportTest, GuidedPointPlannerMatchesInPythonUnderInferenceMode) {
+  for (const Splitting splitting : {Splitting::kNone, Splitting::kMidpoint}) {
+    const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, splitting, Disc());
+    const std::string dir = flowplan::testing::ScratchDir().string();
+    const std::string path = dir + "/planner_py.pt";
+    ExportPlanner(planner, Metadata(4), path);
+    const Request r = MakeRequest(planner, 3);
+    const torch::Tensor got = PlanInPython(dir, path, r, 4);
+    EXPECT_LT(MaxDifference(got, planner.PlanWithNoise(r.start, r.goal, r.noise, r.renoise, r.obstacles)), 1e-5);
+  }
+}
+
+TEST(ExportTest, GuidedFrankaPlannerMatchesInCppAndPython) {
+  const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, Splitting::kMidpoint, Franka(), {32, 64});
+  const std::string dir = flowplan::testing::ScratchDir().string();
+  const std::string path = dir + "/franka.pt";
+  ExportPlanner(planner, Metadata(14), path);
+  const Request r = MakeRequest(planner, 2);
+  const torch::Tensor expected = planner.PlanWithNoise(r.start, r.goal, r.noise, r.renoise, r.obstacles);
+  const torch::Tensor unguided = planner.PlanWithNoise(r.start, r.goal, r.noise, r.renoise);
+  EXPECT_GT(MaxDifference(expected, unguided), 1e-3) << "guidance changed nothing";
+  torch::jit::Module loaded = torch::jit::load(path);
+  EXPECT_LT(MaxDifference(loaded.run_method("plan", r.start, r.goal, r.noise, r.renoise, r.obstacles).toTensor(),
+                          expected),
+            1e-5);
+  EXPECT_LT(MaxDifference(PlanInPython(dir, path, r, 14), expected), 1e-5);
+}
+
+TEST(ExportTest, GuidanceCostAndStepMatchTheCppCostInFloat64) {
+  const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, Splitting::kNone, Franka(), {32, 64});
+  torch::jit::Module module = BuildScriptPlanner(planner, Metadata(14));
+  const Request r = MakeRequest(planner, 3);
+  const torch::Tensor x = planner.normalizer().DenormalizeUnclamped(0.8 * torch::rand({3, 64, 14}) - 0.4)
+                              .to(torch::kFloat64);
+  const torch::Tensor obstacles = r.obstacles.to(torch::kFloat64);
+  const auto cost = guidance::MakeGuidanceCost(planner.guidance().config, Franka(), 0.05);
+  const guidance::CostAndGradient expected = cost->ValueAndGradient(x, obstacles);
+  const auto got = module.run_method("guidance_cost", x, obstacles).toTuple()->elements();
+  EXPECT_GT(expected.value.min().item<double>(), 0.0);
+  EXPECT_LT((got[0].toTensor() - expected.value).abs().max().item<double>(), 1e-9);
+  EXPECT_LT((got[1].toTensor() - expected.gradient).abs().max().item<double>(), 1e-9);
+}
+
+TEST(ExportTest, TcpAndCollisionSpheresAreTheRobotsKinematics) {
+  const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, Splitting::kNone, Franka(), {32, 64});
+  torch::jit::Module module = BuildScriptPlanner(planner, Metadata(14));
+  torch::manual_seed(2);
+  const torch::Tensor q = torch::rand({2, 5, 7}, torch::kFloat64) * 2 - 1;  // any leading dims
+  const auto& arm = dynamic_cast<const kinematics::ArmKinematics&>(*Franka());
+  const kinematics::FkResult fk = arm.Forward(q.view({10, 7}));
+  const torch::Tensor tcp = module.run_method("tcp", q).toTensor();
+  ASSERT_EQ(tcp.sizes(), (std::vector<int64_t>{2, 5, 3}));
+  EXPECT_LT((tcp.view({10, 3}) - fk.tcp_position).abs().max().item<double>(), 1e-12);
+  const torch::Tensor spheres = module.run_method("collision_spheres", q).toTensor();
+  const int64_t S = arm.num_spheres();
+  ASSERT_EQ(spheres.sizes(), (std::vector<int64_t>{2, 5, S, 4}));
+  EXPECT_LT((spheres.view({10, S, 4}).slice(2, 0, 3) - fk.sphere_centres).abs().max().item<double>(), 1e-12);
+  EXPECT_TRUE(torch::equal(spheres[1][3].select(1, 3), arm.SphereRadii()));
+  EXPECT_THAT([&] { module.run_method("tcp", torch::zeros({3, 6})); },
+              ThrowsMessage<std::exception>(HasSubstr("tcp: q: expected (..., 7)")));
+}
+
+TEST(ExportTest, SplittingPlannerWithoutRenoiseIsRejected) {
+  const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, Splitting::kMidpoint, Disc(), {32, 64});
+  torch::jit::Module module = BuildScriptPlanner(planner, Metadata(4));
+  const Request r = MakeRequest(planner, 3);
+  EXPECT_THAT([&] { module.run_method("plan", r.start, r.goal, r.noise); },
+              ThrowsMessage<std::exception>(HasSubstr("plan: renoise")));
+}
+
+TEST(ExportTest, BadShapesAndObstaclesAreRejectedByTheScript) {
+  const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, Splitting::kNone, Disc(), {32, 64});
+  torch::jit::Module module = BuildScriptPlanner(planner, Metadata(4));
+  const torch::jit::IValue none;
   EXPECT_THAT([&] { module.run_method("plan", torch::zeros({2, 3}), torch::zeros({2, 3}), torch::zeros({2, 64, 4})); },
-              ::testing::ThrowsMessage<std::exception>(::testing::HasSubstr("plan: start: expected (B, 4)")));
+              ThrowsMessage<std::exception>(HasSubstr("plan: start: expected (B, 4)")));
+  const torch::Tensor s = torch::full({2, 4}, 0.5f), noise = torch::zeros({2, 64, 4});
+  EXPECT_THAT([&] { module.run_method("plan", s, s, noise, none, torch::zeros({1, 4})); },
+              ThrowsMessage<std::exception>(HasSubstr("plan: obstacles: expected (K, 3)")));
+  EXPECT_THAT([&] { module.run_method("plan", s, s, noise, none, torch::tensor({{0.5f, 0.5f, -0.1f}})); },
+              ThrowsMessage<std::exception>(HasSubstr("non-negative radii")));
+  EXPECT_THAT([&] { module.run_method("plan", s, s, noise, none, torch::tensor({{NAN, 0.5f, 0.1f}})); },
+              ThrowsMessage<std::exception>(HasSubstr("finite")));
 }
 
 TEST(ExportTest, VelocityIsTheNetworkAndChecksItsArguments) {
   for (const Conditioning conditioning : {Conditioning::kInpaint, Conditioning::kDirect}) {
-    const FlowPlanner planner = MakePlanner(conditioning);
-    torch::jit::Module module = BuildScriptPlanner(planner, Metadata());
+    const FlowPlanner planner = MakePlanner(conditioning, Splitting::kNone, Disc());
+    torch::jit::Module module = BuildScriptPlanner(planner, Metadata(4));
     torch::manual_seed(3);
     const torch::Tensor x = torch::randn({2, 64, 4}), t = torch::rand({2});
     const torch::Tensor cond = conditioning == Conditioning::kDirect ? torch::rand({2, 8}) : torch::Tensor();
@@ -126,9 +257,7 @@ TEST(ExportTest, VelocityIsTheNetworkAndChecksItsArguments) {
     const torch::Tensor expected = planner.net()->Forward(x, t, cond);
     const torch::jit::IValue script_cond = cond.defined() ? torch::jit::IValue(cond) : torch::jit::IValue();
     const torch::Tensor got = module.run_method("velocity", x, t, script_cond).toTensor();
-    EXPECT_LT((got - expected).abs().max().item<float>(), 1e-5);
-    using ::testing::HasSubstr;
-    using ::testing::ThrowsMessage;
+    EXPECT_LT(MaxDifference(got, expected), 1e-5);
     EXPECT_THAT([&] { module.run_method("velocity", torch::zeros({2, 63, 4}), t, script_cond); },
                 ThrowsMessage<std::exception>(HasSubstr("velocity: x: expected (B, 64, 4)")));
     EXPECT_THAT([&] { module.run_method("velocity", x, torch::zeros({3}), script_cond); },
@@ -139,10 +268,11 @@ TEST(ExportTest, VelocityIsTheNetworkAndChecksItsArguments) {
 }
 
 TEST(ExportTest, SampleStartsAndEndsAtTheRequest) {
-  const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, Splitting::kMidpoint);
-  torch::jit::Module module = BuildScriptPlanner(planner, Metadata());
-  const torch::Tensor start = torch::tensor({0.0f, 0.0f, 0.0f, 0.0f}), goal = torch::tensor({1.0f, 0.0f, 0.1f, 0.0f});
-  const torch::Tensor plans = module.run_method("sample", start, goal, 5).toTensor();
+  const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, Splitting::kMidpoint, Disc(), {32, 64});
+  torch::jit::Module module = BuildScriptPlanner(planner, Metadata(4));
+  const torch::Tensor start = torch::tensor({0.1f, 0.1f, 0.0f, 0.0f}), goal = torch::tensor({0.9f, 0.2f, 0.1f, 0.0f});
+  const torch::Tensor obstacles = torch::tensor({{0.5f, 0.15f, 0.05f}});
+  const torch::Tensor plans = module.run_method("sample", start, goal, 5, obstacles).toTensor();
   ASSERT_EQ(plans.sizes(), (std::vector<int64_t>{5, 64, 4}));
   EXPECT_TRUE(torch::equal(plans.select(1, 0), start.expand({5, 4})));
   EXPECT_TRUE(torch::equal(plans.select(1, 63), goal.expand({5, 4})));

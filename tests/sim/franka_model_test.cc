@@ -134,7 +134,7 @@ TEST_F(FrankaModelTest, FileAndBuiltInModelAreTheSame) {
 }
 
 TEST_F(FrankaModelTest, DescriptionHasEveryLinkAndSpheresCoverTheCapsules) {
-  const KinematicDescription& description = model_.description();
+  const kinematics::RobotDescription& description = model_.description();
   ASSERT_EQ(description.num_joints, 7);
   ASSERT_EQ(description.links.size(), 11u);  // link0..link7, hand, two fingers
   EXPECT_EQ(description.links[description.tcp_link].name, "hand");

@@ -54,7 +54,7 @@ class FixedVelocity : public models::VelocityNet {
     return v_;
   }
   void CheckHorizon(int64_t) const override {}
-  std::string WriteScript(models::ScriptWriter&) const override { return ""; }
+  std::string WriteScript(jit::ScriptWriter&) const override { return ""; }
   int64_t state_dim() const override { return v_.size(2); }
   int64_t cond_dim() const override { return 0; }
   torch::Tensor seen_;

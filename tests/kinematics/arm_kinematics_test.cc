@@ -1,4 +1,4 @@
-#include "kinematics/forward_kinematics.h"
+#include "kinematics/arm_kinematics.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -25,7 +25,7 @@ class ForwardKinematicsTest : public ::testing::Test {
   }
 
   sim::FrankaModel model_ = sim::LoadFrankaModel();
-  ForwardKinematics fk_{model_.description()};
+  ArmKinematics fk_{model_.description()};
 };
 
 TEST_F(ForwardKinematicsTest, MatchesMujocoInFloat64) {
@@ -79,7 +79,7 @@ TEST_F(ForwardKinematicsTest, MatchesMujocoInFloat64) {
 TEST_F(ForwardKinematicsTest, KnownPosesThroughTorch) {
   const torch::Tensor ready =
       torch::tensor({0.0, -M_PI / 4, 0.0, -3 * M_PI / 4, 0.0, M_PI / 2, M_PI / 4}, torch::kFloat64).view({1, 7});
-  const torch::Tensor tcp = fk_.TcpPosition(ready);
+  const torch::Tensor tcp = fk_.Tcp(ready);
   EXPECT_NEAR(tcp[0][0].item<double>(), 0.306890566, 1e-9);
   EXPECT_NEAR(tcp[0][1].item<double>(), 0.0, 1e-9);
   EXPECT_NEAR(tcp[0][2].item<double>(), 0.590282052 - 0.107, 1e-9);
@@ -129,9 +129,9 @@ TEST_F(ForwardKinematicsTest, AutogradMatchesCentralDifferences) {
 
 TEST_F(ForwardKinematicsTest, ShapesAndTypesAreCheckedAtEntry) {
   EXPECT_THAT([&] { fk_.Forward(torch::zeros({3, 6}, torch::kFloat64)); },
-              ::testing::ThrowsMessage<Error>(HasSubstr("kinematics: q: expected (B, 7), got (3, 6)")));
-  EXPECT_THAT([&] { fk_.TcpPosition(torch::zeros({7}, torch::kFloat64)); },
-              ::testing::ThrowsMessage<Error>(HasSubstr("expected (B, 7), got (7,)")));
+              ::testing::ThrowsMessage<Error>(HasSubstr("kinematics: q: expected (N, 7), got (3, 6)")));
+  EXPECT_THAT([&] { fk_.Tcp(torch::zeros({7}, torch::kFloat64)); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("expected (N, 7), got (7,)")));
   EXPECT_THAT([&] { fk_.Forward(torch::zeros({2, 7}, torch::kInt64)); },
               ::testing::ThrowsMessage<Error>(HasSubstr("expected float32 or float64")));
 }

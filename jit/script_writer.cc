@@ -1,0 +1,77 @@
+#include "jit/script_writer.h"
+
+#include <cstdio>
+#include <cstdlib>
+
+#include "core/error.h"
+
+namespace flowplan::jit {
+
+std::string ScriptModule::Buffer(const std::string& name, const torch::Tensor& value) {
+  for (const auto& [existing, tensor] : buffers_) FLOWPLAN_DEMAND(existing != name);
+  buffers_.emplace_back(name, value.detach().clone());
+  return "self." + name;
+}
+
+void ScriptModule::Attribute(const std::string& name, const c10::TypePtr& type, const c10::IValue& value) {
+  for (const auto& attribute : attributes_) FLOWPLAN_DEMAND(std::get<0>(attribute) != name);
+  attributes_.emplace_back(name, type, value);
+}
+
+void ScriptModule::Define(const std::string& source) {
+  source_ += source;
+  if (!source_.empty() && source_.back() != '\n') source_ += '\n';
+  source_ += '\n';
+}
+
+torch::jit::Module ScriptModule::Build(const std::string& class_name) const {
+  torch::jit::Module module(class_name);
+  for (const auto& [name, tensor] : buffers_) module.register_buffer(name, tensor);
+  for (const auto& [name, type, value] : attributes_) module.register_attribute(name, type, value);
+  try {
+    module.define(source_);
+  } catch (const c10::Error& e) {
+    throw InternalError(class_name + ": generated TorchScript does not compile: " + e.what_without_backtrace());
+  }
+  return module;
+}
+
+std::string ScriptWriter::Tensor(const std::string& name, const torch::Tensor& value) {
+  std::string attribute = prefix_;
+  for (char c : name) attribute += (c == '.') ? '_' : c;
+  return module_.Buffer(attribute, value);
+}
+
+std::string ScriptWriter::Let(const std::string& expr) {
+  const std::string var = "v" + std::to_string(next_var_++);
+  Line(var + " = " + expr);
+  return var;
+}
+
+void ScriptWriter::Line(const std::string& code) { lines_.emplace_back(depth_, code); }
+
+std::string ScriptWriter::Body(int base_indent) const {
+  std::string out;
+  for (const auto& [depth, code] : lines_) {
+    out += std::string(static_cast<size_t>(4 * (base_indent + depth)), ' ') + code + "\n";
+  }
+  return out;
+}
+
+std::string ScriptFloat(double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.17g", value);
+  std::string text = buffer;
+  if (text == "inf") return "float(\"inf\")";
+  if (text == "-inf") return "-float(\"inf\")";
+  if (text.find_first_of(".eEn") == std::string::npos) text += ".0";
+  return text;
+}
+
+std::string ScriptIntList(const std::vector<int64_t>& values) {
+  std::string out = "[";
+  for (size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + std::to_string(values[i]);
+  return out + "]";
+}
+
+}  // namespace flowplan::jit
