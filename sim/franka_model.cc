@@ -181,6 +181,21 @@ void FrankaModel::SetPhysics(double timestep, Integrator integrator) {
   model_->opt.disableflags |= mjDSBL_CONTACT;
 }
 
+void FrankaModel::EnableObstacleContacts() {
+  mjModel& m = *model_;
+  for (int g = 0; g < m.ngeom; ++g) {
+    const bool on_arm = m.geom_bodyid[g] > 0;
+    if (on_arm && m.geom_group[g] == kCollisionGeomGroup) {
+      m.geom_contype[g] = 1;  // touches what has conaffinity 1: the obstacles
+      m.geom_conaffinity[g] = 0;
+    } else if (!on_arm) {
+      m.geom_contype[g] = 0;
+      m.geom_conaffinity[g] = 1;
+    }
+  }
+  m.opt.disableflags &= ~mjDSBL_CONTACT;
+}
+
 const std::string& FrankaModelXml() {
   static const std::string xml = internal::kFrankaPandaXml;
   return xml;

@@ -95,6 +95,11 @@ class FrankaModel {
   /// @throws flowplan::Error if timestep is not positive.
   void SetPhysics(double timestep, Integrator integrator);
 
+  /// Lets the arm's collision geoms (group kCollisionGeomGroup) collide with
+  /// static world geoms (obstacles), and nothing else, and turns collision
+  /// detection on. Call after SetPhysics and before sharing the model.
+  void EnableObstacleContacts();
+
  private:
   MjModelPtr model_;
   std::string source_;
