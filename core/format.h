@@ -11,8 +11,14 @@ namespace flowplan {
 /// "(2, 64, 4)" for a shape.
 std::string ShapeText(const std::vector<int64_t>& shape);
 
+/// `parts` joined by `separator`: Join({"a", "b"}, ",") == "a,b".
+std::string Join(const std::vector<std::string>& parts, const std::string& separator = ", ");
+
 /// The first line of a (possibly multi-line) message, e.g. LibTorch's errors.
 std::string FirstLine(const std::string& text);
+
+/// The last non-empty line of a message, e.g. the assertion of a TorchScript error.
+std::string LastLine(const std::string& text);
 
 /// A JSON number with up to 7 significant digits; "null" for NaN and infinities.
 std::string JsonNumber(double value);

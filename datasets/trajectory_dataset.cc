@@ -13,15 +13,6 @@
 namespace flowplan::datasets {
 namespace {
 
-std::string Join(const std::vector<std::string>& parts, char separator) {
-  std::string out;
-  for (size_t i = 0; i < parts.size(); ++i) {
-    if (i) out += separator;
-    out += parts[i];
-  }
-  return out;
-}
-
 std::vector<std::string> Split(const std::string& text, char separator) {
   std::vector<std::string> parts;
   if (text.empty()) return parts;
@@ -49,7 +40,7 @@ void WritePairs(h5::File& file, const std::string& group, const EvalPairs& pairs
   const std::vector<int64_t> shape = {pairs.count(), state_dim};
   file.WriteFloat32(group + "/start", shape, pairs.start.data());
   file.WriteFloat32(group + "/goal", shape, pairs.goal.data());
-  file.SetAttribute(group, "names", Join(pairs.names, ';'));
+  file.SetAttribute(group, "names", Join(pairs.names, ";"));
 }
 
 EvalPairs ReadPairs(const h5::File& file, const std::string& group, int64_t state_dim) {
@@ -106,7 +97,7 @@ void WriteDataset(const std::string& path, const TrajectoryDataset& dataset) {
     file.SetAttribute("/", "format_version", static_cast<int64_t>(kDatasetFormatVersion));
     file.SetAttribute("/", "env", dataset.env);
     file.SetAttribute("/", "dt", dataset.dt);
-    file.SetAttribute("/", "state_labels", Join(dataset.state_labels, ','));
+    file.SetAttribute("/", "state_labels", Join(dataset.state_labels, ","));
     file.SetAttribute("/", "robot", kinematics::RobotToYaml(dataset.robot));
     file.SetAttribute("/", "config", dataset.config_yaml);
     file.SetAttribute("/", "seed", static_cast<int64_t>(dataset.seed));
@@ -236,7 +227,7 @@ std::string DatasetFingerprint(const TrajectoryDataset& dataset) {
   Fnv1a fnv;
   fnv.Text(dataset.env);
   fnv.Bytes(&dataset.dt, sizeof(dataset.dt));
-  fnv.Text(Join(dataset.state_labels, ','));
+  fnv.Text(Join(dataset.state_labels, ","));
   fnv.Text(kinematics::RobotToYaml(dataset.robot));
   const int64_t shape[3] = {dataset.num_episodes, dataset.horizon, dataset.state_dim};
   fnv.Bytes(shape, sizeof(shape));
@@ -244,7 +235,7 @@ std::string DatasetFingerprint(const TrajectoryDataset& dataset) {
   for (const EvalPairs* pairs : {&dataset.train_pairs, &dataset.test_pairs}) {
     fnv.Array(pairs->start);
     fnv.Array(pairs->goal);
-    fnv.Text(Join(pairs->names, ';'));
+    fnv.Text(Join(pairs->names, ";"));
   }
   char text[17];
   std::snprintf(text, sizeof(text), "%016llx", static_cast<unsigned long long>(fnv.hash()));

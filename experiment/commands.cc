@@ -161,7 +161,8 @@ void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& cha
                                                        "sampler.",  // a trailing dot: every key below
                                                        "eval.",
                                                        "guidance.",
-                                                       "scene."};
+                                                       "scene.",
+                                                       "execute."};
   const auto before = config::ListKeys(trained), after = config::ListKeys(changed);
   for (size_t i = 0; i < before.size(); ++i) {
     const std::string& key = before[i].key;
@@ -172,7 +173,7 @@ void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& cha
     if (!may_change) {
       throw Error(key + ": the run was trained with " + before[i].default_value + " (" + where + "), got " +
                   after[i].default_value + "; a resumed run can change only its length, intervals, threads, "
-                  "sampler.*, eval.*, guidance.* and scene.* (start a new run_dir for the rest)");
+                  "sampler.*, eval.*, guidance.*, scene.* and execute.* (start a new run_dir for the rest)");
     }
     if (key == "train.steps") {
       spdlog::warn("train.steps: {} -> {}: the cosine learning-rate schedule now spans {} steps, so the rate "

@@ -48,7 +48,7 @@ void RunResume(const std::string& run_dir, const std::vector<std::string>& overr
 /// Throws, naming the key, if `changed` differs from `trained` in anything but
 /// what a resumed run may change: threads, train.steps, the log / eval /
 /// checkpoint intervals, keep_checkpoints, val_batch_size, sampler.*, eval.*,
-/// guidance.* and scene.*.
+/// guidance.*, scene.* and execute.*.
 /// Anything else (data, seed, optimizer, batch, network, flow) would make the
 /// resumed run a different one. `where` names the stored config in the message.
 void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& changed, const std::string& where);

@@ -12,6 +12,7 @@
 #include "guidance/scene.h"
 #include "models/model_config.h"
 #include "planning/flow_planner.h"
+#include "sim/franka_execution.h"
 #include "trainer/trainer_config.h"
 
 namespace flowplan::experiment {
@@ -30,6 +31,7 @@ struct ExperimentConfig {
   eval::EvalConfig eval;
   guidance::GuidanceConfig guidance;
   guidance::Scene scene;
+  sim::ExecutionConfig execute;
 
   template <class V>
   void Visit(V& v) {
@@ -46,6 +48,7 @@ struct ExperimentConfig {
     v.Field("eval", eval, "evaluation");
     v.Field("guidance", guidance, "guidance around obstacles (planning)");
     v.Field("scene", scene, "obstacles of `flowplan plan` when no --scene is given");
+    v.Field("execute", execute, "tracking of plans in MuJoCo (`flowplan plan --execute`)");
   }
 };
 

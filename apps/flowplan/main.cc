@@ -19,6 +19,7 @@
 #include "core/logging.h"
 #include "experiment/commands.h"
 #include "experiment/experiment_config.h"
+#include "experiment/plan.h"
 #include "sim/mujoco_util.h"
 
 namespace {
@@ -123,6 +124,33 @@ int Main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   export_command->add_option("overrides", export_request.overrides, kOverrideHelp);
 
+  // plan
+  auto* plan = app.add_subcommand("plan", "plan around obstacles with a trained or exported planner; write plans, "
+                                          "a report and a figure (guidance.*, scene.*, execute.*)");
+  flowplan::experiment::PlanCommand plan_command;
+  plan->add_option("--ckpt", plan_command.ckpt, "checkpoint file, or a run folder (its newest checkpoint)");
+  plan->add_option("--planner", plan_command.planner_file, "an exported planner file (instead of --ckpt)")
+      ->check(CLI::ExistingFile);
+  plan->add_option("--config", plan_command.overlay_path, "YAML applied over the planner's config")
+      ->check(CLI::ExistingFile);
+  plan->add_option("--start", plan_command.start,
+                   "start: J comma-separated positions (at rest) or a full state of D values");
+  plan->add_option("--goal", plan_command.goal, "goal, as --start");
+  plan->add_option("--start-tcp", plan_command.start_tcp, "start TCP point x,y,z (IK with the gripper pointing down)");
+  plan->add_option("--goal-tcp", plan_command.goal_tcp, "goal TCP point x,y,z (IK with the gripper pointing down)");
+  plan->add_option("--scene", plan_command.scene, "scene file (default: the config's scene section)")
+      ->check(CLI::ExistingFile);
+  plan->add_option("--sphere", plan_command.spheres, "add a sphere x,y,z,r (x,y,r for the particle); repeatable");
+  plan->add_option("--radius", plan_command.radii, "set every sphere's radius (R) or sphere K's (K=R); repeatable");
+  plan->add_option("-n,--num-samples", plan_command.num_samples, "number of plans")->check(CLI::PositiveNumber);
+  plan->add_option("--seed", plan_command.seed, "seed of the plans' noise")->check(CLI::NonNegativeNumber);
+  plan->add_option("--out", plan_command.out, "output prefix: PREFIX.h5, PREFIX.json, PREFIX.png (default RUN_DIR/plan)");
+  plan->add_flag("--execute", plan_command.execute, "also track every plan in MuJoCo and report contacts");
+  plan->add_flag("!--no-plot", plan_command.plot, "do not draw PREFIX.png");
+  plan->add_option("--goal-tolerance", plan_command.goal_tolerance,
+                   "a plan succeeds if its last TCP is this close to the goal TCP (and it collides nowhere)");
+  plan->add_option("overrides", plan_command.overrides, kOverrideHelp);
+
   // config
   auto* config_command = app.add_subcommand("config", "show the resolved config or list every key");
   config_command->require_subcommand(1);
@@ -180,6 +208,11 @@ int Main(int argc, char** argv) {
     flowplan::experiment::RunEvalStitching(eval_request);
   } else if (export_command->parsed()) {
     flowplan::experiment::RunExport(export_request);
+  } else if (plan->parsed()) {
+    if (!plan_command.ckpt.empty() && !plan_command.planner_file.empty()) {
+      throw flowplan::Error("plan: give either --ckpt or --planner, not both");
+    }
+    flowplan::experiment::RunPlan(plan_command);
   } else if (show->parsed()) {
     std::cout << flowplan::experiment::ToYaml(flowplan::experiment::LoadExperiment(config_path, overrides));
   } else if (fk->parsed()) {
