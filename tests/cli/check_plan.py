@@ -1,0 +1,60 @@
+"""Checks the files of `flowplan plan` with h5py and a forward kinematics of its own.
+
+usage: check_plan.py PLAN.h5 PLAN.json
+Recomputes every plan's TCP path (Franka: modified Denavit-Hartenberg parameters
+written here, sharing no code with flowplan; particle: the position), the TCP
+clearance to every obstacle, the goal distance and the TCP success flags, and
+compares them with what flowplan wrote.
+"""
+import json
+import sys
+
+import h5py
+import numpy as np
+
+# Franka Panda, modified DH (Craig): (a_{i-1}, d_i, alpha_{i-1}); then the flange
+# (d = 0.107) and the TCP 0.107 m further along the flange's z axis.
+DH = [(0, 0.333, 0), (0, 0, -np.pi / 2), (0, 0.316, np.pi / 2), (0.0825, 0, np.pi / 2),
+      (-0.0825, 0.384, -np.pi / 2), (0, 0, np.pi / 2), (0.088, 0, np.pi / 2)]
+
+
+def franka_tcp(q):
+    """q (..., 7) -> TCP (..., 3)."""
+    shape = q.shape[:-1]
+    q = q.reshape(-1, 7)
+    out = np.zeros((len(q), 3))
+    for n, angles in enumerate(q):
+        frame = np.eye(4)
+        for (a, d, alpha), theta in zip(DH, angles):
+            ca, sa, ct, st = np.cos(alpha), np.sin(alpha), np.cos(theta), np.sin(theta)
+            frame = frame @ np.array([[ct, -st, 0, a], [st * ca, ct * ca, -sa, -d * sa],
+                                      [st * sa, ct * sa, ca, d * ca], [0, 0, 0, 1]])
+        out[n] = (frame @ np.array([0, 0, 0.214, 1]))[:3]
+    return out.reshape(*shape, 3)
+
+
+with h5py.File(sys.argv[1], "r") as f, open(sys.argv[2]) as report_file:
+    report = json.load(report_file)
+    plans, tcp, obstacles = f["plans"][...].astype(np.float64), f["tcp"][...], f["obstacles"][...]
+    goal_tcp, env = f["goal_tcp"][...], f.attrs["env"]
+    mine = franka_tcp(plans[..., :7]) if env == "franka" else plans[..., :2]
+    assert np.abs(mine - tcp).max() < 1e-4, np.abs(mine - tcp).max()
+    samples = report["samples"]
+    assert len(samples) == len(plans) == report["num_samples"]
+    tolerance = report["goal_tolerance"]
+    for i, sample in enumerate(samples):
+        goal = np.linalg.norm(mine[i, -1] - goal_tcp)
+        assert abs(goal - sample["goal_distance"]) < 1e-4, (goal, sample["goal_distance"])
+        clearance = [np.min(np.linalg.norm(mine[i] - o[:-1], axis=-1)) - o[-1] for o in obstacles]
+        assert np.allclose(clearance, sample["tcp_clearance"], atol=1e-4), (clearance, sample["tcp_clearance"])
+        collides = bool(len(clearance)) and min(clearance) < 0
+        assert sample["tcp_collision"] == collides
+        assert sample["success_tcp"] == (not collides and goal <= tolerance)
+        # The whole robot reaches at least as far as its TCP.
+        assert all(a <= t + 1e-6 for a, t in zip(sample["arm_clearance"], sample["tcp_clearance"]))
+        if "executed" in sample:
+            executed = f["executed/tcp"][i]
+            assert abs(np.linalg.norm(executed[-1] - goal_tcp) - sample["executed"]["goal_distance"]) < 1e-3
+    rate = np.mean([s["success_tcp"] for s in samples])
+    assert abs(rate - report["success_rate_tcp"]) < 1e-6
+print("plan files ok")

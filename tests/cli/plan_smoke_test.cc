@@ -1,0 +1,170 @@
+// `flowplan plan` on tiny models: the files it writes, checked by an
+// independent script, its determinism, execution in MuJoCo, and bad input.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "tests/support/scratch_dir.h"
+
+namespace flowplan {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+struct Outcome {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+Outcome RunCommand(const std::string& command_line) {
+  FILE* pipe = popen((command_line + " 2>&1").c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+Outcome Flowplan(const std::string& arguments) { return RunCommand(std::string(FLOWPLAN_BINARY) + " " + arguments); }
+
+void ExpectOk(const Outcome& outcome) { ASSERT_EQ(outcome.exit_code, 0) << outcome.output; }
+
+void ExpectCleanFailure(const Outcome& outcome, const std::string& names) {
+  EXPECT_EQ(outcome.exit_code, 1) << outcome.output;
+  std::vector<std::string> errors;
+  std::istringstream lines(outcome.output);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("] [info] ") == std::string::npos) errors.push_back(line);
+  }
+  ASSERT_EQ(errors.size(), 1u) << outcome.output;
+  EXPECT_THAT(errors[0], HasSubstr("] [error] "));
+  EXPECT_THAT(errors[0], HasSubstr(names));
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string Source(const std::string& path) { return std::string(FLOWPLAN_SOURCE_DIR) + "/" + path; }
+
+std::string CheckPlan(const std::string& prefix) {
+  return std::string(FLOWPLAN_PYTHON) + " " + Source("tests/cli/check_plan.py") + " " + prefix + ".h5 " + prefix +
+         ".json";
+}
+
+/// A particle model of the tiny smoke config, trained once for the suite.
+class ParticlePlanTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    // ScratchDir() names a test, and no test runs yet: one folder for the suite.
+    dir_ = new fs::path(fs::path(::testing::TempDir()) / ("flowplan_" + std::to_string(::getpid()) + "_ParticlePlanTest"));
+    fs::create_directories(*dir_);
+    const std::string paths = " generate.out=" + Path("data.h5") + " data.path=" + Path("data.h5") +
+                              " run_dir=" + Path("run") + " --log-level warn";
+    ASSERT_EQ(Flowplan("generate --config " + Source("tests/cli/tiny.yaml") + paths).exit_code, 0);
+    ASSERT_EQ(Flowplan("train --config " + Source("tests/cli/tiny.yaml") + paths).exit_code, 0);
+    ASSERT_EQ(Flowplan("export --ckpt " + Path("run") + " --log-level warn").exit_code, 0);
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static std::string Path(const std::string& name) { return (*dir_ / name).string(); }
+  static fs::path* dir_;
+};
+fs::path* ParticlePlanTest::dir_ = nullptr;
+
+TEST_F(ParticlePlanTest, WritesPlansReportAndFigureThatAnIndependentScriptConfirms) {
+  std::ofstream(Path("scene.yaml")) << "spheres:\n  - {centre: [0.5, 0.3], radius: 0.1}\n";
+  const Outcome outcome = Flowplan("plan --ckpt " + Path("run") + " --start 0,0 --goal 1,0 --scene " +
+                                   Path("scene.yaml") + " --sphere 0.3,0.7,0.05 -n 20 --seed 4 --out " + Path("p"));
+  ExpectOk(outcome);
+  EXPECT_THAT(outcome.output, HasSubstr("20 plans in"));
+  EXPECT_TRUE(fs::exists(Path("p.png")));
+  const std::string report = ReadText(Path("p.json"));
+  EXPECT_THAT(report, HasSubstr("\"obstacles\": [0.5, 0.3, 0.1, 0.3, 0.7, 0.05]"));
+  EXPECT_THAT(report, HasSubstr("\"arm_clearance\": ["));
+  const Outcome check = RunCommand(CheckPlan(Path("p")));
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+}
+
+TEST_F(ParticlePlanTest, SameSeedSameBytesForAnyThreadCountAndFromTheExportedFile) {
+  const std::string common = " --start 0,0 --goal 1,0 --sphere 0.5,0.3,0.1 -n 40 --seed 9 --no-plot";
+  ExpectOk(Flowplan("plan --ckpt " + Path("run") + common + " threads=1 --out " + Path("one")));
+  ExpectOk(Flowplan("plan --ckpt " + Path("run") + common + " threads=2 --out " + Path("two")));
+  ExpectOk(Flowplan("plan --planner " + Path("run/planner.pt") + common + " --out " + Path("file")));
+  EXPECT_EQ(ReadText(Path("one.h5")), ReadText(Path("two.h5")));
+  // The exported planner plans the same paths from the same seed (to float32 rounding).
+  const std::string compare = std::string(FLOWPLAN_PYTHON) +
+                              " -c \"import h5py, numpy as np; a = h5py.File('" + Path("one.h5") +
+                              "')['plans'][...]; b = h5py.File('" + Path("file.h5") +
+                              "')['plans'][...]; d = np.abs(a - b).max(); assert d < 1e-5, d\"";
+  EXPECT_EQ(std::system(compare.c_str()), 0);
+}
+
+TEST_F(ParticlePlanTest, BadInputsEndInOneClearLine) {
+  const std::string run = "plan --ckpt " + Path("run") + " ";
+  ExpectCleanFailure(Flowplan(run + "--start 0.5,0.3 --goal 1,0 --sphere 0.5,0.3,0.1"), "start is inside obstacle 0");
+  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 0.5,0.3 --sphere 0.5,0.3,0.1"), "goal is inside obstacle 0");
+  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --sphere 0.5,0.3,0.2,0.1"), "expected 3 numbers");
+  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --sphere 0.5,0.3,-0.1"), "non-negative radius");
+  ExpectCleanFailure(Flowplan(run + "--start 0,0,0 --goal 1,0"), "--start: expected 2 positions or 4 state values");
+  ExpectCleanFailure(Flowplan(run + "--start 0,nan --goal 1,0"), "--start value 2 \"nan\": not a finite number");
+  ExpectCleanFailure(Flowplan(run + "--start 1.5,0 --goal 1,0"), "--start: x = 1.5 is outside [0, 1]");
+  ExpectCleanFailure(Flowplan(run + "--goal 1,0"), "either as --start");
+  std::ofstream(Path("three_d.yaml")) << "spheres:\n  - {centre: [0.5, 0.3, 0.2], radius: 0.1}\n";
+  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --scene " + Path("three_d.yaml")),
+                     "three_d.yaml: spheres[0].centre: expected 2 values (the robot's workspace is 2-D), got 3");
+  std::ofstream(Path("no_radius.yaml")) << "spheres:\n  - {centre: [0.5, 0.3]}\n";
+  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --scene " + Path("no_radius.yaml")),
+                     "no_radius.yaml: spheres[0].radius: missing");
+  std::ofstream(Path("nan_radius.yaml")) << "spheres:\n  - {centre: [0.5, 0.3], radius: .nan}\n";
+  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --scene " + Path("nan_radius.yaml")),
+                     "spheres[0].radius: expected a number");
+  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --execute"), "execution in MuJoCo needs the Franka");
+  ExpectCleanFailure(Flowplan("plan --planner " + Path("run/planner.pt") + " --start 0,0 --goal 1,0 guidance.margin=0.1"),
+                     "guidance.margin: is compiled into");
+  EXPECT_FALSE(fs::exists(Path("run/plan.h5")));  // nothing half-written by the failures
+}
+
+/// A Franka reach model trained for two steps: enough to exercise IK, FK, guidance and execution.
+TEST(FrankaPlanTest, PlansFromTcpPointsExecutesInMujocoAndRejectsUnreachableTargets) {
+  const fs::path dir = flowplan::testing::ScratchDir();
+  auto path = [&](const std::string& name) { return (dir / name).string(); };
+  const std::string config = " --config " + Source("configs/franka_reach.yaml") + " generate.out=" + path("data.h5") +
+                             " data.path=" + path("data.h5") + " run_dir=" + path("run") +
+                             " generate.episodes=24 generate.franka.horizon=16 model.unet.down_dims=[8,16]"
+                             " train.steps=2 train.batch_size=4 train.eval_every=0 sampler.steps=2 --log-level warn";
+  ExpectOk(Flowplan("generate" + config));
+  ExpectOk(Flowplan("train" + config));
+  const std::string plan = "plan --ckpt " + path("run") + " --start-tcp 0.5,-0.3,0.2 --goal-tcp 0.5,0.3,0.2 ";
+  const Outcome outcome =
+      Flowplan(plan + "--scene " + Source("configs/scenes/franka_sphere.yaml") + " --radius 0.05 -n 3 --execute --out " +
+               path("p"));
+  ExpectOk(outcome);
+  EXPECT_THAT(outcome.output, HasSubstr("executed"));
+  const std::string report = ReadText(path("p.json"));
+  EXPECT_THAT(report, HasSubstr("\"obstacles\": [0.5, 0, 0.2, 0.05]"));
+  EXPECT_THAT(report, HasSubstr("\"executed\": {\"goal_distance\": "));
+  EXPECT_THAT(report, HasSubstr("\"success_rate_executed\": "));
+  const Outcome check = RunCommand(CheckPlan(path("p")));
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  ExpectCleanFailure(Flowplan(plan.substr(0, plan.find("--goal-tcp")) + "--goal-tcp 2,0,0.5"),
+                     "franka IK: target (2.0, 0.0, 0.5) is unreachable");
+  ExpectCleanFailure(Flowplan(plan + "--sphere 0.5,-0.3,0.2,0.05"), "start is inside obstacle 0");
+  ExpectCleanFailure(Flowplan(plan + "--sphere 0.5,0.3,0.2"), "expected 4 numbers");
+}
+
+}  // namespace
+}  // namespace flowplan
