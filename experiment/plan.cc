@@ -16,9 +16,9 @@
 #include "datasets/h5.h"
 #include "experiment/commands.h"
 #include "guidance/collision_cost.h"
+#include "kinematics/arm_kinematics.h"
 #include "planning/script_planner.h"
 #include "sim/franka_execution.h"
-#include "sim/franka_ik.h"
 
 #ifndef FLOWPLAN_PYTHON
 #define FLOWPLAN_PYTHON "/usr/bin/python3"
@@ -149,7 +149,12 @@ guidance::Scene ResolveScene(const PlanCommand& command, const Subject& subject,
 /// The built-in Franka, after checking that it is the robot the planner was trained on.
 const sim::FrankaModel& BuiltInFranka(const kinematics::Robot& robot, const std::string& what) {
   static const sim::FrankaModel model = sim::LoadFrankaModel();
-  if (kinematics::RobotToYaml(model.description()) != kinematics::RobotToYaml(robot.description())) {
+  // IK and execution need the same kinematics and geometry; limits may differ.
+  auto geometry = [](kinematics::RobotDescription d) {
+    d.velocity_limit.clear();
+    return kinematics::RobotToYaml(d);
+  };
+  if (geometry(model.description()) != geometry(robot.description())) {
     throw Error(what + " needs the robot to be the built-in Franka, but the planner's robot is \"" +
                 robot.description().name + "\"" +
                 (robot.description().name == "franka_panda" ? " with other kinematics" : ""));
@@ -181,11 +186,19 @@ torch::Tensor ResolveState(const std::string& name, const std::string& values, c
     if (robot.kind == kinematics::RobotKind::kPoint) {
       q = point;
     } else {
-      const sim::FrankaModel& model = BuiltInFranka(*subject.robot, "--" + name + "-tcp");
-      sim::MjDataPtr d = sim::MakeData(model.mj());
-      const sim::JointVector solution = sim::SolveTcpIkOrThrow(
-          model, *d, Eigen::Vector3d(point[0], point[1], point[2]), sim::FrankaReadyPose());
-      q.assign(solution.data(), solution.data() + solution.size());
+      // The robot's own inverse kinematics (the exported planner's `ik`), from its home posture.
+      const auto& arm = dynamic_cast<const kinematics::ArmKinematics&>(*subject.robot);
+      const kinematics::IkSolution solution = arm.InverseTcp(torch::tensor(point, torch::kFloat64).view({1, 3}));
+      if (!solution.converged[0].item<bool>()) {
+        const double miss = solution.position_error[0].item<double>();
+        throw Error("--" + name + "-tcp: target (" + Join({JsonNumber(point[0]), JsonNumber(point[1]), JsonNumber(point[2])}) +
+                    ") is unreachable with the TCP orientation of the home posture (" +
+                    (miss >= kinematics::kIkPositionTolerance
+                         ? "closest " + JsonNumber(miss) + " m away"
+                         : "orientation off by " + JsonNumber(solution.orientation_error[0].item<double>()) + " rad") +
+                    ")");
+      }
+      for (int64_t j = 0; j < J; ++j) q.push_back(solution.q[0][j].item<double>());
     }
   }
   for (int64_t j = 0; j < J; ++j) {
@@ -226,6 +239,7 @@ std::string Numbers(const torch::Tensor& values) {
 void RunPlan(const PlanCommand& command) {
   if (command.num_samples < 1) throw Error("-n: expected at least one plan, got " + std::to_string(command.num_samples));
   if (!(command.goal_tolerance > 0)) throw Error("--goal-tolerance: expected a positive distance");
+  if (!(command.max_speed_ratio > 0)) throw Error("--max-speed-ratio: expected a positive ratio");
   Subject subject = LoadSubject(command);
   const planning::Planner& planner = *subject.owned;
   const int threads = ConfigureThreads(subject.config);
@@ -280,6 +294,14 @@ void RunPlan(const PlanCommand& command) {
     arm_clearance = std::get<0>(guidance::SphereClearance(*subject.robot, plans, o).min(1));        // (N, K)
   }
   const torch::Tensor goal_distance = (tcp.select(1, T - 1) - goal_tcp.view({1, W})).norm(2, -1);  // (N,)
+  // Joint speeds the positions imply between consecutive states, relative to the limits.
+  torch::Tensor speed_ratio = torch::zeros({N}, torch::kFloat64);
+  const auto& limits = subject.robot->description().velocity_limit;
+  if (!limits.empty()) {
+    const torch::Tensor q = plans.slice(2, 0, J);
+    const torch::Tensor speed = (q.slice(1, 1, T) - q.slice(1, 0, T - 1)).abs() / subject.dt;  // (N, T-1, J)
+    speed_ratio = std::get<0>((speed / torch::tensor(limits, torch::kFloat64).view({1, 1, J})).flatten(1).max(1));
+  }
 
   // Execution in MuJoCo.
   std::vector<sim::ExecutionResult> executed;
@@ -347,11 +369,14 @@ void RunPlan(const PlanCommand& command) {
     const double goal_i = goal_distance[i].item<double>();
     const bool tcp_collision = K > 0 && tcp_clearance[i].min().item<double>() < 0;
     const bool arm_collision = K > 0 && arm_clearance[i].min().item<double>() < 0;
-    const bool reached = goal_i <= tolerance;
+    const bool feasible = speed_ratio[i].item<double>() <= command.max_speed_ratio;
+    const bool reached = goal_i <= tolerance && feasible;
     tcp_ok += reached && !tcp_collision;
     arm_ok += reached && !arm_collision;
     std::string s = "{\"index\": " + std::to_string(i) + ", \"tcp_clearance\": " + Numbers(tcp_clearance[i]) +
                     ", \"arm_clearance\": " + Numbers(arm_clearance[i]) + ", \"goal_distance\": " + JsonNumber(goal_i) +
+                    ", \"speed_ratio\": " + JsonNumber(speed_ratio[i].item<double>()) +
+                    ", \"feasible\": " + (feasible ? "true" : "false") +
                     ", \"tcp_collision\": " + (tcp_collision ? "true" : "false") +
                     ", \"arm_collision\": " + (arm_collision ? "true" : "false") +
                     ", \"success_tcp\": " + (reached && !tcp_collision ? "true" : "false") +
@@ -381,6 +406,7 @@ void RunPlan(const PlanCommand& command) {
                      ",\n  \"start\": " + Numbers(start) + ", \"goal\": " + Numbers(goal) + ", \"goal_tcp\": " +
                      Numbers(goal_tcp) + ",\n  \"obstacles\": " + Numbers(obstacles.view({-1})) +
                      ", \"goal_tolerance\": " + JsonNumber(tolerance) +
+                     ", \"max_speed_ratio\": " + JsonNumber(command.max_speed_ratio) +
                      ",\n  \"guidance\": " + JsonString(config::ToYaml(subject.config.guidance)) +
                      ", \"splitting\": " + JsonString(config::EnumName(subject.config.sampler.splitting)) +
                      ",\n  \"success_rate_tcp\": " + rate(tcp_ok) + ", \"success_rate_arm\": " + rate(arm_ok) +

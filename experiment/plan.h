@@ -27,6 +27,7 @@ struct PlanCommand {
   bool execute = false;               // --execute: track the plans in MuJoCo
   bool plot = true;                   // --no-plot clears it
   double goal_tolerance = 0.03;       // --goal-tolerance: success radius around the goal TCP (world units)
+  double max_speed_ratio = 1.5;       // --max-speed-ratio: a feasible plan's joint speeds stay within this × the limits
 };
 
 /// @throws flowplan::Error for a bad planner file, scene, start or goal (unreachable,

@@ -9,7 +9,15 @@
 namespace flowplan::guidance {
 
 double GuidanceFactor(GuidanceSchedule schedule, double t) {
-  return schedule == GuidanceSchedule::kRatio ? (1.0 - t) / std::max(t, kMinRatioTime) : 1.0 - t;
+  switch (schedule) {
+    case GuidanceSchedule::kOneMinusT:
+      return 1.0 - t;
+    case GuidanceSchedule::kRatio:
+      return (1.0 - t) / std::max(t, kMinRatioTime);
+    case GuidanceSchedule::kRising:
+      return t;
+  }
+  return 1.0 - t;
 }
 
 std::shared_ptr<const WeightedSumCost> MakeGuidanceCost(const GuidanceConfig& config,
@@ -23,7 +31,7 @@ std::shared_ptr<const WeightedSumCost> MakeGuidanceCost(const GuidanceConfig& co
   return std::make_shared<WeightedSumCost>(std::move(terms));
 }
 
-Guide::Guide(std::shared_ptr<const Cost> cost, models::MinMaxNormalizer normalizer, GuidanceConfig config)
+Guide::Guide(std::shared_ptr<const WeightedSumCost> cost, models::MinMaxNormalizer normalizer, GuidanceConfig config)
     : cost_(std::move(cost)), normalizer_(std::move(normalizer)), config_(config) {
   FLOWPLAN_DEMAND(cost_ != nullptr && normalizer_.fitted());
 }
@@ -31,14 +39,17 @@ Guide::Guide(std::shared_ptr<const Cost> cost, models::MinMaxNormalizer normaliz
 torch::Tensor Guide::Gradient(const torch::Tensor& x_n, const torch::Tensor& obstacles) const {
   // Costs see raw states; x = (x_n + 1)/2 (hi − lo) + lo, so ∂/∂x_n = ∂/∂x · (hi − lo)/2.
   const torch::Tensor x = normalizer_.DenormalizeUnclamped(x_n);
-  torch::Tensor gradient = cost_->ValueAndGradient(x, obstacles).gradient * (0.5 * (normalizer_.hi() - normalizer_.lo()));
-  if (config_.clip > 0.0) {
-    const torch::Tensor norm = gradient.norm(2, -1, /*keepdim=*/true);
-    // Written as the script writes it (tensor / float, then tensor / tensor), so
-    // that both round alike.
-    gradient = gradient / (norm.clamp_min(config_.clip) / config_.clip);
+  torch::Tensor gradient = torch::zeros_like(x);
+  for (const WeightedSumCost::Term& term : cost_->terms()) {
+    if (term.weight == 0.0) continue;
+    torch::Tensor part = term.cost->ValueAndGradient(x, obstacles).gradient;
+    if (config_.clip > 0.0) {
+      // Written as the script writes it (tensor / float, then tensor / tensor), so that both round alike.
+      part = part / (part.norm(2, -1, /*keepdim=*/true).clamp_min(config_.clip) / config_.clip);
+    }
+    gradient = gradient + term.weight * part;
   }
-  return gradient;
+  return gradient * (0.5 * (normalizer_.hi() - normalizer_.lo()));
 }
 
 torch::Tensor Guide::Step(const torch::Tensor& x_n, double t, const torch::Tensor& obstacles, double scale) const {
@@ -47,19 +58,33 @@ torch::Tensor Guide::Step(const torch::Tensor& x_n, double t, const torch::Tenso
 }
 
 void Guide::WriteScript(jit::ScriptModule& module) const {
-  cost_->WriteScript(module, "guidance_cost");
+  cost_->WriteScript(module, "guidance_cost");  // also writes guidance_cost_<term> for every weighted term
   std::string s = R"PY(
 def guide(self, x: Tensor, t: float, obstacles: Tensor, scale: float) -> Tensor:
-    value, gradient = self.guidance_cost(self.denormalize_unclamped(x), obstacles)
-    gradient = gradient * (0.5 * (self.hi - self.lo))
+    raw = self.denormalize_unclamped(x)
+    gradient = torch.zeros_like(x)
 )PY";
-  if (config_.clip > 0.0) {
-    const std::string clip = jit::ScriptFloat(config_.clip);
-    s += "    gradient = gradient / (torch.norm(gradient, 2, -1, True).clamp_min(" + clip + ") / " + clip + ")\n";
+  for (const WeightedSumCost::Term& term : cost_->terms()) {
+    if (term.weight == 0.0) continue;
+    s += "    value, part = self.guidance_cost_" + term.name + "(raw, obstacles)\n";
+    if (config_.clip > 0.0) {
+      const std::string clip = jit::ScriptFloat(config_.clip);
+      s += "    part = part / (torch.norm(part, 2, -1, True).clamp_min(" + clip + ") / " + clip + ")\n";
+    }
+    s += "    gradient = gradient + " + jit::ScriptFloat(term.weight) + " * part\n";
   }
-  s += config_.schedule == GuidanceSchedule::kRatio
-           ? "    b = (1.0 - t) / max(t, " + jit::ScriptFloat(kMinRatioTime) + ")\n"
-           : "    b = 1.0 - t\n";
+  s += "    gradient = gradient * (0.5 * (self.hi - self.lo))\n";
+  switch (config_.schedule) {
+    case GuidanceSchedule::kOneMinusT:
+      s += "    b = 1.0 - t\n";
+      break;
+    case GuidanceSchedule::kRatio:
+      s += "    b = (1.0 - t) / max(t, " + jit::ScriptFloat(kMinRatioTime) + ")\n";
+      break;
+    case GuidanceSchedule::kRising:
+      s += "    b = t\n";
+      break;
+  }
   s += "    return x - (scale * b) * gradient\n";
   module.Define(s);
 }

@@ -3,10 +3,11 @@
 // Guidance of a sampler towards low cost (SPEC section 2): after each sampler
 // step, the normalized trajectories move against the gradient of the cost of
 // their de-normalized states,
-//   x ← x − s · b_t · clip(∇ₓ C(denormalize(x))),
-// b_t = 1 − t (the paper's choice) or (1 − t)/t, and clip() caps the norm of
-// each state's gradient (as MPD does). The cost is the weighted sum of the
-// collision and smoothness costs of the config.
+//   x ← x − s · b_t · Σ_k w_k · clip(∇ C_k(denormalize(x))) · (hi − lo)/2,
+// over the weighted terms of the cost (collision, smoothness), with
+// b_t = 1 − t (the paper's choice) or (1 − t)/t, and clip() capping the norm of
+// each state's gradient of each term in raw units, as MPD does (without it the
+// GP prior's gradient on early, noisy samples dwarfs the collision term).
 
 #include <torch/torch.h>
 
@@ -25,11 +26,13 @@ namespace flowplan::guidance {
 enum class GuidanceSchedule {
   kOneMinusT,  // 1 − t
   kRatio,      // (1 − t)/t, with t at least kMinRatioTime
+  kRising,     // t: strongest after the last step, where the network's own pull back to the data is strongest
 };
 
 inline const config::EnumNames<GuidanceSchedule>& EnumEntries(GuidanceSchedule) {
   static const config::EnumNames<GuidanceSchedule> names = {{GuidanceSchedule::kOneMinusT, "one_minus_t"},
-                                                            {GuidanceSchedule::kRatio, "ratio"}};
+                                                            {GuidanceSchedule::kRatio, "ratio"},
+                                                            {GuidanceSchedule::kRising, "rising"}};
   return names;
 }
 
@@ -41,7 +44,7 @@ inline constexpr double kMinRatioTime = 1e-3;
 struct GuidanceConfig {
   double scale = 1.0;  // s; 0: unguided
   GuidanceSchedule schedule = GuidanceSchedule::kOneMinusT;
-  double clip = 0.0;                // cap on each state's gradient norm (normalized units), 0: none
+  double clip = 0.0;                // cap on each term's gradient norm per state (raw units), 0: none
   double collision_weight = 0.1;    // weight of the collision cost (SPEC / the paper)
   double smoothness_weight = 1e-6;  // weight of the GP smoothness prior
   double margin = 0.05;             // world units added to the radii in the collision hinge (MPD: 0.05 m)
@@ -51,7 +54,8 @@ struct GuidanceConfig {
   void Visit(V& v) {
     v.Field("scale", scale, "guidance scale s (0: unguided)", config::NonNegative());
     v.Field("schedule", schedule, "b_t, the factor on the cost gradient at flow time t");
-    v.Field("clip", clip, "cap on the norm of each state's cost gradient, 0 for none", config::NonNegative());
+    v.Field("clip", clip, "cap on the norm of each cost term's gradient at each state (raw units), 0 for none",
+            config::NonNegative());
     v.Field("collision_weight", collision_weight, "weight of the collision cost", config::NonNegative());
     v.Field("smoothness_weight", smoothness_weight, "weight of the GP smoothness prior", config::NonNegative());
     v.Field("margin", margin, "clearance added to the radii in the collision hinge (world units)",
@@ -71,10 +75,10 @@ std::shared_ptr<const WeightedSumCost> MakeGuidanceCost(const GuidanceConfig& co
 /// Applies guidance to normalized trajectories. Immutable; safe to share between threads.
 class Guide {
  public:
-  Guide(std::shared_ptr<const Cost> cost, models::MinMaxNormalizer normalizer, GuidanceConfig config);
+  Guide(std::shared_ptr<const WeightedSumCost> cost, models::MinMaxNormalizer normalizer, GuidanceConfig config);
 
-  /// The cost's gradient with respect to normalized x (B, T, D), each state's
-  /// norm capped at config.clip (when positive). `obstacles` (K, W+1).
+  /// Σ_k w_k clip(∇ C_k) with respect to normalized x (B, T, D), each term's
+  /// raw gradient capped at config.clip per state (when positive). `obstacles` (K, W+1).
   torch::Tensor Gradient(const torch::Tensor& x_n, const torch::Tensor& obstacles) const;
 
   /// x − scale · b_t · Gradient(x): one guidance step at flow time t.
@@ -87,7 +91,7 @@ class Guide {
   const GuidanceConfig& config() const { return config_; }
 
  private:
-  std::shared_ptr<const Cost> cost_;
+  std::shared_ptr<const WeightedSumCost> cost_;
   models::MinMaxNormalizer normalizer_;
   GuidanceConfig config_;
 };

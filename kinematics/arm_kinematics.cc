@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/format.h"
 
 namespace flowplan::kinematics {
 namespace {
@@ -80,6 +81,10 @@ ArmKinematics::ArmKinematics(const RobotDescription& description) : Robot(descri
   sphere_links_ = torch::empty({S}, torch::kInt64);
   sphere_local_ = torch::empty({S, 3}, torch::kFloat64);
   ancestors_ = torch::zeros({J, S}, torch::kFloat64);
+  tcp_ancestors_ = torch::zeros({J}, torch::kFloat64);
+  for (int64_t l = tcp_link_; l >= 0; l = parents_[l]) {
+    if (joints_[l] >= 0) tcp_ancestors_[joints_[l]] = 1.0;
+  }
   for (int64_t s = 0; s < S; ++s) {
     const RobotSphere& sphere = description.spheres[s];
     sphere_links_[s] = static_cast<int64_t>(sphere.link);
@@ -117,9 +122,88 @@ std::vector<torch::Tensor> ArmKinematics::LinkFrames(const torch::Tensor& q) con
   return frames;
 }
 
+torch::Tensor ArmKinematics::TcpFrame(const std::vector<torch::Tensor>& frames, const torch::Tensor& q) const {
+  return torch::matmul(frames[tcp_link_], tcp_.to(q.options()));
+}
+
 torch::Tensor ArmKinematics::TcpFrom(const std::vector<torch::Tensor>& frames, const torch::Tensor& q) const {
-  const torch::Tensor tcp = torch::matmul(frames[tcp_link_], tcp_.to(q.options()));
-  return tcp.index({Slice(), Slice(0, 3), 3});
+  return TcpFrame(frames, q).index({Slice(), Slice(0, 3), 3});
+}
+
+namespace {
+
+// Settings of the damped-least-squares solver, as sim/franka_ik.h's defaults.
+constexpr int kIkIterations = 300;
+constexpr double kIkDamping = 0.05;
+constexpr double kIkMaxStep = 0.2;
+constexpr double kIkLimitMargin = 0.01;
+constexpr double kIkPostureGain = 0.1;
+
+/// Rotation vectors (N, 3) of the rotations m (N, 3, 3): axis times angle.
+torch::Tensor RotationVector(const torch::Tensor& m) {
+  const torch::Tensor v = 0.5 * torch::stack({m.select(1, 2).select(1, 1) - m.select(1, 1).select(1, 2),
+                                              m.select(1, 0).select(1, 2) - m.select(1, 2).select(1, 0),
+                                              m.select(1, 1).select(1, 0) - m.select(1, 0).select(1, 1)},
+                                             1);  // sin(θ) · axis
+  const torch::Tensor cosine = 0.5 * (m.diagonal(0, 1, 2).sum(1) - 1.0);
+  const torch::Tensor sine = v.norm(2, 1);
+  const torch::Tensor angle = torch::atan2(sine, cosine);
+  return v * (angle / sine.clamp_min(1e-12)).unsqueeze(1);
+}
+
+}  // namespace
+
+IkSolution ArmKinematics::InverseTcp(const torch::Tensor& targets) const {
+  const RobotDescription& d = description();
+  if (d.home.empty()) throw Error("kinematics: robot \"" + d.name + "\" has no home posture to solve IK from");
+  if (!targets.defined() || targets.dim() != 2 || targets.size(1) != 3) {
+    throw Error("IK: targets: expected (N, 3), got " + (targets.defined() ? ShapeText(targets.sizes().vec()) : "(undefined)"));
+  }
+  const int64_t N = targets.size(0), J = num_joints();
+  const auto options = torch::TensorOptions().dtype(torch::kFloat64);
+  const torch::Tensor target = targets.to(torch::kFloat64);
+  const torch::Tensor home = torch::tensor(d.home, options).view({1, J});
+  const torch::Tensor lower = torch::tensor(d.joint_lower, options).view({1, J}) + kIkLimitMargin;
+  const torch::Tensor upper = torch::tensor(d.joint_upper, options).view({1, J}) - kIkLimitMargin;
+  const torch::Tensor goal_rotation =
+      TcpFrame(LinkFrames(home), home).index({Slice(), Slice(0, 3), Slice(0, 3)});  // (1, 3, 3)
+  const torch::Tensor moves_tcp = tcp_ancestors_.view({1, J, 1});
+  const torch::Tensor identity = torch::eye(J, options).unsqueeze(0);
+  const torch::Tensor damping = kIkDamping * kIkDamping * torch::eye(6, options).unsqueeze(0);
+  torch::Tensor q = torch::max(torch::min(home.expand({N, J}), upper), lower);
+  IkSolution out;
+  for (int iteration = 0;; ++iteration) {
+    const std::vector<torch::Tensor> frames = LinkFrames(q);
+    const torch::Tensor tcp = TcpFrame(frames, q);
+    const torch::Tensor position = tcp.index({Slice(), Slice(0, 3), 3});
+    const torch::Tensor rotation = tcp.index({Slice(), Slice(0, 3), Slice(0, 3)});
+    const torch::Tensor error = torch::cat(
+        {target - position, RotationVector(torch::matmul(goal_rotation, rotation.transpose(1, 2)))}, 1);  // (N, 6)
+    out.position_error = error.slice(1, 0, 3).norm(2, 1);
+    out.orientation_error = error.slice(1, 3, 6).norm(2, 1);
+    out.converged = (out.position_error < kIkPositionTolerance) & (out.orientation_error < kIkOrientationTolerance);
+    if (iteration == kIkIterations || out.converged.all().item<bool>()) break;
+    // Geometric Jacobian (N, 6, J): a_j × (p − o_j) and a_j for the joints that move the TCP.
+    const torch::Tensor turned = torch::stack(frames, 1).index_select(1, joint_links_);  // (N, J, 4, 4)
+    const torch::Tensor axes = torch::matmul(turned.index({"...", Slice(0, 3), Slice(0, 3)}),
+                                             joint_axes_.to(options).unsqueeze(-1)).squeeze(-1) * moves_tcp;
+    const torch::Tensor origins = turned.index({"...", Slice(0, 3), 3});
+    const torch::Tensor linear = torch::cross(axes, position.unsqueeze(1) - origins, -1);
+    const torch::Tensor jacobian = torch::cat({linear, axes}, 2).transpose(1, 2);  // (N, 6, J)
+    const torch::Tensor jt = jacobian.transpose(1, 2);
+    torch::Tensor step = torch::matmul(
+        jt, torch::linalg::solve(torch::matmul(jacobian, jt) + damping, error.unsqueeze(-1), true)).squeeze(-1);
+    // The pull towards home acts in the exact null space of the task.
+    const torch::Tensor null_space = identity - torch::matmul(torch::linalg::pinv(jacobian), jacobian);
+    step = step + kIkPostureGain * torch::matmul(null_space, (home - q).unsqueeze(-1)).squeeze(-1);
+    const torch::Tensor largest = step.abs().amax(1, true);
+    step = step * (kIkMaxStep / largest.clamp_min(kIkMaxStep));
+    // Converged configurations stay where they are.
+    step = step * (~out.converged).to(torch::kFloat64).unsqueeze(1);
+    q = torch::max(torch::min(q + step, upper), lower);
+  }
+  out.q = q;
+  return out;
 }
 
 FkResult ArmKinematics::Forward(const torch::Tensor& q) const {
@@ -170,6 +254,7 @@ void ArmKinematics::WriteScript(jit::ScriptModule& module) const {
   module.Buffer("robot_joint_links", joint_links_);
   module.Buffer("robot_joint_axes", joint_axes_);
   module.Buffer("robot_ancestors", ancestors_);
+  module.Buffer("robot_tcp_ancestors", tcp_ancestors_);
   // The link frames, unrolled link by link exactly as LinkFrames() computes them.
   std::string s = R"PY(
 def robot_link_frames(self, q: Tensor) -> Tensor:
@@ -217,6 +302,62 @@ def robot_spheres_vjp(self, centres: Tensor, axes: Tensor, origins: Tensor, g: T
     forces = torch.matmul(ancestors, g)
     return (axes * (moments - torch.cross(origins, forces, -1))).sum(-1)
 )PY";
+  if (!description().home.empty()) {
+    const RobotDescription& d = description();
+    const std::string J = std::to_string(num_joints());
+    module.Buffer("robot_home", torch::tensor(d.home, torch::kFloat64));
+    module.Buffer("robot_lower", torch::tensor(d.joint_lower, torch::kFloat64));
+    module.Buffer("robot_upper", torch::tensor(d.joint_upper, torch::kFloat64));
+    // The solver of InverseTcp, op for op.
+    s += R"PY(
+def robot_rotation_vector(self, m: Tensor) -> Tensor:
+    v = 0.5 * torch.stack([m[:, 2, 1] - m[:, 1, 2], m[:, 0, 2] - m[:, 2, 0], m[:, 1, 0] - m[:, 0, 1]], 1)
+    cosine = 0.5 * (torch.diagonal(m, 0, 1, 2).sum(1) - 1.0)
+    sine = torch.norm(v, 2, 1)
+    angle = torch.atan2(sine, cosine)
+    return v * (angle / sine.clamp_min(1e-12)).unsqueeze(1)
+
+def ik(self, tcp: Tensor) -> Tensor:
+    assert tcp.dim() >= 1 and tcp.size(-1) == 3, "ik: tcp: expected (..., 3), TCP positions in m"
+    shape = tcp.shape[:-1]
+    target = tcp.reshape(-1, 3).double()
+    N = target.size(0)
+    home = self.robot_home.view(1, )PY" + J + R"PY()
+    lower = self.robot_lower.view(1, )PY" + J + ") + " + jit::ScriptFloat(kIkLimitMargin) + R"PY(
+    upper = self.robot_upper.view(1, )PY" + J + ") - " + jit::ScriptFloat(kIkLimitMargin) + R"PY(
+    goal_rotation = torch.matmul(self.robot_link_frames(home)[:, )PY" + std::to_string(tcp_link_) + R"PY(], self.robot_tcp_pose)[:, 0:3, 0:3]
+    moves_tcp = self.robot_tcp_ancestors.view(1, )PY" + J + R"PY(, 1)
+    identity = torch.eye()PY" + J + R"PY(, dtype=target.dtype).unsqueeze(0)
+    damping = )PY" + jit::ScriptFloat(kIkDamping * kIkDamping) + R"PY( * torch.eye(6, dtype=target.dtype).unsqueeze(0)
+    q = torch.max(torch.min(home.expand(N, )PY" + J + R"PY(), upper), lower)
+    converged = torch.zeros([N], dtype=target.dtype) > 1.0
+    for iteration in range()PY" + std::to_string(kIkIterations + 1) + R"PY():
+        frames = self.robot_link_frames(q)
+        tcp_frame = torch.matmul(frames[:, )PY" + std::to_string(tcp_link_) + R"PY(], self.robot_tcp_pose)
+        position = tcp_frame[:, 0:3, 3]
+        rotation = tcp_frame[:, 0:3, 0:3]
+        error = torch.cat([target - position, self.robot_rotation_vector(torch.matmul(goal_rotation, rotation.transpose(1, 2)))], 1)
+        converged = (torch.norm(error[:, 0:3], 2, 1) < )PY" + jit::ScriptFloat(kIkPositionTolerance) +
+         ") & (torch.norm(error[:, 3:6], 2, 1) < " + jit::ScriptFloat(kIkOrientationTolerance) + R"PY()
+        if iteration == )PY" + std::to_string(kIkIterations) + R"PY( or bool(converged.all()):
+            break
+        turned = frames.index_select(1, self.robot_joint_links)
+        axes = torch.matmul(turned[:, :, 0:3, 0:3], self.robot_joint_axes.unsqueeze(-1)).squeeze(-1) * moves_tcp
+        origins = turned[:, :, 0:3, 3]
+        linear = torch.cross(axes, position.unsqueeze(1) - origins, -1)
+        jacobian = torch.cat([linear, axes], 2).transpose(1, 2)
+        jt = jacobian.transpose(1, 2)
+        step = torch.matmul(jt, torch.linalg_solve(torch.matmul(jacobian, jt) + damping, error.unsqueeze(-1))).squeeze(-1)
+        null_space = identity - torch.matmul(torch.linalg_pinv(jacobian), jacobian)
+        step = step + )PY" + jit::ScriptFloat(kIkPostureGain) + R"PY( * torch.matmul(null_space, (home - q).unsqueeze(-1)).squeeze(-1)
+        largest = step.abs().amax(1, True)
+        step = step * ()PY" + jit::ScriptFloat(kIkMaxStep) + " / largest.clamp_min(" + jit::ScriptFloat(kIkMaxStep) + R"PY())
+        step = step * torch.logical_not(converged).double().unsqueeze(1)
+        q = torch.max(torch.min(q + step, upper), lower)
+    assert bool(converged.all()), "ik: a target is out of reach with the TCP orientation of the home posture"
+    return q.reshape(shape + [)PY" + J + R"PY(]).to(tcp.dtype)
+)PY";
+  }
   module.Define(s);
   WritePublicScript(module);
 }

@@ -25,6 +25,17 @@ struct FkResult {
   torch::Tensor joint_origins;   // (B, J, 3), m, origins of the links the hinges turn
 };
 
+/// Joint configurations that put the TCP at targets, with what was reached.
+struct IkSolution {
+  torch::Tensor q;                  // (N, J) rad
+  torch::Tensor position_error;     // (N,) m
+  torch::Tensor orientation_error;  // (N,) rad
+  torch::Tensor converged;          // (N,) bool: within kIkPositionTolerance and kIkOrientationTolerance
+};
+
+inline constexpr double kIkPositionTolerance = 1e-5;     // m
+inline constexpr double kIkOrientationTolerance = 1e-4;  // rad
+
 class ArmKinematics : public Robot {
  public:
   /// @throws flowplan::Error if the description is not a consistent arm.
@@ -41,6 +52,15 @@ class ArmKinematics : public Robot {
   torch::Tensor SpheresVjp(const SpherePoses& poses, const torch::Tensor& grad_centres) const override;
   void WriteScript(jit::ScriptModule& module) const override;
 
+  /// Inverse kinematics of TCP positions `targets` (N, 3), m, with the TCP
+  /// orientation it has at the description's home posture (the Franka's: the
+  /// gripper pointing down), by damped least squares (λ 0.05, steps of at most
+  /// 0.2 rad, joints 0.01 rad inside their limits) from home with a pull
+  /// towards home in the task's null space: the solver of sim/franka_ik.h, in
+  /// LibTorch and in the exported script (`ik`). float64.
+  /// @throws flowplan::Error if the description has no home posture.
+  IkSolution InverseTcp(const torch::Tensor& targets) const;
+
   /// Link index of every sphere (S,), int64.
   const torch::Tensor& sphere_links() const { return sphere_links_; }
   int64_t num_links() const { return static_cast<int64_t>(parents_.size()); }
@@ -50,6 +70,7 @@ class ArmKinematics : public Robot {
   /// The link frames as a list of L tensors (B, 4, 4).
   std::vector<torch::Tensor> LinkFrames(const torch::Tensor& q) const;
   torch::Tensor TcpFrom(const std::vector<torch::Tensor>& frames, const torch::Tensor& q) const;
+  torch::Tensor TcpFrame(const std::vector<torch::Tensor>& frames, const torch::Tensor& q) const;  // (B, 4, 4)
 
   std::vector<std::string> link_names_;
   std::vector<int64_t> parents_;  // (L,), -1: world
@@ -65,6 +86,7 @@ class ArmKinematics : public Robot {
   torch::Tensor joint_links_;    // (J,), int64, the link each joint turns
   torch::Tensor joint_axes_;     // (J, 3), unit hinge axes in their link frames
   torch::Tensor ancestors_;      // (J, S), 1 where joint j moves sphere s
+  torch::Tensor tcp_ancestors_;  // (J,), 1 where joint j moves the TCP
 };
 
 }  // namespace flowplan::kinematics

@@ -23,6 +23,19 @@ void RobotDescription::Validate(const std::string& where) const {
       throw Error(prefix + "joint " + std::to_string(j) + ": expected lower < upper limit");
     }
   }
+  if (!velocity_limit.empty() && velocity_limit.size() != J) {
+    throw Error(prefix + "expected " + std::to_string(J) + " velocity limits or none, got " +
+                std::to_string(velocity_limit.size()));
+  }
+  if (!home.empty() && home.size() != J) {
+    throw Error(prefix + "expected " + std::to_string(J) + " home joint values or none, got " +
+                std::to_string(home.size()));
+  }
+  for (size_t j = 0; j < home.size(); ++j) {
+    if (home[j] < joint_lower[j] || home[j] > joint_upper[j]) {
+      throw Error(prefix + "home joint " + std::to_string(j) + " is outside its limits");
+    }
+  }
   if (kind == RobotKind::kPoint) {
     if (num_joints != workspace_dim) {
       throw Error(prefix + "a point robot's num_joints must equal its workspace_dim (" +

@@ -76,6 +76,9 @@ struct RobotDescription {
   int num_joints = 0;                     // J: the state's first J entries are the positions
   std::vector<double> joint_lower;        // (J,) rad (arm) or m (point)
   std::vector<double> joint_upper;        // (J,)
+  std::vector<double> velocity_limit;     // (J,) rad/s (arm) or m/s (point); empty: none
+  std::vector<double> home;               // (J,) arm: the posture inverse kinematics starts from and keeps
+                                          // to; a TCP target is reached with the TCP orientation of home
   std::vector<RobotLink> links;           // (L,), arm only
   int tcp_link = -1;                      // arm: link that carries the TCP
   std::array<double, 3> tcp_pos{0.0, 0.0, 0.0};        // m, TCP origin in that link's frame
@@ -92,6 +95,8 @@ struct RobotDescription {
     const config::Bounds any{-INFINITY, INFINITY, false, false, "a number or -.inf / .inf", true};
     v.Field("joint_lower", joint_lower, "lower position limits (-.inf: none)", any);
     v.Field("joint_upper", joint_upper, "upper position limits (.inf: none)", any);
+    v.Field("velocity_limit", velocity_limit, "speed limit per joint, empty for none", config::Positive());
+    v.Field("home", home, "arm: posture that inverse kinematics starts from and keeps to (rad)");
     v.Field("links", links, "arm: kinematic tree, parents first");
     v.Field("tcp_link", tcp_link, "arm: index of the link carrying the tool centre point", config::AtLeast(-1));
     v.Field("tcp_pos", tcp_pos, "arm: TCP origin in its link frame (m)");

@@ -165,6 +165,9 @@ FrankaModel::FrankaModel(MjModelPtr model, std::string source)
     limits_.torque[j] = m.actuator_ctrlrange[2 * j + 1];
   }
   description_ = DescribeKinematics(m, "franka_panda", "tcp", kCollisionGeomGroup);
+  description_.velocity_limit.assign(limits_.velocity.data(), limits_.velocity.data() + kFrankaJoints);
+  const JointVector ready = FrankaReadyPose();  // gripper pointing down
+  description_.home.assign(ready.data(), ready.data() + kFrankaJoints);
   description_.Validate(source_);
 }
 

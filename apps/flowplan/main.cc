@@ -149,6 +149,9 @@ int Main(int argc, char** argv) {
   plan->add_flag("!--no-plot", plan_command.plot, "do not draw PREFIX.png");
   plan->add_option("--goal-tolerance", plan_command.goal_tolerance,
                    "a plan succeeds if its last TCP is this close to the goal TCP (and it collides nowhere)");
+  plan->add_option("--max-speed-ratio", plan_command.max_speed_ratio,
+                   "a plan counts as feasible (and can succeed) if the joint speeds its positions imply stay within "
+                   "this many times the robot's velocity limits");
   plan->add_option("overrides", plan_command.overrides, kOverrideHelp);
 
   // config

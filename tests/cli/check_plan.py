@@ -41,7 +41,8 @@ with h5py.File(sys.argv[1], "r") as f, open(sys.argv[2]) as report_file:
     assert np.abs(mine - tcp).max() < 1e-4, np.abs(mine - tcp).max()
     samples = report["samples"]
     assert len(samples) == len(plans) == report["num_samples"]
-    tolerance = report["goal_tolerance"]
+    tolerance, max_ratio, dt = report["goal_tolerance"], report["max_speed_ratio"], f.attrs["dt"]
+    limits = np.array([2.175] * 4 + [2.61] * 3) if env == "franka" else None
     for i, sample in enumerate(samples):
         goal = np.linalg.norm(mine[i, -1] - goal_tcp)
         assert abs(goal - sample["goal_distance"]) < 1e-4, (goal, sample["goal_distance"])
@@ -49,7 +50,12 @@ with h5py.File(sys.argv[1], "r") as f, open(sys.argv[2]) as report_file:
         assert np.allclose(clearance, sample["tcp_clearance"], atol=1e-4), (clearance, sample["tcp_clearance"])
         collides = bool(len(clearance)) and min(clearance) < 0
         assert sample["tcp_collision"] == collides
-        assert sample["success_tcp"] == (not collides and goal <= tolerance)
+        ratio = 0.0
+        if limits is not None:
+            ratio = np.max(np.abs(np.diff(plans[i, :, :7], axis=0)) / dt / limits)
+        assert abs(ratio - sample["speed_ratio"]) < 1e-4 * max(1, ratio), (ratio, sample["speed_ratio"])
+        assert sample["feasible"] == (ratio <= max_ratio)
+        assert sample["success_tcp"] == (not collides and goal <= tolerance and ratio <= max_ratio)
         # The whole robot reaches at least as far as its TCP.
         assert all(a <= t + 1e-6 for a, t in zip(sample["arm_clearance"], sample["tcp_clearance"]))
         if "executed" in sample:

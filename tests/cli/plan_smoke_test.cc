@@ -161,8 +161,8 @@ TEST(FrankaPlanTest, PlansFromTcpPointsExecutesInMujocoAndRejectsUnreachableTarg
   const Outcome check = RunCommand(CheckPlan(path("p")));
   EXPECT_EQ(check.exit_code, 0) << check.output;
   ExpectCleanFailure(Flowplan(plan.substr(0, plan.find("--goal-tcp")) + "--goal-tcp 2,0,0.5"),
-                     "franka IK: target (2.0, 0.0, 0.5) is unreachable");
-  ExpectCleanFailure(Flowplan(plan + "--sphere 0.5,-0.3,0.2,0.05"), "start is inside obstacle 0");
+                     "--goal-tcp: target (2, 0, 0.5) is unreachable");
+  ExpectCleanFailure(Flowplan(plan + "--sphere 0.5,-0.3,0.2,0.05"), "start is inside obstacle 1");  // 0: the preset's scene
   ExpectCleanFailure(Flowplan(plan + "--sphere 0.5,0.3,0.2"), "expected 4 numbers");
 }
 

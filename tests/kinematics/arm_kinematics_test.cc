@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "sim/franka_ik.h"
 #include "sim/franka_model.h"
 
 namespace flowplan::kinematics {
@@ -125,6 +126,31 @@ TEST_F(ForwardKinematicsTest, AutogradMatchesCentralDifferences) {
           << "b " << b << " j " << j;
     }
   }
+}
+
+TEST_F(ForwardKinematicsTest, InverseTcpReachesTargetsAsTheMujocoSolverDoes) {
+  // Targets in the inner part of the reach box, where every point is reachable with the gripper down.
+  torch::manual_seed(6);
+  const torch::Tensor lo = torch::tensor({0.35, -0.3, 0.15}, torch::kFloat64);
+  const torch::Tensor hi = torch::tensor({0.55, 0.3, 0.55}, torch::kFloat64);
+  const torch::Tensor targets = lo + (hi - lo) * torch::rand({24, 3}, torch::kFloat64);
+  const IkSolution solution = fk_.InverseTcp(targets);
+  ASSERT_TRUE(solution.converged.all().item<bool>());
+  sim::MjDataPtr d = sim::MakeData(model_.mj());
+  for (int64_t n = 0; n < targets.size(0); ++n) {
+    const Eigen::Vector3d target(targets[n][0].item<double>(), targets[n][1].item<double>(), targets[n][2].item<double>());
+    sim::JointVector q;
+    for (int j = 0; j < 7; ++j) q[j] = solution.q[n][j].item<double>();
+    const sim::FrankaPose pose = sim::FrankaForwardKinematics(model_, *d, q);
+    EXPECT_LT((pose.tcp_position - target).norm(), 1e-5);
+    EXPECT_LT((pose.tcp_rotation - sim::DownwardTcpRotation()).norm(), 1e-3);  // gripper down, as at home
+    // The MuJoCo solver the data generator uses finds the same configuration.
+    const sim::JointVector reference = sim::SolveTcpIkOrThrow(model_, *d, target, sim::FrankaReadyPose());
+    EXPECT_LT((reference - q).cwiseAbs().maxCoeff(), 2e-3) << "target " << target.transpose();
+  }
+  const IkSolution far = fk_.InverseTcp(torch::tensor({{2.0, 0.0, 0.5}}, torch::kFloat64));
+  EXPECT_FALSE(far.converged.any().item<bool>());
+  EXPECT_GT(far.position_error[0].item<double>(), 1.0);
 }
 
 TEST_F(ForwardKinematicsTest, ShapesAndTypesAreCheckedAtEntry) {

@@ -223,6 +223,21 @@ TEST(ExportTest, TcpAndCollisionSpheresAreTheRobotsKinematics) {
               ThrowsMessage<std::exception>(HasSubstr("tcp: q: expected (..., 7)")));
 }
 
+TEST(ExportTest, IkIsTheRobotsInverseKinematics) {
+  const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, Splitting::kNone, Franka(), {32, 64});
+  torch::jit::Module module = BuildScriptPlanner(planner, Metadata(14));
+  const torch::Tensor targets = torch::tensor({{0.5, -0.3, 0.2}, {0.5, 0.3, 0.2}, {0.4, 0.1, 0.5}}, torch::kFloat64);
+  const auto& arm = dynamic_cast<const kinematics::ArmKinematics&>(*Franka());
+  const kinematics::IkSolution expected = arm.InverseTcp(targets);
+  const torch::Tensor got = module.run_method("ik", targets.view({3, 1, 3})).toTensor();
+  ASSERT_EQ(got.sizes(), (std::vector<int64_t>{3, 1, 7}));
+  EXPECT_LT((got.view({3, 7}) - expected.q).abs().max().item<double>(), 1e-9);
+  // float32 targets give float32 joints.
+  EXPECT_EQ(module.run_method("ik", targets.to(torch::kFloat32)).toTensor().scalar_type(), torch::kFloat32);
+  EXPECT_THAT([&] { module.run_method("ik", torch::tensor({2.0, 0.0, 0.5})); },
+              ThrowsMessage<std::exception>(HasSubstr("ik: a target is out of reach")));
+}
+
 TEST(ExportTest, SplittingPlannerWithoutRenoiseIsRejected) {
   const FlowPlanner planner = MakePlanner(Conditioning::kInpaint, Splitting::kMidpoint, Disc(), {32, 64});
   torch::jit::Module module = BuildScriptPlanner(planner, Metadata(4));
