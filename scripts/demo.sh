@@ -37,6 +37,26 @@ for config in configs/particle_cross.yaml configs/particle_cross_no_noise.yaml; 
 done
 
 run=$(setting configs/particle_cross.yaml run_dir)
+data=$("$FLOWPLAN" config show --config configs/particle_cross.yaml --log-level warn | sed -n 's/^  out: //p' | head -1)
+echo "=== guidance: plans from (0,0) to (1,0) around the disc of configs/scenes/particle_disc.yaml"
+for mode in unguided guided; do
+  scale=$([ "$mode" = unguided ] && echo "guidance.scale=0" || echo "")
+  "$FLOWPLAN" plan --ckpt "$run" --config configs/particle_cross.yaml --start 0,0 --goal 1,0 \
+    --scene configs/scenes/particle_disc.yaml -n 64 \
+    --no-plot --out "$run/plan_$mode" sampler.splitting=midpoint $scale
+done
+"$PYTHON" scripts/plot.py scene "$run/plan_guided.h5" --compare "$run/plan_unguided.h5" --data "$data" \
+  --out "$run/plan_guided.png" --title "particle: guided (blue) and unguided (grey) plans around a disc"
+guided_summary=$("$PYTHON" - "$run" <<'PY'
+import json, sys
+rates = {m: json.load(open(f"{sys.argv[1]}/plan_{m}.json"))["success_rate_arm"] for m in ("unguided", "guided")}
+print(f"  plans whose disc stays clear of the obstacle: unguided {rates['unguided']:.0%}, guided {rates['guided']:.0%} (64 each)")
+if rates["guided"] <= rates["unguided"]:
+    sys.exit("guidance did not help: " + str(rates))
+PY
+)
+echo "$guided_summary"
+
 echo "=== the exported planner, loaded by Python with nothing but torch"
 "$PYTHON" - "$run/planner.pt" <<'PY'
 import sys
@@ -57,9 +77,13 @@ echo
 echo "=== stitching error on the novel pairs (mean ± std over the plans; lower is better)"
 printf '%s\n' "${summaries[@]}"
 echo
+echo "=== guidance around the disc (runs/particle_cross/plan_guided.png)"
+echo "$guided_summary"
+echo
 echo "=== where everything went"
 for config in configs/particle_cross.yaml configs/particle_cross_no_noise.yaml; do
   run=$(setting "$config" run_dir)
   echo "  $config -> $run/{config.yaml,metrics.jsonl,checkpoints/,eval_stitching.json,planner.pt,*.png}"
+  if [ -f "$run/plan_guided.json" ]; then echo "    and $run/plan_{unguided,guided}.{h5,json}, plan_guided.png"; fi
 done
 echo "  datasets in data/; total time $(( $(date +%s) - start_time )) s"
