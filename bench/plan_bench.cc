@@ -34,7 +34,7 @@ planning::FlowPlanner MakePlanner(bool split) {
     lo[j] = static_cast<float>(d.joint_lower[j]);
     hi[j] = static_cast<float>(d.joint_upper[j]);
   }
-  return planning::FlowPlanner(net, models::MinMaxNormalizer(lo, hi), planning::Conditioning::kInpaint, 64,
+  return planning::FlowPlanner(net, models::MinMaxNormalizer(lo, hi), models::Conditioning::kInpaint, 64,
                                planning::SamplerConfig{10, split ? planning::Splitting::kMidpoint : planning::Splitting::kNone},
                                planning::GuidanceSetup{robot, 1.0 / 15.0, {}});
 }

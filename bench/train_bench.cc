@@ -34,7 +34,7 @@ void BM_Gradient(benchmark::State& state) {
   trainer::ShardedGradient gradient(*net, [&] { return models::MakeVelocityNet(config, D, 0); }, 4, threads);
   auto generator = at::make_generator<at::CPUGeneratorImpl>(0);
   const auto batch = trainer::DrawFlowMatchingBatch(torch::randn({128, 64, D}), generator);
-  for (auto _ : state) benchmark::DoNotOptimize(gradient.Compute(batch, planning::Conditioning::kInpaint));
+  for (auto _ : state) benchmark::DoNotOptimize(gradient.Compute(batch, models::Conditioning::kInpaint));
   state.counters["steps/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_Gradient)
@@ -50,7 +50,7 @@ void BM_Plan(benchmark::State& state) {
   at::set_num_threads(1);
   auto net = models::MakeVelocityNet(Unet(levels), D, 0);
   const planning::FlowPlanner planner(net, models::MinMaxNormalizer(-torch::ones({D}), torch::ones({D})),
-                                      planning::Conditioning::kInpaint, 64, planning::SamplerConfig{});
+                                      models::Conditioning::kInpaint, 64, planning::SamplerConfig{});
   const torch::Tensor start = torch::zeros({64, D}), goal = torch::full({64, D}, 0.5);
   const planning::PlanRequest request{start, goal, torch::Tensor(), 0, std::nullopt};
   for (auto _ : state) benchmark::DoNotOptimize(planning::PlanInChunks(planner, request, threads));

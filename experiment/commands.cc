@@ -212,7 +212,7 @@ LoadedPlanner LoadPlanner(const std::string& ckpt, const std::string& overlay_pa
   loaded.state_labels = header.state_labels;
   const int64_t D = header.normalizer.dim();
   models::VelocityNetPtr net = models::MakeVelocityNet(
-      loaded.config.model, D, planning::ConditionDim(loaded.config.flow.conditioning, D));
+      loaded.config.model, D, models::ConditionDim(loaded.config.flow.conditioning, D));
   checkpoints::LoadCheckpointWeights(loaded.checkpoint, {nullptr, net.get(), nullptr});
   net->eval();
   loaded.robot = kinematics::MakeRobot(header.robot, loaded.checkpoint);

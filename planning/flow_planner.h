@@ -12,11 +12,18 @@
 #include "kinematics/robot.h"
 #include "models/normalizer.h"
 #include "models/velocity_net.h"
-#include "planning/conditioning.h"
+#include "models/conditioning.h"
 #include "planning/euler.h"
 #include "planning/planner.h"
 
 namespace flowplan::planning {
+
+// How start and goal reach the network is the network's business (models/);
+// samplers use the same names.
+using models::ConditionDim;
+using models::Conditioning;
+using models::ConditionVector;
+using models::Inpaint;
 
 /// Inference-time trajectory splitting (SPEC section 2).
 enum class Splitting {

@@ -38,22 +38,22 @@ FlowMatchingBatch DrawFlowMatchingBatch(const torch::Tensor& x1, at::Generator& 
 }
 
 torch::Tensor FlowMatchingLoss(models::VelocityNet& net, const FlowMatchingBatch& batch,
-                               planning::Conditioning conditioning) {
+                               models::Conditioning conditioning) {
   const int64_t T = batch.x1.size(1);
   torch::Tensor xt = InterpolateOt(batch.x0, batch.x1, batch.t);
   const torch::Tensor target = batch.x1 - batch.x0;
   const torch::Tensor start = batch.x1.select(1, 0), goal = batch.x1.select(1, T - 1);
-  if (conditioning == planning::Conditioning::kInpaint) {
-    xt = planning::Inpaint(xt, start, goal);
+  if (conditioning == models::Conditioning::kInpaint) {
+    xt = models::Inpaint(xt, start, goal);
     const torch::Tensor v = net.Forward(xt, batch.t, torch::Tensor());
     return torch::mse_loss(v.slice(1, 1, T - 1), target.slice(1, 1, T - 1));
   }
-  const torch::Tensor v = net.Forward(xt, batch.t, planning::ConditionVector(conditioning, start, goal));
+  const torch::Tensor v = net.Forward(xt, batch.t, models::ConditionVector(conditioning, start, goal));
   return torch::mse_loss(v, target);
 }
 
 torch::Tensor FlowMatchingLoss(models::VelocityNet& net, const torch::Tensor& x1,
-                               planning::Conditioning conditioning, at::Generator& generator) {
+                               models::Conditioning conditioning, at::Generator& generator) {
   return FlowMatchingLoss(net, DrawFlowMatchingBatch(x1, generator), conditioning);
 }
 

@@ -3,7 +3,7 @@
 #include <torch/torch.h>
 
 #include "models/velocity_net.h"
-#include "planning/conditioning.h"
+#include "models/conditioning.h"
 
 namespace flowplan::trainer {
 
@@ -45,10 +45,10 @@ FlowMatchingBatch DrawFlowMatchingBatch(const torch::Tensor& x1, at::Generator& 
 /// overwritten at sampling time, so their prediction carries no signal).
 /// @returns scalar loss, the mean over the batch's elements
 torch::Tensor FlowMatchingLoss(models::VelocityNet& net, const FlowMatchingBatch& batch,
-                               planning::Conditioning conditioning);
+                               models::Conditioning conditioning);
 
 /// DrawFlowMatchingBatch() then FlowMatchingLoss(). x1: (B, T, D) normalized.
 torch::Tensor FlowMatchingLoss(models::VelocityNet& net, const torch::Tensor& x1,
-                               planning::Conditioning conditioning, at::Generator& generator);
+                               models::Conditioning conditioning, at::Generator& generator);
 
 }  // namespace flowplan::trainer

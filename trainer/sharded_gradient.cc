@@ -18,7 +18,7 @@ ShardedGradient::ShardedGradient(models::VelocityNet& master,
   shard_losses_.resize(static_cast<size_t>(shards));
 }
 
-double ShardedGradient::Compute(const FlowMatchingBatch& batch, planning::Conditioning conditioning) {
+double ShardedGradient::Compute(const FlowMatchingBatch& batch, models::Conditioning conditioning) {
   for (auto& replica : replicas_) models::CopyWeights(master_, *replica);
   const int64_t B = batch.size();
   ParallelFor(shards_, static_cast<int>(replicas_.size()), [&](int worker, int shard) {

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "models/velocity_net.h"
-#include "planning/conditioning.h"
+#include "models/conditioning.h"
 #include "trainer/flow_matching.h"
 
 namespace flowplan::trainer {
@@ -28,7 +28,7 @@ class ShardedGradient {
 
   /// Sets master's gradients to those of the batch's mean loss and returns the loss.
   /// Call with LibTorch's intra-op threads set to 1 (see at::set_num_threads).
-  double Compute(const FlowMatchingBatch& batch, planning::Conditioning conditioning);
+  double Compute(const FlowMatchingBatch& batch, models::Conditioning conditioning);
 
  private:
   models::VelocityNet& master_;

@@ -49,7 +49,7 @@ class ScopedGlobalSeed {
 
 models::VelocityNetPtr BuildNet(const TrainingSetup& setup, int64_t state_dim) {
   ScopedGlobalSeed seed(StreamSeed(setup.seed, kInitStream));
-  return models::MakeVelocityNet(setup.model, state_dim, planning::ConditionDim(setup.flow.conditioning, state_dim));
+  return models::MakeVelocityNet(setup.model, state_dim, models::ConditionDim(setup.flow.conditioning, state_dim));
 }
 
 double CosineLearningRate(const TrainerConfig& config, int64_t step) {
@@ -102,7 +102,7 @@ class MetricsLog {
 
 }  // namespace
 
-double ValidationLoss(models::VelocityNet& net, const torch::Tensor& val, planning::Conditioning conditioning,
+double ValidationLoss(models::VelocityNet& net, const torch::Tensor& val, models::Conditioning conditioning,
                       int batch_size, uint64_t seed) {
   if (!val.defined() || val.size(0) == 0) return NAN;
   torch::NoGradGuard no_grad;

@@ -51,7 +51,7 @@ TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& 
 
 /// Validation loss of `net` on `val` (N, T, D) normalized, with noise and times
 /// from a generator seeded by `seed`: comparable between evaluations.
-double ValidationLoss(models::VelocityNet& net, const torch::Tensor& val, planning::Conditioning conditioning,
+double ValidationLoss(models::VelocityNet& net, const torch::Tensor& val, models::Conditioning conditioning,
                       int batch_size, uint64_t seed);
 
 }  // namespace flowplan::trainer

@@ -3,13 +3,13 @@
 #include <cstdint>
 
 #include "core/config.h"
-#include "planning/conditioning.h"
+#include "models/conditioning.h"
 
 namespace flowplan::trainer {
 
 /// The `flow` section: how the flow-matching objective is posed.
 struct FlowConfig {
-  planning::Conditioning conditioning = planning::Conditioning::kInpaint;
+  models::Conditioning conditioning = models::Conditioning::kInpaint;
   double split_prob = 0.5;  // chance per batch of training on trajectory halves instead
 
   template <class V>

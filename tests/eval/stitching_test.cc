@@ -26,7 +26,7 @@ planning::FlowPlanner SmallPlanner() {
   config.unet.down_dims = {8, 16};
   auto net = models::MakeVelocityNet(config, 4, 0);
   models::MinMaxNormalizer normalizer(torch::zeros({4}) - 1, torch::ones({4}));
-  return planning::FlowPlanner(net, normalizer, planning::Conditioning::kInpaint, 16,
+  return planning::FlowPlanner(net, normalizer, models::Conditioning::kInpaint, 16,
                                planning::SamplerConfig{3, planning::Splitting::kMidpoint});
 }
 

@@ -74,7 +74,7 @@ TEST(FlowMatchingTest, InpaintedLossIgnoresTheEndsAndSeesTheDataThere) {
   v.select(1, 0).fill_(100.0);  // wrong at the ends only
   v.select(1, 5).fill_(-100.0);
   FixedVelocity net(v);
-  const double loss = FlowMatchingLoss(net, x1, planning::Conditioning::kInpaint, generator).item<double>();
+  const double loss = FlowMatchingLoss(net, x1, models::Conditioning::kInpaint, generator).item<double>();
   EXPECT_NEAR(loss, 0.0, 1e-10);
   EXPECT_TRUE(torch::equal(net.seen_.select(1, 0), x1.select(1, 0)));
   EXPECT_TRUE(torch::equal(net.seen_.select(1, 5), x1.select(1, 5)));
@@ -93,12 +93,12 @@ TEST(FlowMatchingTest, LossDecreasesOnATinyProblem) {
   auto eval_loss = [&] {
     auto g = at::make_generator<at::CPUGeneratorImpl>(99);
     torch::NoGradGuard no_grad;
-    return FlowMatchingLoss(*net, x1, planning::Conditioning::kInpaint, g).item<double>();
+    return FlowMatchingLoss(*net, x1, models::Conditioning::kInpaint, g).item<double>();
   };
   const double before = eval_loss();
   for (int i = 0; i < 150; ++i) {
     optimizer.zero_grad();
-    FlowMatchingLoss(*net, x1, planning::Conditioning::kInpaint, generator).backward();
+    FlowMatchingLoss(*net, x1, models::Conditioning::kInpaint, generator).backward();
     optimizer.step();
   }
   const double after = eval_loss();

@@ -149,8 +149,8 @@ TEST(TrainerTest, ShardsSumToTheWholeBatchGradient) {
   auto generator = at::make_generator<at::CPUGeneratorImpl>(1);
   const FlowMatchingBatch batch = DrawFlowMatchingBatch(torch::randn({10, 16, 4}), generator);
   ShardedGradient sharded(*master, [&] { return models::MakeVelocityNet(config, 4, 0); }, 3, 2);
-  const double loss = sharded.Compute(batch, planning::Conditioning::kInpaint);
-  const torch::Tensor whole = FlowMatchingLoss(*reference, batch, planning::Conditioning::kInpaint);
+  const double loss = sharded.Compute(batch, models::Conditioning::kInpaint);
+  const torch::Tensor whole = FlowMatchingLoss(*reference, batch, models::Conditioning::kInpaint);
   whole.backward();
   EXPECT_NEAR(loss, whole.item<double>(), 1e-6);
   const auto a = master->parameters(), b = reference->parameters();

@@ -4,7 +4,7 @@
 
 #include "core/config.h"
 
-namespace flowplan::planning {
+namespace flowplan::models {
 
 /// How the start and goal states reach the network (SPEC section 2).
 enum class Conditioning {
@@ -32,4 +32,4 @@ torch::Tensor Inpaint(const torch::Tensor& x, const torch::Tensor& start, const 
 /// an undefined tensor for inpainting.
 torch::Tensor ConditionVector(Conditioning conditioning, const torch::Tensor& start, const torch::Tensor& goal);
 
-}  // namespace flowplan::planning
+}  // namespace flowplan::models

@@ -1,6 +1,6 @@
-#include "planning/conditioning.h"
+#include "models/conditioning.h"
 
-namespace flowplan::planning {
+namespace flowplan::models {
 
 torch::Tensor Inpaint(const torch::Tensor& x, const torch::Tensor& start, const torch::Tensor& goal) {
   const int64_t T = x.size(1);
@@ -12,4 +12,4 @@ torch::Tensor ConditionVector(Conditioning conditioning, const torch::Tensor& st
   return torch::cat({start, goal}, -1);
 }
 
-}  // namespace flowplan::planning
+}  // namespace flowplan::models
