@@ -25,7 +25,7 @@ planning::FlowPlanner MakePlanner(bool split) {
   torch::manual_seed(0);
   models::ModelConfig model;
   model.unet.down_dims = {32, 64, 128};
-  auto net = models::MakeVelocityNet(model, 14, 0);
+  auto net = models::MakeTrajectoryNet(model, 14, 0);
   net->eval();
   static const auto robot = kinematics::MakeRobot(sim::LoadFrankaModel().description());
   const auto& d = robot->description();

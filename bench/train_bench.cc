@@ -11,7 +11,7 @@
 #include "eval/stitching.h"
 #include "models/model_config.h"
 #include "planning/flow_planner.h"
-#include "trainer/flow_matching.h"
+#include "objectives/flow_matching.h"
 #include "trainer/sharded_gradient.h"
 
 namespace flowplan {
@@ -30,11 +30,15 @@ void BM_Gradient(benchmark::State& state) {
   const int64_t D = state.range(2);
   at::set_num_threads(1);
   const models::ModelConfig config = Unet(levels);
-  auto net = models::MakeVelocityNet(config, D, 0);
-  trainer::ShardedGradient gradient(*net, [&] { return models::MakeVelocityNet(config, D, 0); }, 4, threads);
+  auto net = models::MakeTrajectoryNet(config, D, 0);
+  trainer::ShardedGradient gradient(*net, [&] { return models::MakeTrajectoryNet(config, D, 0); }, 4, threads);
   auto generator = at::make_generator<at::CPUGeneratorImpl>(0);
-  const auto batch = trainer::DrawFlowMatchingBatch(torch::randn({128, 64, D}), generator);
-  for (auto _ : state) benchmark::DoNotOptimize(gradient.Compute(batch, models::Conditioning::kInpaint));
+  const objectives::FlowMatchingObjective objective;
+  const auto batch = objective.Draw(torch::randn({128, 64, D}), generator);
+  const trainer::BatchLoss loss = [&](models::Network& n, const objectives::ObjectiveBatch& b) {
+    return objective.Loss(n, b, models::Conditioning::kInpaint);
+  };
+  for (auto _ : state) benchmark::DoNotOptimize(gradient.Compute(batch, loss));
   state.counters["steps/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_Gradient)
@@ -48,7 +52,7 @@ void BM_Plan(benchmark::State& state) {
   const int levels = static_cast<int>(state.range(0)), threads = static_cast<int>(state.range(1));
   const int64_t D = state.range(2);
   at::set_num_threads(1);
-  auto net = models::MakeVelocityNet(Unet(levels), D, 0);
+  auto net = models::MakeTrajectoryNet(Unet(levels), D, 0);
   const planning::FlowPlanner planner(net, models::MinMaxNormalizer(-torch::ones({D}), torch::ones({D})),
                                       models::Conditioning::kInpaint, 64, planning::SamplerConfig{});
   const torch::Tensor start = torch::zeros({64, D}), goal = torch::full({64, D}, 0.5);

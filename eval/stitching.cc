@@ -4,7 +4,7 @@
 
 #include "core/error.h"
 #include "core/format.h"
-#include "models/velocity_net.h"
+#include "models/trajectory_net.h"
 
 namespace flowplan::eval {
 

@@ -115,7 +115,7 @@ void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
   setup.seed = static_cast<uint64_t>(config.seed);
   setup.threads = threads;
   setup.model = config.model;
-  setup.flow = config.flow;
+  setup.objective = config.objective;
   setup.train = config.train;
   setup.sampler = config.sampler;
   setup.eval = config.eval;
@@ -139,7 +139,7 @@ void CheckSameNetwork(const ExperimentConfig& trained, const ExperimentConfig& c
   const auto before = config::ListKeys(trained), after = config::ListKeys(changed);
   for (size_t i = 0; i < before.size(); ++i) {
     const std::string& key = before[i].key;
-    const bool shapes_network = key.rfind("model.", 0) == 0 || key == "flow.conditioning";
+    const bool shapes_network = key.rfind("model.", 0) == 0 || key == "objective.name" || key == "objective.conditioning";
     if (shapes_network && before[i].default_value != after[i].default_value) {
       throw Error(key + ": the network was trained with " + before[i].default_value + " (" + where + "), got " +
                   after[i].default_value + "; a trained network's architecture and conditioning cannot change");
@@ -211,14 +211,14 @@ LoadedPlanner LoadPlanner(const std::string& ckpt, const std::string& overlay_pa
   loaded.dt = header.dt;
   loaded.state_labels = header.state_labels;
   const int64_t D = header.normalizer.dim();
-  models::VelocityNetPtr net = models::MakeVelocityNet(
-      loaded.config.model, D, models::ConditionDim(loaded.config.flow.conditioning, D));
+  const models::NetworkPtr net =
+      models::MakeNetwork(loaded.config.model, D, models::ConditionDim(loaded.config.objective.conditioning, D));
   checkpoints::LoadCheckpointWeights(loaded.checkpoint, {nullptr, net.get(), nullptr});
   net->eval();
   loaded.robot = kinematics::MakeRobot(header.robot, loaded.checkpoint);
-  loaded.planner = std::make_unique<planning::FlowPlanner>(
-      net, header.normalizer, loaded.config.flow.conditioning, header.horizon, loaded.config.sampler,
-      planning::GuidanceSetup{loaded.robot, header.dt, loaded.config.guidance});
+  loaded.planner = planning::MakeLearnedPlanner({net, header.normalizer, loaded.config.objective, header.horizon,
+                                                 loaded.config.sampler,
+                                                 planning::GuidanceSetup{loaded.robot, header.dt, loaded.config.guidance}});
   return loaded;
 }
 

@@ -11,6 +11,7 @@
 #include "experiment/experiment_config.h"
 #include "kinematics/robot.h"
 #include "planning/flow_planner.h"
+#include "planning/zoo.h"
 #include "trainer/trainer.h"
 
 namespace flowplan::experiment {
@@ -49,19 +50,19 @@ void RunResume(const std::string& run_dir, const std::vector<std::string>& overr
 /// what a resumed run may change: threads, train.steps, the log / eval /
 /// checkpoint intervals, keep_checkpoints, val_batch_size, sampler.*, eval.*,
 /// guidance.*, scene.* and execute.*.
-/// Anything else (data, seed, optimizer, batch, network, flow) would make the
+/// Anything else (data, seed, optimizer, batch, network, objective) would make the
 /// resumed run a different one. `where` names the stored config in the message.
 void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& changed, const std::string& where);
 
 /// Throws, naming the key, if `changed` differs from `trained` in anything that
-/// shapes the trained network (model.*, flow.conditioning). `where` names the
+/// shapes the trained network (model.*, objective.name, objective.conditioning). `where` names the
 /// stored config in the message.
 void CheckSameNetwork(const ExperimentConfig& trained, const ExperimentConfig& changed, const std::string& where);
 
 /// A planner restored from a checkpoint (EMA weights), with the config it was trained with.
 struct LoadedPlanner {
   ExperimentConfig config;
-  std::unique_ptr<planning::FlowPlanner> planner;
+  std::unique_ptr<planning::Planner> planner;
   std::string checkpoint;
   int64_t step = 0;
   std::string env;

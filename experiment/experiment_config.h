@@ -11,6 +11,7 @@
 #include "guidance/guide.h"
 #include "guidance/scene.h"
 #include "models/model_config.h"
+#include "objectives/objective.h"
 #include "planning/flow_planner.h"
 #include "sim/franka_execution.h"
 #include "trainer/trainer_config.h"
@@ -25,7 +26,7 @@ struct ExperimentConfig {
   datasets::GenerateConfig generate;
   datasets::DataConfig data;
   models::ModelConfig model;
-  trainer::FlowConfig flow;
+  objectives::ObjectiveConfig objective;
   trainer::TrainerConfig train;
   planning::SamplerConfig sampler;
   eval::EvalConfig eval;
@@ -42,7 +43,7 @@ struct ExperimentConfig {
     v.Field("generate", generate, "dataset generation");
     v.Field("data", data, "training data");
     v.Field("model", model, "velocity network");
-    v.Field("flow", flow, "flow-matching objective");
+    v.Field("objective", objective, "training objective and conditioning");
     v.Field("train", train, "optimization");
     v.Field("sampler", sampler, "sampling");
     v.Field("eval", eval, "evaluation");

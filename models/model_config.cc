@@ -4,13 +4,24 @@
 
 namespace flowplan::models {
 
-VelocityNetPtr MakeVelocityNet(const ModelConfig& config, int64_t state_dim, int64_t cond_dim) {
+NetworkPtr MakeNetwork(const ModelConfig& config, int64_t state_dim, int64_t cond_dim) {
+  // One line per network.
   switch (config.architecture) {
-    case Architecture::kUNet1D:
-      return std::make_shared<UNet1D>(config.unet, state_dim, cond_dim);
+    case Architecture::kUNet1D: return std::make_shared<UNet1D>(config.unet, state_dim, cond_dim);
+    case Architecture::kTransformer: return std::make_shared<Transformer>(config.transformer, state_dim, cond_dim);
+    case Architecture::kStateVae: return std::make_shared<StateVae>(config.vae, state_dim);
   }
   FLOWPLAN_DEMAND(false);
   return nullptr;
+}
+
+TrajectoryNetPtr MakeTrajectoryNet(const ModelConfig& config, int64_t state_dim, int64_t cond_dim) {
+  auto net = std::dynamic_pointer_cast<TrajectoryNet>(MakeNetwork(config, state_dim, cond_dim));
+  if (!net) {
+    throw Error(std::string("model.architecture: ") + config::EnumName(config.architecture) +
+                " is not a trajectory network (unet1d or transformer)");
+  }
+  return net;
 }
 
 void CopyWeights(const torch::nn::Module& from, torch::nn::Module& to) {

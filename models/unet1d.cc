@@ -136,7 +136,7 @@ torch::Tensor UNet1D::TimeFeature(const torch::Tensor& t) const {
 }
 
 torch::Tensor UNet1D::Forward(const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond) {
-  CheckVelocityInputs(x, t, cond, state_dim_, cond_dim_);
+  CheckTrajectoryInputs(x, t, cond, state_dim_, cond_dim_);
   CheckHorizon(x.size(1));
   torch::Tensor feature = TimeFeature(t);
   if (cond_dim_ > 0) feature = torch::cat({feature, cond}, -1);

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "core/config.h"
-#include "models/velocity_net.h"
+#include "models/trajectory_net.h"
 
 namespace flowplan::models {
 
@@ -68,7 +68,7 @@ class ResidualBlock : public torch::nn::Module {
 
 }  // namespace internal
 
-class UNet1D : public VelocityNet {
+class UNet1D : public TrajectoryNet {
  public:
   /// @param state_dim D, @param cond_dim C (0: no global condition).
   UNet1D(const UNetConfig& config, int64_t state_dim, int64_t cond_dim);

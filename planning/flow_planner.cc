@@ -9,7 +9,7 @@ namespace flowplan::planning {
 
 using models::ShapeString;
 
-FlowPlanner::FlowPlanner(models::VelocityNetPtr net, models::MinMaxNormalizer normalizer,
+FlowPlanner::FlowPlanner(models::TrajectoryNetPtr net, models::MinMaxNormalizer normalizer,
                          Conditioning conditioning, int64_t horizon, SamplerConfig sampler, GuidanceSetup guidance)
     : net_(std::move(net)),
       normalizer_(std::move(normalizer)),

@@ -11,7 +11,7 @@
 #include "jit/script_writer.h"
 #include "kinematics/robot.h"
 #include "models/normalizer.h"
-#include "models/velocity_net.h"
+#include "models/trajectory_net.h"
 #include "models/conditioning.h"
 #include "planning/euler.h"
 #include "planning/planner.h"
@@ -69,7 +69,7 @@ struct GuidanceSetup {
 class FlowPlanner : public Planner {
  public:
   /// @param horizon T the network was trained for; @throws if the network cannot take it.
-  FlowPlanner(models::VelocityNetPtr net, models::MinMaxNormalizer normalizer, Conditioning conditioning,
+  FlowPlanner(models::TrajectoryNetPtr net, models::MinMaxNormalizer normalizer, Conditioning conditioning,
               int64_t horizon, SamplerConfig sampler, GuidanceSetup guidance = {});
 
   /// Plans with noise drawn from request.seed (noise, then renoise when splitting).
@@ -109,7 +109,7 @@ class FlowPlanner : public Planner {
 
   int64_t horizon() const override { return horizon_; }
   int64_t state_dim() const override { return normalizer_.dim(); }
-  const models::VelocityNetPtr& net() const { return net_; }
+  const models::TrajectoryNetPtr& net() const { return net_; }
   const models::MinMaxNormalizer& normalizer() const { return normalizer_; }
   Conditioning conditioning() const { return conditioning_; }
   const SamplerConfig& sampler() const { return sampler_; }
@@ -123,7 +123,7 @@ class FlowPlanner : public Planner {
                           const TimeGrid& grid, const guidance::Guide* guide, const torch::Tensor& obstacles,
                           double scale) const;
 
-  models::VelocityNetPtr net_;
+  models::TrajectoryNetPtr net_;
   models::MinMaxNormalizer normalizer_;
   Conditioning conditioning_;
   int64_t horizon_;

@@ -53,8 +53,8 @@ both unet2_seed1 seed=1
 both unet2_seed2 seed=2
 both unet3 "model.unet.down_dims=[32,64,128]"
 both unet4 "model.unet.down_dims=[32,64,128,256]"
-both unet2_direct flow.conditioning=direct
-both unet2_nosplit flow.split_prob=0
+both unet2_direct objective.conditioning=direct
+both unet2_nosplit objective.split_prob=0
 # Training length: the default stops while the stitching error still falls.
 both unet2_long train.steps=$((4 * STEPS))
 # The code's default learning rate (2e-4, the paper's) instead of the preset's

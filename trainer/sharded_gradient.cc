@@ -8,8 +8,8 @@
 
 namespace flowplan::trainer {
 
-ShardedGradient::ShardedGradient(models::VelocityNet& master,
-                                 const std::function<models::VelocityNetPtr()>& make_replica, int shards, int threads)
+ShardedGradient::ShardedGradient(models::Network& master, const std::function<models::NetworkPtr()>& make_replica,
+                                 int shards, int threads)
     : master_(master), shards_(shards) {
   FLOWPLAN_DEMAND(shards >= 1 && threads >= 1);
   const int workers = std::min(shards, threads);
@@ -18,7 +18,7 @@ ShardedGradient::ShardedGradient(models::VelocityNet& master,
   shard_losses_.resize(static_cast<size_t>(shards));
 }
 
-double ShardedGradient::Compute(const FlowMatchingBatch& batch, models::Conditioning conditioning) {
+double ShardedGradient::Compute(const objectives::ObjectiveBatch& batch, const BatchLoss& batch_loss) {
   for (auto& replica : replicas_) models::CopyWeights(master_, *replica);
   const int64_t B = batch.size();
   ParallelFor(shards_, static_cast<int>(replicas_.size()), [&](int worker, int shard) {
@@ -26,10 +26,10 @@ double ShardedGradient::Compute(const FlowMatchingBatch& batch, models::Conditio
     shard_grads_[shard].clear();
     shard_losses_[shard] = 0.0;
     if (end == begin) return;
-    models::VelocityNet& replica = *replicas_[worker];
+    models::Network& replica = *replicas_[worker];
     replica.zero_grad();
     // Weighted by the shard's share of the batch: the shard losses add up to the batch mean.
-    const torch::Tensor loss = FlowMatchingLoss(replica, batch.Slice(begin, end), conditioning) *
+    const torch::Tensor loss = batch_loss(replica, batch.Slice(begin, end)) *
                                (static_cast<double>(end - begin) / static_cast<double>(B));
     loss.backward();
     shard_losses_[shard] = loss.item<double>();

@@ -15,7 +15,8 @@
 #include "core/progress.h"
 #include "core/random.h"
 #include "models/normalizer.h"
-#include "trainer/flow_matching.h"
+#include "planning/zoo.h"
+#include "trainer/training_batch.h"
 #include "trainer/run_dir.h"
 #include "trainer/sharded_gradient.h"
 
@@ -47,9 +48,9 @@ class ScopedGlobalSeed {
   torch::Tensor saved_;
 };
 
-models::VelocityNetPtr BuildNet(const TrainingSetup& setup, int64_t state_dim) {
+models::NetworkPtr BuildNet(const TrainingSetup& setup, int64_t state_dim) {
   ScopedGlobalSeed seed(StreamSeed(setup.seed, kInitStream));
-  return models::MakeVelocityNet(setup.model, state_dim, models::ConditionDim(setup.flow.conditioning, state_dim));
+  return models::MakeNetwork(setup.model, state_dim, models::ConditionDim(setup.objective.conditioning, state_dim));
 }
 
 double CosineLearningRate(const TrainerConfig& config, int64_t step) {
@@ -63,11 +64,19 @@ void SetLearningRate(torch::optim::AdamW& optimizer, double lr) {
   }
 }
 
-void UpdateEma(models::VelocityNet& ema, const models::VelocityNet& net, double decay) {
+/// Averages parameters and floating-point buffers (constant ones, like the
+/// UNet's sinusoid frequencies, stay what they are; statistics a network might
+/// keep in buffers are averaged like weights).
+void UpdateEma(models::Network& ema, const models::Network& net, double decay) {
   torch::NoGradGuard no_grad;
   const auto source = net.parameters(true);
   auto target = ema.parameters(true);
   for (size_t i = 0; i < source.size(); ++i) target[i].mul_(decay).add_(source[i], 1.0 - decay);
+  const auto source_buffers = net.buffers(true);
+  auto target_buffers = ema.buffers(true);
+  for (size_t i = 0; i < source_buffers.size(); ++i) {
+    if (target_buffers[i].is_floating_point()) target_buffers[i].mul_(decay).add_(source_buffers[i], 1.0 - decay);
+  }
 }
 
 /// Keeps the rows of a metrics file up to `step` (a resumed run rewrites what
@@ -102,8 +111,8 @@ class MetricsLog {
 
 }  // namespace
 
-double ValidationLoss(models::VelocityNet& net, const torch::Tensor& val, models::Conditioning conditioning,
-                      int batch_size, uint64_t seed) {
+double ValidationLoss(const objectives::Objective& objective, models::Network& net, const torch::Tensor& val,
+                      models::Conditioning conditioning, int batch_size, uint64_t seed) {
   if (!val.defined() || val.size(0) == 0) return NAN;
   torch::NoGradGuard no_grad;
   auto generator = at::make_generator<at::CPUGeneratorImpl>(seed);
@@ -111,7 +120,7 @@ double ValidationLoss(models::VelocityNet& net, const torch::Tensor& val, models
   int64_t count = 0;
   for (int64_t begin = 0; begin < val.size(0); begin += batch_size) {
     const torch::Tensor batch = val.slice(0, begin, std::min<int64_t>(begin + batch_size, val.size(0)));
-    total += FlowMatchingLoss(net, batch, conditioning, generator).item<double>() * batch.size(0);
+    total += objective.Loss(net, objective.Draw(batch, generator), conditioning).item<double>() * batch.size(0);
     count += batch.size(0);
   }
   return total / static_cast<double>(count);
@@ -134,11 +143,16 @@ class TrainingRun {
         net_(BuildNet(setup, D_)),
         ema_(BuildNet(setup, D_)),
         optimizer_(net_->parameters(), torch::optim::AdamWOptions(config_.lr).weight_decay(config_.weight_decay)),
+        objective_(objectives::MakeObjective(setup.objective, setup.model)),
         generator_(at::make_generator<at::CPUGeneratorImpl>(StreamSeed(setup.seed, kTrainStream))),
         normalizer_(models::MinMaxNormalizer::Fit(data.train)) {
     models::CopyWeights(*net_, *ema_);
-    net_->CheckHorizon(T_);
-    if (setup.flow.split_prob > 0.0) models::CheckHalfHorizon(*net_, T_, "flow.split_prob > 0 trains on");
+    if (const auto* trajectory_net = dynamic_cast<const models::TrajectoryNet*>(net_.get())) {
+      trajectory_net->CheckHorizon(T_);
+      if (setup.objective.split_prob > 0.0) {
+        models::CheckHalfHorizon(*trajectory_net, T_, "objective.split_prob > 0 trains on");
+      }
+    }
     run_.Create();
     if (start == TrainStart::kResume) {
       Restore();
@@ -152,9 +166,9 @@ class TrainingRun {
     WriteFileAtomically(run_.config(), setup.config_yaml);
     train_n_ = normalizer_.Normalize(data.train);
     val_n_ = data.val.size(0) > 0 ? normalizer_.Normalize(data.val) : data.val;
-    ema_planner_ = std::make_unique<planning::FlowPlanner>(
-        ema_, normalizer_, setup.flow.conditioning, T_, setup.sampler,
-        planning::GuidanceSetup{kinematics::MakeRobot(data.robot, "training data"), data.dt, {}});
+    ema_planner_ = planning::MakeLearnedPlanner(
+        {ema_, normalizer_, setup.objective, T_, setup.sampler,
+         planning::GuidanceSetup{kinematics::MakeRobot(data.robot, "training data"), data.dt, {}}});
     gradient_ = std::make_unique<ShardedGradient>(*net_, [&] { return BuildNet(setup_, D_); }, config_.shards,
                                                   setup.threads);
     metrics_ = std::make_unique<MetricsLog>(run_.metrics());
@@ -230,8 +244,14 @@ class TrainingRun {
   /// One optimizer step at learning rate `lr`; returns the batch loss.
   double Step(double lr) {
     SetLearningRate(optimizer_, lr);
-    const torch::Tensor x1 = DrawTrainingTrajectories(train_n_, config_.batch_size, setup_.flow.split_prob, generator_);
-    const double loss = gradient_->Compute(DrawFlowMatchingBatch(x1, generator_), setup_.flow.conditioning);
+    const torch::Tensor x1 =
+        DrawTrainingTrajectories(train_n_, config_.batch_size, setup_.objective.split_prob, generator_);
+    const models::Conditioning conditioning = setup_.objective.conditioning;
+    const double loss = gradient_->Compute(
+        objective_->Draw(x1, generator_),
+        [&](models::Network& net, const objectives::ObjectiveBatch& batch) {
+          return objective_->Loss(net, batch, conditioning);
+        });
     if (config_.grad_clip > 0.0) torch::nn::utils::clip_grad_norm_(net_->parameters(), config_.grad_clip);
     optimizer_.step();
     const double n = static_cast<double>(step_);
@@ -257,7 +277,7 @@ class TrainingRun {
   /// Validation loss and stitching errors of the EMA weights into result_.
   void Evaluate() {
     ema_->eval();
-    result_.val_loss = ValidationLoss(*ema_, val_n_, setup_.flow.conditioning, config_.val_batch_size,
+    result_.val_loss = ValidationLoss(*objective_, *ema_, val_n_, setup_.objective.conditioning, config_.val_batch_size,
                                       StreamSeed(setup_.seed, kValidationStream));
     result_.test = Stitching(data_.test_pairs, "test");
     result_.train = Stitching(data_.train_pairs, "train");
@@ -304,13 +324,14 @@ class TrainingRun {
   const datasets::TrajectorySplits& data_;
   RunDir run_;
   const int64_t T_, D_;
-  models::VelocityNetPtr net_, ema_;
+  models::NetworkPtr net_, ema_;
   torch::optim::AdamW optimizer_;
+  std::unique_ptr<objectives::Objective> objective_;
   at::Generator generator_;
   models::MinMaxNormalizer normalizer_;
   torch::Tensor train_n_;  // (N_train, T, D) normalized
   torch::Tensor val_n_;    // (N_val, T, D) normalized
-  std::unique_ptr<planning::FlowPlanner> ema_planner_;
+  std::unique_ptr<planning::Planner> ema_planner_;
   std::unique_ptr<ShardedGradient> gradient_;
   std::unique_ptr<MetricsLog> metrics_;
   int64_t step_ = 0;

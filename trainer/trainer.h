@@ -6,6 +6,7 @@
 #include "datasets/trajectory_loader.h"
 #include "eval/stitching.h"
 #include "models/model_config.h"
+#include "objectives/objective.h"
 #include "planning/flow_planner.h"
 #include "trainer/trainer_config.h"
 
@@ -19,7 +20,7 @@ struct TrainingSetup {
   uint64_t seed = 0;
   int threads = 1;  // worker threads; results do not depend on it
   models::ModelConfig model;
-  FlowConfig flow;
+  objectives::ObjectiveConfig objective;
   TrainerConfig train;
   planning::SamplerConfig sampler;
   eval::EvalConfig eval;
@@ -41,7 +42,7 @@ struct TrainResult {
 /// Whether a run starts afresh or continues its folder's newest checkpoint.
 enum class TrainStart { kFresh, kResume };
 
-/// Trains a flow-matching planner on `data`, or resumes the run in
+/// Trains a network with `setup.objective` on `data`, or resumes the run in
 /// `setup.run_dir` from its newest checkpoint (continuing bit-exactly). The weights do not depend on the thread count: LibTorch runs
 /// single-threaded and `setup.threads` workers share fixed gradient shards. Writes config.yaml, metrics.jsonl and
 /// checkpoints; on SIGINT writes a checkpoint of the current step and throws.
@@ -49,9 +50,10 @@ enum class TrainStart { kFresh, kResume };
 ///   fresh start in a folder that holds checkpoints, or a resume without one.
 TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& data, TrainStart start);
 
-/// Validation loss of `net` on `val` (N, T, D) normalized, with noise and times
-/// from a generator seeded by `seed`: comparable between evaluations.
-double ValidationLoss(models::VelocityNet& net, const torch::Tensor& val, models::Conditioning conditioning,
-                      int batch_size, uint64_t seed);
+/// Validation loss of `net` under `objective` on `val` (N, T, D) normalized,
+/// with noise and times from a generator seeded by `seed`: comparable between
+/// evaluations.
+double ValidationLoss(const objectives::Objective& objective, models::Network& net, const torch::Tensor& val,
+                      models::Conditioning conditioning, int batch_size, uint64_t seed);
 
 }  // namespace flowplan::trainer

@@ -3,22 +3,8 @@
 #include <cstdint>
 
 #include "core/config.h"
-#include "models/conditioning.h"
 
 namespace flowplan::trainer {
-
-/// The `flow` section: how the flow-matching objective is posed.
-struct FlowConfig {
-  models::Conditioning conditioning = models::Conditioning::kInpaint;
-  double split_prob = 0.5;  // chance per batch of training on trajectory halves instead
-
-  template <class V>
-  void Visit(V& v) {
-    v.Field("conditioning", conditioning, "how start and goal reach the network");
-    v.Field("split_prob", split_prob, "probability per batch of training on the two halves of every trajectory",
-            config::Probability());
-  }
-};
 
 /// The `train` section: optimizer, schedule, logging and checkpointing.
 struct TrainerConfig {

@@ -95,7 +95,7 @@ int Main(int argc, char** argv) {
   merge->add_option("--out", merge_out, "merged file")->required();
 
   // train
-  auto* train = app.add_subcommand("train", "train a planner (train.*, model.*, flow.*) or resume a run");
+  auto* train = app.add_subcommand("train", "train a planner (train.*, model.*, objective.*) or resume a run");
   add_config(train, false);
   std::string resume_dir;
   int64_t until_step = 0;

@@ -116,7 +116,7 @@ TEST_F(CliTest, ResumeAfterAStopEqualsOneRun) {
   models::ModelConfig model;
   model.unet.down_dims = {8, 16};
   auto load = [&](const std::string& path) {
-    auto net = models::MakeVelocityNet(model, 4, 0), ema = models::MakeVelocityNet(model, 4, 0);
+    auto net = models::MakeTrajectoryNet(model, 4, 0), ema = models::MakeTrajectoryNet(model, 4, 0);
     checkpoints::LoadCheckpointWeights(path, {net.get(), ema.get(), nullptr});
     std::vector<torch::Tensor> weights = net->parameters();
     for (const auto& p : ema->parameters()) weights.push_back(p);
@@ -133,7 +133,7 @@ TEST_F(CliTest, TrainedNetworkCannotBeChangedByOverridesOrRetrainedInPlace) {
   ExpectOk(Flowplan("train --config " + Tiny() + Paths()));
   ExpectCleanFailure(Flowplan("eval stitching --ckpt " + Path("run") + " model.unet.groups=4"),
                      "model.unet.groups: the network was trained with 8");
-  ExpectCleanFailure(Flowplan("export --ckpt " + Path("run") + " flow.conditioning=direct"), "flow.conditioning");
+  ExpectCleanFailure(Flowplan("export --ckpt " + Path("run") + " objective.conditioning=direct"), "objective.conditioning");
   ExpectCleanFailure(Flowplan("train --resume " + Path("run") + " model.unet.kernel_size=3"), "model.unet.kernel_size");
   // Nor can a resumed run change its data, seed or optimizer: it would be another run.
   ExpectCleanFailure(Flowplan("train --resume " + Path("run") + " train.lr=0.01"), "train.lr: the run was trained with");
@@ -177,7 +177,7 @@ TEST_F(CliTest, BadConfigKeyValueAndFile) {
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " train.bach_size=8"), "train.bach_size");
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " train.batch_size=abc"), "train.batch_size");
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " train.lr=-1"), "train.lr");
-  ExpectCleanFailure(Flowplan("train --config " + Tiny() + " flow.conditioning=global"), "one of inpaint, direct");
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + " objective.conditioning=global"), "one of inpaint, direct");
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " model.unet.time_scale=.inf"),
                      "model.unet.time_scale: expected a finite number");
   ExpectCleanFailure(Flowplan("generate --config " + Tiny() + " --shard 99999999999/1"), "--shard");

@@ -24,7 +24,7 @@ planning::FlowPlanner SmallPlanner() {
   torch::manual_seed(0);
   models::ModelConfig config;
   config.unet.down_dims = {8, 16};
-  auto net = models::MakeVelocityNet(config, 4, 0);
+  auto net = models::MakeTrajectoryNet(config, 4, 0);
   models::MinMaxNormalizer normalizer(torch::zeros({4}) - 1, torch::ones({4}));
   return planning::FlowPlanner(net, normalizer, models::Conditioning::kInpaint, 16,
                                planning::SamplerConfig{3, planning::Splitting::kMidpoint});

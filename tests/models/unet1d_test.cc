@@ -70,9 +70,9 @@ TEST(UNet1DTest, TimeChangesTheOutput) {
 
 TEST(ModelConfigTest, CopyWeightsMakesAnIdenticalNetwork) {
   torch::manual_seed(3);
-  auto a = MakeVelocityNet(ModelConfig{}, 4, 0);
+  auto a = MakeTrajectoryNet(ModelConfig{}, 4, 0);
   torch::manual_seed(4);
-  auto b = MakeVelocityNet(ModelConfig{}, 4, 0);
+  auto b = MakeTrajectoryNet(ModelConfig{}, 4, 0);
   const torch::Tensor x = torch::randn({2, 16, 4}), t = torch::rand({2});
   EXPECT_FALSE(torch::equal(a->Forward(x, t, {}), b->Forward(x, t, {})));
   CopyWeights(*a, *b);

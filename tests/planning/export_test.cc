@@ -37,7 +37,7 @@ FlowPlanner MakePlanner(Conditioning conditioning, Splitting splitting, std::sha
   const int64_t J = robot->num_joints(), D = 2 * J;
   models::ModelConfig config;  // the default UNet exercises every block type
   config.unet.down_dims = down_dims;
-  auto net = models::MakeVelocityNet(config, D, ConditionDim(conditioning, D));
+  auto net = models::MakeTrajectoryNet(config, D, ConditionDim(conditioning, D));
   // Random weights would make the velocity tiny; scale them up so that a
   // mistake anywhere in the script shows in the plan.
   torch::NoGradGuard no_grad;

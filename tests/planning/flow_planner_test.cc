@@ -16,7 +16,7 @@ FlowPlanner MakePlanner(Conditioning conditioning, int steps = 4) {
   torch::manual_seed(0);
   models::ModelConfig config;
   config.unet.down_dims = {16, 32};
-  auto net = models::MakeVelocityNet(config, 4, ConditionDim(conditioning, 4));
+  auto net = models::MakeTrajectoryNet(config, 4, ConditionDim(conditioning, 4));
   models::MinMaxNormalizer normalizer(torch::tensor({0.f, 0.f, -1.f, -1.f}), torch::tensor({1.f, 1.f, 1.f, 1.f}));
   return FlowPlanner(net, normalizer, conditioning, 16, SamplerConfig{steps});
 }
@@ -55,7 +55,7 @@ TEST(FlowPlannerTest, BadShapesNameTheArgument) {
 }
 
 /// A network whose velocity is zero everywhere: plans stay where the noise puts them.
-class ZeroVelocity : public models::VelocityNet {
+class ZeroVelocity : public models::TrajectoryNet {
  public:
   torch::Tensor Forward(const torch::Tensor& x, const torch::Tensor&, const torch::Tensor&) override {
     return torch::zeros_like(x);
@@ -92,7 +92,7 @@ TEST(FlowPlannerTest, MidpointSplittingUsesTheStatesBesideTheMiddleAsBoundaries)
 TEST(FlowPlannerTest, SplittingNeedsHalvesTheNetworkCanTake) {
   models::ModelConfig config;
   config.unet.down_dims = {8, 8, 8, 8};  // T must be a multiple of 8
-  auto net = models::MakeVelocityNet(config, 4, 0);
+  auto net = models::MakeTrajectoryNet(config, 4, 0);
   models::MinMaxNormalizer unit(-torch::ones({4}), torch::ones({4}));
   EXPECT_THAT([&] { FlowPlanner(net, unit, Conditioning::kInpaint, 8, SamplerConfig{4, Splitting::kMidpoint}); },
               ThrowsMessage<Error>(HasSubstr("sampler.splitting")));

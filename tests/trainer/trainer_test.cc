@@ -12,6 +12,7 @@
 #include "datasets/particle_task.h"
 #include "tests/support/scratch_dir.h"
 #include "trainer/run_dir.h"
+#include "objectives/flow_matching.h"
 #include "trainer/sharded_gradient.h"
 
 namespace flowplan::trainer {
@@ -48,8 +49,8 @@ TrainingSetup TinySetup(const std::string& name) {
 }
 
 std::vector<torch::Tensor> Weights(const std::string& checkpoint, const TrainingSetup& setup) {
-  auto net = models::MakeVelocityNet(setup.model, 4, 0);
-  auto ema = models::MakeVelocityNet(setup.model, 4, 0);
+  auto net = models::MakeTrajectoryNet(setup.model, 4, 0);
+  auto ema = models::MakeTrajectoryNet(setup.model, 4, 0);
   checkpoints::LoadCheckpointWeights(checkpoint, {net.get(), ema.get(), nullptr});
   std::vector<torch::Tensor> out;
   for (const auto& p : net->parameters()) out.push_back(p.clone());
@@ -97,7 +98,7 @@ TEST(TrainerTest, EmaFollowsTheWeightsWithWarmUp) {
   setup.stop_at_step = 4;
   Train(setup, data, TrainStart::kFresh);
   RunDir run(setup.run_dir);
-  const size_t P = models::MakeVelocityNet(setup.model, 4, 0)->parameters().size();
+  const size_t P = models::MakeTrajectoryNet(setup.model, 4, 0)->parameters().size();
   for (int64_t n = 2; n <= 4; ++n) {
     const auto before = Weights(run.checkpoint(n - 1), setup), after = Weights(run.checkpoint(n), setup);
     const double d = std::min(0.2, static_cast<double>(n) / (9.0 + static_cast<double>(n)));
@@ -113,7 +114,7 @@ TEST(TrainerTest, ForeignGeneratorStateIsNamed) {
   const std::string path = Train(setup, TinyData(), TrainStart::kFresh).checkpoint;
   checkpoints::CheckpointHeader header = checkpoints::ReadCheckpointHeader(path);
   header.rng_state = torch::zeros({3}, torch::kUInt8);
-  auto net = models::MakeVelocityNet(setup.model, 4, 0);
+  auto net = models::MakeTrajectoryNet(setup.model, 4, 0);
   const std::string foreign = (fs::path(setup.run_dir) / "foreign.pt").string();
   checkpoints::SaveCheckpoint(foreign, header, {net.get(), net.get(), nullptr});
   EXPECT_THAT([&] { checkpoints::ReadCheckpointHeader(foreign); },
@@ -143,14 +144,17 @@ TEST(TrainerTest, ShardsSumToTheWholeBatchGradient) {
   torch::manual_seed(0);
   models::ModelConfig config;
   config.unet.down_dims = {8, 16};
-  auto master = models::MakeVelocityNet(config, 4, 0);
-  auto reference = models::MakeVelocityNet(config, 4, 0);
+  auto master = models::MakeTrajectoryNet(config, 4, 0);
+  auto reference = models::MakeTrajectoryNet(config, 4, 0);
   models::CopyWeights(*master, *reference);
   auto generator = at::make_generator<at::CPUGeneratorImpl>(1);
-  const FlowMatchingBatch batch = DrawFlowMatchingBatch(torch::randn({10, 16, 4}), generator);
-  ShardedGradient sharded(*master, [&] { return models::MakeVelocityNet(config, 4, 0); }, 3, 2);
-  const double loss = sharded.Compute(batch, models::Conditioning::kInpaint);
-  const torch::Tensor whole = FlowMatchingLoss(*reference, batch, models::Conditioning::kInpaint);
+  const objectives::FlowMatchingObjective objective;
+  const objectives::ObjectiveBatch batch = objective.Draw(torch::randn({10, 16, 4}), generator);
+  ShardedGradient sharded(*master, [&] { return models::MakeTrajectoryNet(config, 4, 0); }, 3, 2);
+  const double loss = sharded.Compute(batch, [&](models::Network& net, const objectives::ObjectiveBatch& part) {
+    return objective.Loss(net, part, models::Conditioning::kInpaint);
+  });
+  const torch::Tensor whole = objective.Loss(*reference, batch, models::Conditioning::kInpaint);
   whole.backward();
   EXPECT_NEAR(loss, whole.item<double>(), 1e-6);
   const auto a = master->parameters(), b = reference->parameters();
@@ -199,7 +203,7 @@ TEST(TrainerTest, SplitTrainingNeedsAHalfHorizonTheNetCanTake) {
   TrainingSetup setup = TinySetup("bad_split");
   setup.model.unet.down_dims = {8, 8, 8, 8, 8};  // T must be a multiple of 16; halves have 8
   EXPECT_THAT([&] { Train(setup, TinyData(), TrainStart::kFresh); },
-              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("flow.split_prob")));
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("objective.split_prob")));
 }
 
 }  // namespace

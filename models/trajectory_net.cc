@@ -1,4 +1,4 @@
-#include "models/velocity_net.h"
+#include "models/trajectory_net.h"
 
 #include "core/error.h"
 #include "core/format.h"
@@ -9,20 +9,20 @@ std::string ShapeString(const torch::Tensor& tensor) {
   return tensor.defined() ? ShapeText(tensor.sizes().vec()) : "(undefined)";
 }
 
-void CheckVelocityInputs(const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond,
+void CheckTrajectoryInputs(const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond,
                          int64_t state_dim, int64_t cond_dim) {
   if (!x.defined() || x.dim() != 3 || x.size(2) != state_dim) {
-    throw Error("velocity network: x: expected (B, T, " + std::to_string(state_dim) + "), got " + ShapeString(x));
+    throw Error("trajectory network: x: expected (B, T, " + std::to_string(state_dim) + "), got " + ShapeString(x));
   }
   const int64_t batch = x.size(0);
   if (!t.defined() || t.dim() != 1 || t.size(0) != batch) {
-    throw Error("velocity network: t: expected (" + std::to_string(batch) + ",), got " + ShapeString(t));
+    throw Error("trajectory network: t: expected (" + std::to_string(batch) + ",), got " + ShapeString(t));
   }
   if (cond_dim == 0 && cond.defined()) {
-    throw Error("velocity network: cond: this network takes no global condition, got " + ShapeString(cond));
+    throw Error("trajectory network: cond: this network takes no global condition, got " + ShapeString(cond));
   }
   if (cond_dim > 0 && (!cond.defined() || cond.dim() != 2 || cond.size(0) != batch || cond.size(1) != cond_dim)) {
-    throw Error("velocity network: cond: expected (" + std::to_string(batch) + ", " + std::to_string(cond_dim) +
+    throw Error("trajectory network: cond: expected (" + std::to_string(batch) + ", " + std::to_string(cond_dim) +
                 "), got " + ShapeString(cond));
   }
 }
@@ -31,7 +31,7 @@ void CheckVelocityInputs(const torch::Tensor& x, const torch::Tensor& t, const t
 
 namespace flowplan::models {
 
-void CheckHalfHorizon(const VelocityNet& net, int64_t horizon, const std::string& what) {
+void CheckHalfHorizon(const TrajectoryNet& net, int64_t horizon, const std::string& what) {
   try {
     if (horizon % 2 != 0) throw Error("the horizon " + std::to_string(horizon) + " is odd");
     net.CheckHorizon(horizon / 2);

@@ -6,19 +6,22 @@
 #include <string>
 
 #include "jit/script_writer.h"
+#include "models/network.h"
 
 namespace flowplan::models {
 
-/// A network that predicts the flow velocity of a whole trajectory. It knows
-/// nothing of robots, files or samplers: states are normalized vectors, time is
-/// the flow time, and an optional global condition vector (for direct
-/// conditioning) is just C numbers per sample.
-class VelocityNet : public torch::nn::Module {
+/// A network that maps a whole noisy trajectory to a trajectory-shaped output:
+/// the flow velocity under flow matching, the noise under DDPM. It knows
+/// nothing of robots, files, objectives or samplers: states are normalized
+/// vectors, time is whatever the objective uses (flow time, diffusion step),
+/// and an optional global condition vector (for direct conditioning) is just
+/// C numbers per sample.
+class TrajectoryNet : public Network {
  public:
   /// @param x     (B, T, D) normalized noisy trajectories
-  /// @param t     (B,) flow time in [0, 1] (0 noise, 1 data)
+  /// @param t     (B,) the objective's time (flow time in [0, 1]; diffusion step)
   /// @param cond  (B, C) global condition, or an undefined tensor when C = 0
-  /// @returns     (B, T, D) predicted velocity
+  /// @returns     (B, T, D) the objective's target (velocity; noise)
   virtual torch::Tensor Forward(const torch::Tensor& x, const torch::Tensor& t,
                                 const torch::Tensor& cond) = 0;
 
@@ -34,16 +37,16 @@ class VelocityNet : public torch::nn::Module {
   virtual int64_t cond_dim() const = 0;
 };
 
-using VelocityNetPtr = std::shared_ptr<VelocityNet>;
+using TrajectoryNetPtr = std::shared_ptr<TrajectoryNet>;
 
 /// Checks x (B, T, D), t (B,) and cond (B, C) against a network's dimensions.
 /// @throws flowplan::Error "expected (B, T, 4), got (…)" style messages.
-void CheckVelocityInputs(const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond,
+void CheckTrajectoryInputs(const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond,
                          int64_t state_dim, int64_t cond_dim);
 
-/// Throws, naming `what` (e.g. "flow.split_prob > 0 trains on"), if `net` cannot
+/// Throws, naming `what` (e.g. "objective.split_prob > 0 trains on"), if `net` cannot
 /// take the halves (T/2 states) of a horizon-T trajectory.
-void CheckHalfHorizon(const VelocityNet& net, int64_t horizon, const std::string& what);
+void CheckHalfHorizon(const TrajectoryNet& net, int64_t horizon, const std::string& what);
 
 /// "(2, 64, 4)"
 std::string ShapeString(const torch::Tensor& tensor);

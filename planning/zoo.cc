@@ -1,0 +1,33 @@
+#include "planning/zoo.h"
+
+#include "core/error.h"
+
+namespace flowplan::planning {
+namespace {
+
+std::shared_ptr<models::TrajectoryNet> TrajectoryNetOf(const LearnedPlannerParts& parts, const char* objective) {
+  auto net = std::dynamic_pointer_cast<models::TrajectoryNet>(parts.net);
+  if (!net) {
+    throw Error(std::string("objective.name: ") + objective + " plans with a trajectory network (model.architecture "
+                "unet1d or transformer)");
+  }
+  return net;
+}
+
+}  // namespace
+
+std::unique_ptr<Planner> MakeLearnedPlanner(const LearnedPlannerParts& parts) {
+  // One line per objective.
+  switch (parts.objective.name) {
+    case objectives::ObjectiveKind::kFlowMatching:
+      return std::make_unique<FlowPlanner>(TrajectoryNetOf(parts, "flow_matching"), parts.normalizer,
+                                           parts.objective.conditioning, parts.horizon, parts.sampler, parts.guidance);
+    case objectives::ObjectiveKind::kDdpm:
+    case objectives::ObjectiveKind::kVae:
+      throw Error("objective.name: no planner for this objective yet");
+  }
+  FLOWPLAN_DEMAND(false);
+  return nullptr;
+}
+
+}  // namespace flowplan::planning
