@@ -60,7 +60,7 @@ torch::Tensor Guide::Step(const torch::Tensor& x_n, double t, const torch::Tenso
 void Guide::WriteScript(jit::ScriptModule& module) const {
   cost_->WriteScript(module, "guidance_cost");  // also writes guidance_cost_<term> for every weighted term
   std::string s = R"PY(
-def guide(self, x: Tensor, t: float, obstacles: Tensor, scale: float) -> Tensor:
+def guide_gradient(self, x: Tensor, obstacles: Tensor) -> Tensor:
     raw = self.denormalize_unclamped(x)
     gradient = torch.zeros_like(x)
 )PY";
@@ -73,7 +73,8 @@ def guide(self, x: Tensor, t: float, obstacles: Tensor, scale: float) -> Tensor:
     }
     s += "    gradient = gradient + " + jit::ScriptFloat(term.weight) + " * part\n";
   }
-  s += "    gradient = gradient * (0.5 * (self.hi - self.lo))\n";
+  s += "    return gradient * (0.5 * (self.hi - self.lo))\n";
+  s += "\ndef guide(self, x: Tensor, t: float, obstacles: Tensor, scale: float) -> Tensor:\n";
   switch (config_.schedule) {
     case GuidanceSchedule::kOneMinusT:
       s += "    b = 1.0 - t\n";
@@ -85,7 +86,7 @@ def guide(self, x: Tensor, t: float, obstacles: Tensor, scale: float) -> Tensor:
       s += "    b = t\n";
       break;
   }
-  s += "    return x - (scale * b) * gradient\n";
+  s += "    return x - (scale * b) * self.guide_gradient(x, obstacles)\n";
   module.Define(s);
 }
 

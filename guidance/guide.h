@@ -84,8 +84,8 @@ class Guide {
   /// x − scale · b_t · Gradient(x): one guidance step at flow time t.
   torch::Tensor Step(const torch::Tensor& x_n, double t, const torch::Tensor& obstacles, double scale) const;
 
-  /// Adds `guide(self, x, t: float, obstacles, scale: float) -> Tensor` (Step)
-  /// and the cost's methods. Needs the normalizer's and the robot's methods in the module.
+  /// Adds `guide_gradient(self, x, obstacles)` (Gradient), `guide(self, x,
+  /// t: float, obstacles, scale: float)` (Step) and the cost's methods. Needs the normalizer's and the robot's methods in the module.
   void WriteScript(jit::ScriptModule& module) const;
 
   const GuidanceConfig& config() const { return config_; }

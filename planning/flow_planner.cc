@@ -4,6 +4,7 @@
 
 #include "core/error.h"
 #include "guidance/scene.h"
+#include "planning/script_parts.h"
 
 namespace flowplan::planning {
 
@@ -130,42 +131,15 @@ PlanResult FlowPlanner::Plan(const PlanRequest& request) const {
 }
 
 void FlowPlanner::WriteScript(jit::ScriptModule& module) const {
-  if (!guidance_.robot) throw Error("export: the planner has no robot description (retrain with a current dataset)");
   const bool inpaint = conditioning_ == Conditioning::kInpaint;
   const bool splitting = sampler_.splitting != Splitting::kNone;
   const std::string D = std::to_string(state_dim());
   const std::string T = std::to_string(horizon_);
   const std::string H = std::to_string(horizon_ / 2);
-  const std::string C = std::to_string(2 * state_dim());
-  const std::string K1 = std::to_string(guidance_.robot->workspace_dim() + 1);
+  WritePlanningSupport(module, normalizer_, guidance_);
+  WriteTrajectoryNetwork(module, *net_, conditioning_, horizon_, "velocity");
 
-  // The network, and the same for callers with its arguments checked.
-  jit::ScriptWriter net_writer(module, "p_");
-  const std::string out = net_->WriteScript(net_writer);
-  net_writer.Line("return " + out);
-  module.Define("def net_velocity(self, x: Tensor, t: Tensor, cond: Optional[Tensor]) -> Tensor:\n" +
-                net_writer.Body(1));
   std::string s = R"PY(
-def velocity(self, x: Tensor, t: Tensor, cond: Optional[Tensor]) -> Tensor:
-    assert x.dim() == 3 and x.size(1) == )PY" + T + " and x.size(2) == " + D + R"PY(, "velocity: x: expected (B, )PY" + T + ", " + D + R"PY(), normalized"
-    assert t.dim() == 1 and t.size(0) == x.size(0), "velocity: t: expected (B,) with the B of x"
-)PY";
-  s += inpaint ? "    assert cond is None, \"velocity: cond: this planner conditions by inpainting; pass None\"\n"
-               : "    assert cond is not None and cond.dim() == 2 and cond.size(0) == x.size(0) and cond.size(1) == " + C +
-                     ", \"velocity: cond: expected (B, " + C + "), the normalized start and goal\"\n";
-  s += "    return self.net_velocity(x, t, cond)\n";
-  module.Define(s);
-
-  normalizer_.WriteScript(module);
-  guidance_.robot->WriteScript(module);
-  guidance::Guide(guidance::MakeGuidanceCost(guidance_.config, guidance_.robot, guidance_.dt), normalizer_,
-                  guidance_.config)
-      .WriteScript(module);
-
-  s = R"PY(
-def inpaint(self, x: Tensor, start: Tensor, goal: Tensor) -> Tensor:
-    return torch.cat([start.unsqueeze(1), x[:, 1:-1], goal.unsqueeze(1)], 1)
-
 def integrate(self, x: Tensor, s: Tensor, g: Tensor, t0: float, steps: int, obstacles: Optional[Tensor], scale: float) -> Tensor:
 )PY";
   s += inpaint ? "    cond: Optional[Tensor] = None\n    x = self.inpaint(x, s, g)\n"
@@ -174,33 +148,15 @@ def integrate(self, x: Tensor, s: Tensor, g: Tensor, t0: float, steps: int, obst
     for i in range(steps):
         t = torch.full([x.size(0)], t0 + i * h, dtype=x.dtype, device=x.device)
 )PY";
-  s += inpaint ? "        x = x + h * self.net_velocity(self.inpaint(x, s, g), t, cond)\n"
-               : "        x = x + h * self.net_velocity(x, t, cond)\n";
+  s += inpaint ? "        x = x + h * self.network(self.inpaint(x, s, g), t, cond)\n"
+               : "        x = x + h * self.network(x, t, cond)\n";
   s += R"PY(        if obstacles is not None:
             x = self.guide(x, t0 + (i + 1) * h, obstacles, scale)
 )PY";
   if (inpaint) s += "        x = self.inpaint(x, s, g)\n";
   s += "    return x\n";
-  s += R"PY(
-def plan(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Tensor] = None, obstacles: Optional[Tensor] = None, scale: Optional[float] = None) -> Tensor:
-    assert start.dim() == 2 and start.size(1) == )PY" + D + R"PY(, "plan: start: expected (B, )PY" + D + R"PY()"
-    assert goal.dim() == 2 and goal.size(0) == start.size(0) and goal.size(1) == )PY" + D + R"PY(, "plan: goal: expected the shape of start"
-    assert noise.dim() == 3 and noise.size(0) == start.size(0) and noise.size(1) == )PY" + T + " and noise.size(2) == " + D + R"PY(, "plan: noise: expected (B, )PY" + T + ", " + D + R"PY()"
-    guidance_scale = self.guidance_scale if scale is None else scale
-    assert guidance_scale >= 0.0, "plan: scale: expected a non-negative guidance scale"
-    guided: Optional[Tensor] = None
-    if obstacles is not None:
-        assert obstacles.dim() == 2 and obstacles.size(1) == )PY" + K1 + R"PY(, "plan: obstacles: expected (K, )PY" + K1 + R"PY() rows of centre and radius"
-        assert bool(torch.isfinite(obstacles).all()), "plan: obstacles: expected finite values"
-        assert bool((obstacles[:, -1] >= 0).all()), "plan: obstacles: expected non-negative radii"
-        if obstacles.size(0) > 0 and guidance_scale != 0.0:
-            guided = obstacles.float()
-    start = start.float()
-    goal = goal.float()
-    s = self.normalize(start)
-    g = self.normalize(goal)
-    x = self.integrate(noise.float(), s, g, 0.0, )PY" + std::to_string(sampler_.steps) + R"PY(, guided, guidance_scale)
-)PY";
+  s += PlanPreamble(state_dim(), horizon_, guidance_.robot->workspace_dim());
+  s += "    x = self.integrate(noise.float(), s, g, 0.0, " + std::to_string(sampler_.steps) + ", guided, guidance_scale)\n";
   if (splitting) {
     s += R"PY(    assert renoise is not None, "plan: renoise: this planner splits trajectories and needs re-noising noise (B, )PY" + T + ", " + D + R"PY()"
     assert renoise.size() == noise.size(), "plan: renoise: expected the shape of noise"
@@ -215,25 +171,17 @@ def plan(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Ten
 )PY";
   }
   s += inpaint ? "    return self.inpaint(self.denormalize(x), start, goal)\n" : "    return self.denormalize(x)\n";
-  s += R"PY(
-def sample(self, start: Tensor, goal: Tensor, num_samples: int, obstacles: Optional[Tensor] = None, scale: Optional[float] = None) -> Tensor:
-    assert start.dim() == 1 and goal.dim() == 1, "sample: expected start and goal of shape (D,)"
-    noise = torch.randn([num_samples, )PY" + T + ", " + D + R"PY(], dtype=self.lo.dtype, device=self.lo.device)
-)PY";
-  s += splitting ? "    renoise: Optional[Tensor] = torch.randn([num_samples, " + T + ", " + D +
-                       "], dtype=self.lo.dtype, device=self.lo.device)\n"
-                 : "    renoise: Optional[Tensor] = None\n";
-  s += "    return self.plan(start.unsqueeze(0).expand(num_samples, -1), goal.unsqueeze(0).expand(num_samples, -1), "
-       "noise, renoise, obstacles, scale)\n";
+  s += SampleMethod(state_dim(), horizon_, splitting ? "[" + T + ", " + D + "]" : "");
   module.Define(s);
 
+  module.Attribute("planner", c10::StringType::get(), std::string("flow_matching"));
+  WriteNoiseShapes(module, {horizon_, state_dim()}, splitting ? std::vector<int64_t>{horizon_, state_dim()}
+                                                              : std::vector<int64_t>{});
   module.Attribute("horizon", c10::IntType::get(), horizon_);
   module.Attribute("state_dim", c10::IntType::get(), state_dim());
   module.Attribute("steps", c10::IntType::get(), static_cast<int64_t>(sampler_.steps));
   module.Attribute("splitting", c10::StringType::get(), std::string(config::EnumName(sampler_.splitting)));
   module.Attribute("conditioning", c10::StringType::get(), std::string(config::EnumName(conditioning_)));
-  module.Attribute("guidance_scale", c10::FloatType::get(), guidance_.config.scale);
-  module.Attribute("guidance", c10::StringType::get(), config::ToYaml(guidance_.config));
 }
 
 }  // namespace flowplan::planning

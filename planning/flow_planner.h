@@ -15,6 +15,7 @@
 #include "models/conditioning.h"
 #include "planning/euler.h"
 #include "planning/planner.h"
+#include "planning/sampler_config.h"
 
 namespace flowplan::planning {
 
@@ -24,35 +25,6 @@ using models::ConditionDim;
 using models::Conditioning;
 using models::ConditionVector;
 using models::Inpaint;
-
-/// Inference-time trajectory splitting (SPEC section 2).
-enum class Splitting {
-  kNone,
-  // After the full loop: re-noise the plan to t = 0.5, cut it into halves that
-  // take the states beside the midpoint as their missing boundary conditions,
-  // and integrate each half from t = 0.5 to 1 with half the steps (guided too).
-  kMidpoint,
-};
-
-inline const config::EnumNames<Splitting>& EnumEntries(Splitting) {
-  static const config::EnumNames<Splitting> names = {{Splitting::kNone, "none"}, {Splitting::kMidpoint, "midpoint"}};
-  return names;
-}
-
-/// The `sampler` section of an experiment config.
-struct SamplerConfig {
-  int steps = 10;  // Euler steps from t = 0 (noise) to t = 1 (data)
-  Splitting splitting = Splitting::kNone;
-
-  template <class V>
-  void Visit(V& v) {
-    v.Field("steps", steps, "Euler steps from noise to a plan", config::Positive());
-    v.Field("splitting", splitting, "inference-time trajectory splitting");
-  }
-};
-
-/// Euler steps of the second (t = 0.5 -> 1) stage of splitting: half the steps, at least one.
-inline int SplitSteps(const SamplerConfig& sampler) { return std::max(1, sampler.steps / 2); }
 
 /// What guidance needs besides the network: the robot whose collision spheres
 /// meet the obstacles, the time between states, and the default settings.

@@ -26,7 +26,8 @@ ScriptPlanner::ScriptPlanner(const std::string& path) : path_(path) {
     }
     horizon_ = module_.attr("horizon").toInt();
     state_dim_ = module_.attr("state_dim").toInt();
-    splitting_ = module_.attr("splitting").toStringRef() != "none";
+    noise_shape_ = module_.attr("noise_shape").toIntVector();
+    renoise_shape_ = module_.attr("renoise_shape").toIntVector();
     env_ = module_.attr("env").toStringRef();
     dt_ = module_.attr("dt").toDouble();
     config_yaml_ = module_.attr("config").toStringRef();
@@ -42,10 +43,15 @@ PlanResult ScriptPlanner::Plan(const PlanRequest& request) const {
   CheckEnds(request.start, request.goal, state_dim_, "plan");
   if (request.obstacles.defined()) guidance::CheckObstacles(request.obstacles, robot_.workspace_dim, "plan: obstacles");
   auto generator = at::make_generator<at::CPUGeneratorImpl>(request.seed);
-  const std::vector<int64_t> shape = {request.start.size(0), horizon_, state_dim_};
-  const torch::Tensor noise = torch::randn(shape, generator, torch::kFloat32);
+  auto with_batch = [&](const std::vector<int64_t>& shape) {
+    std::vector<int64_t> out = {request.start.size(0)};
+    out.insert(out.end(), shape.begin(), shape.end());
+    return out;
+  };
+  const torch::Tensor noise = torch::randn(with_batch(noise_shape_), generator, torch::kFloat32);
   const torch::jit::IValue renoise =
-      splitting_ ? torch::jit::IValue(torch::randn(shape, generator, torch::kFloat32)) : torch::jit::IValue();
+      renoise_shape_.empty() ? torch::jit::IValue()
+                             : torch::jit::IValue(torch::randn(with_batch(renoise_shape_), generator, torch::kFloat32));
   const torch::jit::IValue obstacles =
       request.obstacles.defined() ? torch::jit::IValue(request.obstacles.to(torch::kFloat32)) : torch::jit::IValue();
   const torch::jit::IValue scale = request.guidance ? torch::jit::IValue(request.guidance->scale) : torch::jit::IValue();

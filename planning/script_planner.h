@@ -38,7 +38,7 @@ class ScriptPlanner : public Planner {
   std::string path_;
   mutable torch::jit::Module module_;  // run_method is not const; running it is thread-safe
   int64_t horizon_ = 0, state_dim_ = 0;
-  bool splitting_ = false;
+  std::vector<int64_t> noise_shape_, renoise_shape_;  // after B; renoise empty: none
   std::string env_, config_yaml_;
   double dt_ = 0.0;
   std::vector<std::string> state_labels_;

@@ -1,6 +1,7 @@
 #include "planning/zoo.h"
 
 #include "core/error.h"
+#include "planning/ddpm_planner.h"
 
 namespace flowplan::planning {
 namespace {
@@ -23,6 +24,9 @@ std::unique_ptr<Planner> MakeLearnedPlanner(const LearnedPlannerParts& parts) {
       return std::make_unique<FlowPlanner>(TrajectoryNetOf(parts, "flow_matching"), parts.normalizer,
                                            parts.objective.conditioning, parts.horizon, parts.sampler, parts.guidance);
     case objectives::ObjectiveKind::kDdpm:
+      return std::make_unique<DdpmPlanner>(TrajectoryNetOf(parts, "ddpm"), parts.normalizer,
+                                           parts.objective.conditioning, parts.horizon, parts.objective.ddpm,
+                                           parts.sampler.ddpm, parts.guidance);
     case objectives::ObjectiveKind::kVae:
       throw Error("objective.name: no planner for this objective yet");
   }

@@ -12,6 +12,7 @@
 
 #include "kinematics/arm_kinematics.h"
 #include "models/model_config.h"
+#include "planning/ddpm_planner.h"
 #include "planning/flow_planner.h"
 #include "sim/franka_model.h"
 #include "tests/support/scratch_dir.h"
@@ -170,6 +171,41 @@ TEST(ExportTest, GuidedPointPlannerMatchesInPythonUnderInferenceMode) {
     const Request r = MakeRequest(planner, 3);
     const torch::Tensor got = PlanInPython(dir, path, r, 4);
     EXPECT_LT(MaxDifference(got, planner.PlanWithNoise(r.start, r.goal, r.noise, r.renoise, r.obstacles)), 1e-5);
+  }
+}
+
+DdpmPlanner MakeDdpmPlanner(std::shared_ptr<const kinematics::Robot> robot) {
+  const FlowPlanner flow = MakePlanner(Conditioning::kInpaint, Splitting::kNone, robot, {32, 64});
+  objectives::DdpmConfig schedule;
+  schedule.steps = 8;  // small, so the test is quick; guided: the last 2 steps and 3 extra
+  DdpmSamplerConfig sampler;
+  sampler.extra_steps = 3;
+  sampler.guide_iterations = 2;
+  return DdpmPlanner(flow.net(), flow.normalizer(), Conditioning::kInpaint, 64, schedule, sampler, flow.guidance());
+}
+
+TEST(ExportTest, GuidedDdpmPlannerMatchesInCppAndPython) {
+  for (const auto& robot : {Disc(), Franka()}) {
+    const DdpmPlanner planner = MakeDdpmPlanner(robot);
+    const int64_t D = planner.state_dim();
+    const std::string dir = flowplan::testing::ScratchDir().string();
+    const std::string path = dir + "/ddpm.pt";
+    ExportPlanner(planner, Metadata(D), path);
+    torch::manual_seed(9);
+    const FlowPlanner reference = MakePlanner(Conditioning::kInpaint, Splitting::kNone, robot, {32, 64});
+    Request r = MakeRequest(reference, 2);
+    r.renoise = torch::randn({2, 7, 64, D});
+    const torch::Tensor expected = planner.PlanWithNoise(r.start, r.goal, r.noise, r.renoise, r.obstacles);
+    const torch::Tensor unguided = planner.PlanWithNoise(r.start, r.goal, r.noise, r.renoise);
+    EXPECT_GT(MaxDifference(expected, unguided), 1e-3) << "guidance changed nothing";
+    torch::jit::Module loaded = torch::jit::load(path);
+    EXPECT_EQ(loaded.attr("planner").toStringRef(), "ddpm");
+    EXPECT_LT(MaxDifference(loaded.run_method("plan", r.start, r.goal, r.noise, r.renoise, r.obstacles).toTensor(),
+                            expected),
+              1e-5);
+    EXPECT_LT(MaxDifference(PlanInPython(dir, path, r, D), expected), 1e-5);
+    EXPECT_THAT([&] { loaded.run_method("plan", r.start, r.goal, r.noise, r.noise); },
+                ThrowsMessage<std::exception>(HasSubstr("plan: renoise: expected the noise of the DDPM steps")));
   }
 }
 

@@ -23,8 +23,9 @@ def read(name, shape):
     return torch.from_file(f"{folder}/{name}", size=int(torch.Size(shape).numel()), dtype=torch.float32).view(shape)
 
 
-start, goal, noise = read("start.bin", (batch, D)), read("goal.bin", (batch, D)), read("noise.bin", (batch, T, D))
-renoise = read("renoise.bin", (batch, T, D)) if planner.splitting != "none" else None
+start, goal = read("start.bin", (batch, D)), read("goal.bin", (batch, D))
+noise = read("noise.bin", (batch, *planner.noise_shape))
+renoise = read("renoise.bin", (batch, *planner.renoise_shape)) if len(planner.renoise_shape) > 0 else None
 obstacles = read("obstacles.bin", (num_obstacles, W + 1))
 with torch.inference_mode():
     guided = planner.plan(start, goal, noise, renoise, obstacles)

@@ -1,0 +1,78 @@
+#pragma once
+
+#include <algorithm>
+
+#include "core/config.h"
+
+namespace flowplan::planning {
+
+/// Inference-time trajectory splitting (SPEC section 2).
+enum class Splitting {
+  kNone,
+  // After the full loop: re-noise the plan to t = 0.5, cut it into halves that
+  // take the states beside the midpoint as their missing boundary conditions,
+  // and integrate each half from t = 0.5 to 1 with half the steps (guided too).
+  kMidpoint,
+};
+
+inline const config::EnumNames<Splitting>& EnumEntries(Splitting) {
+  static const config::EnumNames<Splitting> names = {{Splitting::kNone, "none"}, {Splitting::kMidpoint, "midpoint"}};
+  return names;
+}
+
+/// How the DDPM planner samples and guides (Motion Planning Diffusion's scheme).
+struct DdpmSamplerConfig {
+  double guide_fraction = 0.25;  // guidance in the last ceil(fraction · N) denoising steps
+  int guide_iterations = 5;      // gradient steps on the posterior mean per guided step
+  int extra_steps = 5;           // noise-free denoising steps at k = 0 after the chain, guided
+  double noise_scale = 1.0;      // factor on the standard deviation of the noise each step adds
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("guide_fraction", guide_fraction, "guide the last ceil(fraction * N) denoising steps",
+            config::Probability());
+    v.Field("guide_iterations", guide_iterations, "gradient steps per guided denoising step", config::NonNegative());
+    v.Field("extra_steps", extra_steps, "noise-free guided steps at the end", config::NonNegative());
+    v.Field("noise_scale", noise_scale, "factor on the noise added at each step", config::NonNegative());
+  }
+};
+
+/// How the latent (VAE) planner optimizes its waypoints.
+struct LatentPlannerConfig {
+  int iterations = 10;         // Adam steps on the latent per waypoint
+  double lr = 0.05;            // Adam step size
+  double goal_weight = 1.0;    // weight of the TCP's distance to the goal TCP
+  double prior_weight = 1e-3;  // weight of 0.5 |z|^2 (the latent's standard-normal prior)
+  double goal_tolerance = 0.01;  // world units: waypoints stop once the TCP is this close to the goal
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("iterations", iterations, "Adam steps on the latent per waypoint", config::Positive());
+    v.Field("lr", lr, "Adam step size on the latent", config::Positive());
+    v.Field("goal_weight", goal_weight, "weight of the TCP distance to the goal", config::NonNegative());
+    v.Field("prior_weight", prior_weight, "weight of the latent prior 0.5 |z|^2", config::NonNegative());
+    v.Field("goal_tolerance", goal_tolerance, "stop adding waypoints once the TCP is this close to the goal",
+            config::Positive());
+  }
+};
+
+/// The `sampler` section of an experiment config: how each planner samples.
+struct SamplerConfig {
+  int steps = 10;  // flow matching: Euler steps from t = 0 (noise) to t = 1 (data)
+  Splitting splitting = Splitting::kNone;
+  DdpmSamplerConfig ddpm;
+  LatentPlannerConfig latent;
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("steps", steps, "flow matching: Euler steps from noise to a plan", config::Positive());
+    v.Field("splitting", splitting, "flow matching: inference-time trajectory splitting");
+    v.Field("ddpm", ddpm, "DDPM planner (MPD): guidance schedule");
+    v.Field("latent", latent, "latent (VAE) planner: activation maximization");
+  }
+};
+
+/// Euler steps of the second (t = 0.5 -> 1) stage of splitting: half the steps, at least one.
+inline int SplitSteps(const SamplerConfig& sampler) { return std::max(1, sampler.steps / 2); }
+
+}  // namespace flowplan::planning
