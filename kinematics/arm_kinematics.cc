@@ -230,6 +230,14 @@ torch::Tensor ArmKinematics::Tcp(const torch::Tensor& q) const {
   return TcpFrom(LinkFrames(q), q);
 }
 
+torch::Tensor ArmKinematics::TcpVjp(const torch::Tensor& q, const torch::Tensor& g) const {
+  // ∂p/∂q_j = a_j × (p − o_j) for the joints that move the TCP: the product with g is a_j · ((p − o_j) × g).
+  const FkResult r = Forward(q);
+  const torch::Tensor arm = r.tcp_position.unsqueeze(1) - r.joint_origins;  // (N, J, 3)
+  return (r.joint_axes * torch::cross(arm, g.unsqueeze(1).expand_as(arm), -1)).sum(-1) *
+         tcp_ancestors_.to(q.options()).unsqueeze(0);
+}
+
 SpherePoses ArmKinematics::Spheres(const torch::Tensor& q) const {
   FkResult r = Forward(q);
   return {r.sphere_centres, r.joint_axes, r.joint_origins};
@@ -295,6 +303,14 @@ def robot_spheres(self, q: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
     turned = frames.index_select(1, self.robot_joint_links.to(q.device))
     axes = torch.matmul(turned[:, :, 0:3, 0:3], self.robot_joint_axes.to(q.dtype).unsqueeze(-1)).squeeze(-1)
     return centres, axes, turned[:, :, 0:3, 3]
+
+def robot_tcp_vjp(self, q: Tensor, g: Tensor) -> Tensor:
+    frames = self.robot_link_frames(q)
+    position = torch.matmul(frames[:, )PY" + std::to_string(tcp_link_) + R"PY(], self.robot_tcp_pose.to(q.dtype))[:, 0:3, 3]
+    turned = frames.index_select(1, self.robot_joint_links.to(q.device))
+    axes = torch.matmul(turned[:, :, 0:3, 0:3], self.robot_joint_axes.to(q.dtype).unsqueeze(-1)).squeeze(-1)
+    arm = position.unsqueeze(1) - turned[:, :, 0:3, 3]
+    return (axes * torch.cross(arm, g.unsqueeze(1).expand_as(arm), -1)).sum(-1) * self.robot_tcp_ancestors.to(q.dtype).unsqueeze(0)
 
 def robot_spheres_vjp(self, centres: Tensor, axes: Tensor, origins: Tensor, g: Tensor) -> Tensor:
     ancestors = self.robot_ancestors.to(g.dtype)

@@ -48,6 +48,7 @@ class ArmKinematics : public Robot {
   FkResult Forward(const torch::Tensor& q) const;
 
   torch::Tensor Tcp(const torch::Tensor& q) const override;
+  torch::Tensor TcpVjp(const torch::Tensor& q, const torch::Tensor& g) const override;
   SpherePoses Spheres(const torch::Tensor& q) const override;
   torch::Tensor SpheresVjp(const SpherePoses& poses, const torch::Tensor& grad_centres) const override;
   void WriteScript(jit::ScriptModule& module) const override;

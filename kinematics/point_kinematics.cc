@@ -7,6 +7,11 @@ torch::Tensor PointKinematics::Tcp(const torch::Tensor& q) const {
   return q;
 }
 
+torch::Tensor PointKinematics::TcpVjp(const torch::Tensor& q, const torch::Tensor& g) const {
+  CheckJoints(q);
+  return g;
+}
+
 SpherePoses PointKinematics::Spheres(const torch::Tensor& q) const {
   CheckJoints(q);
   return {q.unsqueeze(1), torch::Tensor(), torch::Tensor()};
@@ -20,6 +25,9 @@ void PointKinematics::WriteScript(jit::ScriptModule& module) const {
   module.Define(R"PY(
 def robot_tcp(self, q: Tensor) -> Tensor:
     return q
+
+def robot_tcp_vjp(self, q: Tensor, g: Tensor) -> Tensor:
+    return g
 
 def robot_spheres(self, q: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
     none = torch.zeros([0], dtype=q.dtype, device=q.device)

@@ -33,6 +33,7 @@ struct SpherePoses {
 ///   collision_spheres(q (..., J)) -> (..., S, W + 1): centre and radius of every sphere
 ///   robot_spheres(q (N, J)) -> (centres, joint_axes, joint_origins) as SpherePoses
 ///   robot_spheres_vjp(centres, joint_axes, joint_origins, g (N, S, W)) -> (N, J)
+///   robot_tcp_vjp(q (N, J), g (N, W)) -> (N, J)
 /// the buffer robot_sphere_radii (S,) and the attributes robot (the description
 /// as YAML), num_joints and workspace_dim.
 class Robot {
@@ -53,6 +54,9 @@ class Robot {
   /// TCP positions (N, W), m, of configurations q (N, J), float32 or float64.
   /// @throws flowplan::Error "kinematics: q: expected (N, 7), got (3, 6)".
   virtual torch::Tensor Tcp(const torch::Tensor& q) const = 0;
+
+  /// ∂/∂q of Σ ⟨g, Tcp(q)⟩: q (N, J), g (N, W) -> (N, J), written out.
+  virtual torch::Tensor TcpVjp(const torch::Tensor& q, const torch::Tensor& g) const = 0;
 
   /// Sphere centres of q (N, J), with what SpheresVjp needs.
   virtual SpherePoses Spheres(const torch::Tensor& q) const = 0;

@@ -163,7 +163,7 @@ def denoise(self, x: Tensor, k: int, cond: Optional[Tensor], s: Tensor, g: Tenso
   s += "        x = self.denoise(x, 0, cond, s, g, guided, guidance_scale)\n";
   if (inpaint) s += "        x = self.inpaint(x, s, g)\n";
   s += inpaint ? "    return self.inpaint(self.denormalize(x), start, goal)\n" : "    return self.denormalize(x)\n";
-  s += SampleMethod(state_dim(), horizon_, "[" + N1 + ", " + T + ", " + D + "]");
+  s += SampleMethod("[" + T + ", " + D + "]", "[" + N1 + ", " + T + ", " + D + "]");
   module.Define(s);
   module.Attribute("planner", c10::StringType::get(), std::string("ddpm"));
   WriteNoiseShapes(module, {horizon_, state_dim()}, {N - 1, horizon_, state_dim()});

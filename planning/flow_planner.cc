@@ -171,7 +171,7 @@ def integrate(self, x: Tensor, s: Tensor, g: Tensor, t0: float, steps: int, obst
 )PY";
   }
   s += inpaint ? "    return self.inpaint(self.denormalize(x), start, goal)\n" : "    return self.denormalize(x)\n";
-  s += SampleMethod(state_dim(), horizon_, splitting ? "[" + T + ", " + D + "]" : "");
+  s += SampleMethod("[" + T + ", " + D + "]", splitting ? "[" + T + ", " + D + "]" : "");
   module.Define(s);
 
   module.Attribute("planner", c10::StringType::get(), std::string("flow_matching"));

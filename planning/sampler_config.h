@@ -58,6 +58,10 @@ struct LatentPlannerConfig {
 
 /// The `sampler` section of an experiment config: how each planner samples.
 struct SamplerConfig {
+  SamplerConfig() = default;
+  /// The flow sampler's settings, every other planner's at their defaults.
+  explicit SamplerConfig(int euler_steps, Splitting split = Splitting::kNone) : steps(euler_steps), splitting(split) {}
+
   int steps = 10;  // flow matching: Euler steps from t = 0 (noise) to t = 1 (data)
   Splitting splitting = Splitting::kNone;
   DdpmSamplerConfig ddpm;

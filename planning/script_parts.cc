@@ -71,12 +71,11 @@ void WriteNoiseShapes(jit::ScriptModule& module, const std::vector<int64_t>& noi
   module.Attribute("renoise_shape", c10::ListType::ofInts(), c10::List<int64_t>(renoise));
 }
 
-std::string SampleMethod(int64_t state_dim, int64_t horizon, const std::string& renoise_shape) {
-  const std::string D = std::to_string(state_dim), T = std::to_string(horizon);
+std::string SampleMethod(const std::string& noise_shape, const std::string& renoise_shape) {
   std::string s = R"PY(
 def sample(self, start: Tensor, goal: Tensor, num_samples: int, obstacles: Optional[Tensor] = None, scale: Optional[float] = None) -> Tensor:
     assert start.dim() == 1 and goal.dim() == 1, "sample: expected start and goal of shape (D,)"
-    noise = torch.randn([num_samples, )PY" + T + ", " + D + R"PY(], dtype=self.lo.dtype, device=self.lo.device)
+    noise = torch.randn([num_samples] + )PY" + noise_shape + R"PY(, dtype=self.lo.dtype, device=self.lo.device)
 )PY";
   s += renoise_shape.empty()
            ? "    renoise: Optional[Tensor] = None\n"

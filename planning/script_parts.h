@@ -41,9 +41,9 @@ std::string PlanPreamble(int64_t state_dim, int64_t horizon, int64_t workspace_d
 void WriteNoiseShapes(jit::ScriptModule& module, const std::vector<int64_t>& noise,
                       const std::vector<int64_t>& renoise);
 
-/// `sample(self, start, goal, num_samples, obstacles, scale)`, drawing
-/// `noise` (num_samples, T, D) and `renoise_shape` (a TorchScript list after
-/// num_samples, e.g. "[64, 14]"; empty: None) from the global generator.
-std::string SampleMethod(int64_t state_dim, int64_t horizon, const std::string& renoise_shape);
+/// `sample(self, start, goal, num_samples, obstacles, scale)`, drawing plan()'s
+/// noise and renoise of the shapes after num_samples given as TorchScript
+/// lists (e.g. "[64, 14]"; renoise empty: None) from the global generator.
+std::string SampleMethod(const std::string& noise_shape, const std::string& renoise_shape);
 
 }  // namespace flowplan::planning

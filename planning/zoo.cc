@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "planning/ddpm_planner.h"
+#include "planning/latent_planner.h"
 
 namespace flowplan::planning {
 namespace {
@@ -27,8 +28,11 @@ std::unique_ptr<Planner> MakeLearnedPlanner(const LearnedPlannerParts& parts) {
       return std::make_unique<DdpmPlanner>(TrajectoryNetOf(parts, "ddpm"), parts.normalizer,
                                            parts.objective.conditioning, parts.horizon, parts.objective.ddpm,
                                            parts.sampler.ddpm, parts.guidance);
-    case objectives::ObjectiveKind::kVae:
-      throw Error("objective.name: no planner for this objective yet");
+    case objectives::ObjectiveKind::kVae: {
+      auto vae = std::dynamic_pointer_cast<models::StateVae>(parts.net);
+      if (!vae) throw Error("objective.name: vae plans with a state VAE (model.architecture state_vae)");
+      return std::make_unique<LatentPlanner>(vae, parts.normalizer, parts.horizon, parts.sampler.latent, parts.guidance);
+    }
   }
   FLOWPLAN_DEMAND(false);
   return nullptr;

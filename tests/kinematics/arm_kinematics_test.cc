@@ -128,6 +128,16 @@ TEST_F(ForwardKinematicsTest, AutogradMatchesCentralDifferences) {
   }
 }
 
+TEST_F(ForwardKinematicsTest, TcpVjpIsTheTcpsJacobianTransposed) {
+  // The written-out product against autograd through the same FK, in float64.
+  const torch::Tensor q0 = RandomQ(6, 5);
+  torch::manual_seed(6);
+  const torch::Tensor g = torch::randn({6, 3}, torch::kFloat64);
+  const torch::Tensor q = q0.clone().requires_grad_(true);
+  const torch::Tensor expected = torch::autograd::grad({(fk_.Tcp(q) * g).sum()}, {q})[0];
+  EXPECT_LT((fk_.TcpVjp(q0, g) - expected).abs().max().item<double>(), 1e-12);
+}
+
 TEST_F(ForwardKinematicsTest, InverseTcpReachesTargetsAsTheMujocoSolverDoes) {
   // Targets in the inner part of the reach box, where every point is reachable with the gripper down.
   torch::manual_seed(6);

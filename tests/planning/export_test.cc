@@ -14,6 +14,7 @@
 #include "models/model_config.h"
 #include "planning/ddpm_planner.h"
 #include "planning/flow_planner.h"
+#include "planning/latent_planner.h"
 #include "sim/franka_model.h"
 #include "tests/support/scratch_dir.h"
 
@@ -33,11 +34,14 @@ std::shared_ptr<const kinematics::Robot> Franka() {
 }
 
 FlowPlanner MakePlanner(Conditioning conditioning, Splitting splitting, std::shared_ptr<const kinematics::Robot> robot,
-                        std::vector<int> down_dims = {32, 64, 128, 256}) {
+                        std::vector<int> down_dims = {32, 64, 128, 256},
+                        models::Architecture architecture = models::Architecture::kUNet1D) {
   torch::manual_seed(11);
   const int64_t J = robot->num_joints(), D = 2 * J;
   models::ModelConfig config;  // the default UNet exercises every block type
+  config.architecture = architecture;
   config.unet.down_dims = down_dims;
+  config.transformer.d_model = 64;
   auto net = models::MakeTrajectoryNet(config, D, ConditionDim(conditioning, D));
   // Random weights would make the velocity tiny; scale them up so that a
   // mistake anywhere in the script shows in the plan.
@@ -52,7 +56,10 @@ FlowPlanner MakePlanner(Conditioning conditioning, Splitting splitting, std::sha
   guidance::GuidanceConfig guidance;
   guidance.scale = 0.5;
   guidance.clip = 5.0;  // exercised by the script too
-  return FlowPlanner(net, models::MinMaxNormalizer(lo, hi), conditioning, 64, SamplerConfig{10, splitting},
+  SamplerConfig sampler;
+  sampler.steps = 10;
+  sampler.splitting = splitting;
+  return FlowPlanner(net, models::MinMaxNormalizer(lo, hi), conditioning, 64, sampler,
                      GuidanceSetup{robot, 0.05, guidance});
 }
 
@@ -206,6 +213,56 @@ TEST(ExportTest, GuidedDdpmPlannerMatchesInCppAndPython) {
     EXPECT_LT(MaxDifference(PlanInPython(dir, path, r, D), expected), 1e-5);
     EXPECT_THAT([&] { loaded.run_method("plan", r.start, r.goal, r.noise, r.noise); },
                 ThrowsMessage<std::exception>(HasSubstr("plan: renoise: expected the noise of the DDPM steps")));
+  }
+}
+
+TEST(ExportTest, GuidedLatentPlannerMatchesInCppAndPython) {
+  for (const auto& robot : {Disc(), Franka()}) {
+    const FlowPlanner reference = MakePlanner(Conditioning::kInpaint, Splitting::kNone, robot, {32, 64});
+    const int64_t D = reference.state_dim();
+    torch::manual_seed(13);
+    models::StateVaeConfig vae_config;
+    vae_config.hidden = {32, 32};
+    vae_config.latent = 8;
+    auto vae = std::make_shared<models::StateVae>(vae_config, D);
+    LatentPlannerConfig config;
+    config.iterations = 3;
+    GuidanceSetup guidance = reference.guidance();
+    guidance.config.scale = 20.0;  // random weights: make the obstacles' pull visible in the plan
+    const LatentPlanner planner(vae, reference.normalizer(), 64, config, guidance);
+    const std::string dir = flowplan::testing::ScratchDir().string();
+    const std::string path = dir + "/latent.pt";
+    ExportPlanner(planner, Metadata(D), path);
+    Request r = MakeRequest(reference, 2);
+    r.noise = torch::randn({2, 8});
+    // A large obstacle around the first start's TCP, so that the random decoder's states meet it.
+    const int64_t J = robot->num_joints();
+    r.obstacles = torch::cat({robot->Tcp(r.start.slice(0, 0, 1).slice(1, 0, J)), torch::full({1, 1}, 0.3f)}, 1);
+    const torch::Tensor expected = planner.PlanWithNoise(r.start, r.goal, r.noise, r.obstacles);
+    torch::jit::Module loaded = torch::jit::load(path);
+    EXPECT_EQ(loaded.attr("planner").toStringRef(), "latent");
+    EXPECT_LT(MaxDifference(loaded.run_method("plan", r.start, r.goal, r.noise, torch::jit::IValue(), r.obstacles)
+                                .toTensor(),
+                            expected),
+              1e-5);
+    EXPECT_LT(MaxDifference(PlanInPython(dir, path, r, D), expected), 1e-5);
+  }
+}
+
+TEST(ExportTest, TransformerPlannerMatchesInCppAndPython) {
+  for (const Conditioning conditioning : {Conditioning::kInpaint, Conditioning::kDirect}) {
+    const FlowPlanner planner =
+        MakePlanner(conditioning, Splitting::kMidpoint, Disc(), {}, models::Architecture::kTransformer);
+    const std::string dir = flowplan::testing::ScratchDir().string();
+    const std::string path = dir + "/transformer.pt";
+    ExportPlanner(planner, Metadata(4), path);
+    const Request r = MakeRequest(planner, 2);
+    const torch::Tensor expected = planner.PlanWithNoise(r.start, r.goal, r.noise, r.renoise, r.obstacles);
+    torch::jit::Module loaded = torch::jit::load(path);
+    EXPECT_LT(MaxDifference(loaded.run_method("plan", r.start, r.goal, r.noise, r.renoise, r.obstacles).toTensor(),
+                            expected),
+              1e-5);
+    EXPECT_LT(MaxDifference(PlanInPython(dir, path, r, 4), expected), 1e-5);
   }
 }
 
