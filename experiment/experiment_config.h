@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "classical/rrt_connect.h"
 #include "core/config.h"
 #include "datasets/generate_config.h"
 #include "datasets/trajectory_loader.h"
@@ -33,6 +34,7 @@ struct ExperimentConfig {
   guidance::GuidanceConfig guidance;
   guidance::Scene scene;
   sim::ExecutionConfig execute;
+  classical::RrtConnectConfig rrt_connect;
 
   template <class V>
   void Visit(V& v) {
@@ -50,6 +52,7 @@ struct ExperimentConfig {
     v.Field("guidance", guidance, "guidance around obstacles (planning)");
     v.Field("scene", scene, "obstacles of `flowplan plan` when no --scene is given");
     v.Field("execute", execute, "tracking of plans in MuJoCo (`flowplan plan --execute`)");
+    v.Field("rrt_connect", rrt_connect, "the classical reference planner (`flowplan plan --rrt-connect`)");
   }
 };
 

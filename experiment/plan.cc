@@ -13,7 +13,9 @@
 #include "core/error.h"
 #include "core/format.h"
 #include "core/parallel.h"
+#include "classical/rrt_connect.h"
 #include "datasets/h5.h"
+#include "datasets/trajectory_dataset.h"
 #include "experiment/commands.h"
 #include "guidance/collision_cost.h"
 #include "kinematics/arm_kinematics.h"
@@ -94,7 +96,23 @@ Subject LoadSubject(const PlanCommand& command) {
     subject.owned = std::move(planner);
     return subject;
   }
-  if (command.ckpt.empty()) throw Error("plan: expected --ckpt RUN_DIR or --planner FILE");
+  if (command.rrt_connect) {
+    if (command.overlay_path.empty()) {
+      throw Error("--rrt-connect: expected --config FILE (its data.path names the robot, horizon and dt to plan for)");
+    }
+    subject.config = LoadExperiment(command.overlay_path, command.overrides);
+    const datasets::TrajectoryDataset data = datasets::ReadDataset(subject.config.data.path);
+    subject.robot = kinematics::MakeRobot(data.robot, subject.config.data.path);
+    subject.dt = data.dt;
+    subject.env = data.env;
+    subject.state_labels = data.state_labels;
+    subject.source = "rrt_connect";
+    subject.run_folder = subject.config.run_dir;
+    subject.owned = std::make_unique<classical::RrtConnectPlanner>(subject.robot, data.horizon, data.state_dim,
+                                                                   data.dt, subject.config.rrt_connect);
+    return subject;
+  }
+  if (command.ckpt.empty()) throw Error("plan: expected --ckpt RUN_DIR, --planner FILE or --rrt-connect");
   LoadedPlanner loaded = LoadPlanner(command.ckpt, command.overlay_path, command.overrides);
   subject.config = loaded.config;
   subject.robot = loaded.robot;
@@ -273,9 +291,13 @@ void RunPlan(const PlanCommand& command) {
   request.obstacles = obstacles;
   request.seed = static_cast<uint64_t>(command.seed);
   request.guidance = subject.config.guidance;
-  spdlog::info("planning {} samples with {} around {} obstacle{} (guidance scale {}, splitting {})",
-               command.num_samples, subject.source, K, K == 1 ? "" : "s", subject.config.guidance.scale,
-               config::EnumName(subject.config.sampler.splitting));
+  const std::string settings = command.rrt_connect
+                                   ? fmt::format("margin {}, {} iterations", subject.config.rrt_connect.margin,
+                                                 subject.config.rrt_connect.max_iterations)
+                                   : fmt::format("guidance scale {}, splitting {}", subject.config.guidance.scale,
+                                                 config::EnumName(subject.config.sampler.splitting));
+  spdlog::info("planning {} samples with {} around {} obstacle{} ({})", command.num_samples, subject.source, K,
+               K == 1 ? "" : "s", settings);
   const auto started = std::chrono::steady_clock::now();
   const planning::PlanResult result = planning::PlanInChunks(planner, request, threads);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
@@ -407,8 +429,10 @@ void RunPlan(const PlanCommand& command) {
                      Numbers(goal_tcp) + ",\n  \"obstacles\": " + Numbers(obstacles.view({-1})) +
                      ", \"goal_tolerance\": " + JsonNumber(tolerance) +
                      ", \"max_speed_ratio\": " + JsonNumber(command.max_speed_ratio) +
-                     ",\n  \"guidance\": " + JsonString(config::ToYaml(subject.config.guidance)) +
-                     ", \"splitting\": " + JsonString(config::EnumName(subject.config.sampler.splitting)) +
+                     (command.rrt_connect
+                          ? ",\n  \"rrt_connect\": " + JsonString(config::ToYaml(subject.config.rrt_connect))
+                          : ",\n  \"guidance\": " + JsonString(config::ToYaml(subject.config.guidance)) +
+                                ", \"splitting\": " + JsonString(config::EnumName(subject.config.sampler.splitting))) +
                      ",\n  \"success_rate_tcp\": " + rate(tcp_ok) + ", \"success_rate_arm\": " + rate(arm_ok) +
                      (executed.empty() ? std::string() : ", \"success_rate_executed\": " + rate(exec_ok)) +
                      ", \"wall_time_s\": " + JsonNumber(wall) + ", \"threads\": " + std::to_string(threads) +

@@ -14,6 +14,7 @@ namespace flowplan::experiment {
 struct PlanCommand {
   std::string ckpt;                   // --ckpt: a run folder or checkpoint file
   std::string planner_file;           // --planner: an exported planner file (instead of --ckpt)
+  bool rrt_connect = false;           // --rrt-connect: OMPL's RRT-Connect on the robot of --config's dataset
   std::string overlay_path;           // --config: YAML applied over the planner's config
   std::vector<std::string> overrides;  // key=value, e.g. guidance.scale=2
   std::string start, goal;            // --start/--goal: J positions (at rest) or D state values

@@ -131,6 +131,8 @@ int Main(int argc, char** argv) {
   plan->add_option("--ckpt", plan_command.ckpt, "checkpoint file, or a run folder (its newest checkpoint)");
   plan->add_option("--planner", plan_command.planner_file, "an exported planner file (instead of --ckpt)")
       ->check(CLI::ExistingFile);
+  plan->add_flag("--rrt-connect", plan_command.rrt_connect,
+                 "plan with OMPL's RRT-Connect (rrt_connect.*) for the robot of --config's dataset");
   plan->add_option("--config", plan_command.overlay_path, "YAML applied over the planner's config")
       ->check(CLI::ExistingFile);
   plan->add_option("--start", plan_command.start,

@@ -160,6 +160,16 @@ TEST(FrankaPlanTest, PlansFromTcpPointsExecutesInMujocoAndRejectsUnreachableTarg
   EXPECT_THAT(report, HasSubstr("\"success_rate_executed\": "));
   const Outcome check = RunCommand(CheckPlan(path("p")));
   EXPECT_EQ(check.exit_code, 0) << check.output;
+  // RRT-Connect on the same robot, horizon and dt (from the config's dataset), around a 0.10 m sphere.
+  const Outcome rrt = Flowplan("plan --rrt-connect" + config + " --start-tcp 0.5,-0.3,0.2 --goal-tcp 0.5,0.3,0.2 --scene " +
+                               Source("configs/scenes/franka_sphere.yaml") + " --radius 0.1 -n 2 --execute --out " +
+                               path("rrt") + " --max-speed-ratio 3");  // 16 states: a fast move around the sphere
+  ExpectOk(rrt);
+  const std::string rrt_report = ReadText(path("rrt.json"));
+  EXPECT_THAT(rrt_report, HasSubstr("\"planner\": \"rrt_connect\""));
+  EXPECT_THAT(rrt_report, HasSubstr("\"success_rate_tcp\": 1, \"success_rate_arm\": 1, \"success_rate_executed\": 1"));
+  const Outcome check_rrt = RunCommand(CheckPlan(path("rrt")));
+  EXPECT_EQ(check_rrt.exit_code, 0) << check_rrt.output;
   ExpectCleanFailure(Flowplan(plan.substr(0, plan.find("--goal-tcp")) + "--goal-tcp 2,0,0.5"),
                      "--goal-tcp: target (2, 0, 0.5) is unreachable");
   ExpectCleanFailure(Flowplan(plan + "--sphere 0.5,-0.3,0.2,0.05"), "start is inside obstacle 1");  // 0: the preset's scene

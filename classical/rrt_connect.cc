@@ -1,0 +1,256 @@
+#include "classical/rrt_connect.h"
+
+#include <ompl/base/MotionValidator.h>
+#include <ompl/base/PlannerTerminationCondition.h>
+#include <ompl/base/ProblemDefinition.h>
+#include <ompl/base/SpaceInformation.h>
+#include <ompl/base/spaces/RealVectorStateSpace.h>
+#include <ompl/geometric/PathGeometric.h>
+#include <ompl/geometric/PathSimplifier.h>
+#include <ompl/geometric/planners/rrt/RRTConnect.h>
+#include <ompl/util/Console.h>
+
+#include <chrono>
+#include <cmath>
+#include <mutex>
+
+#include "core/error.h"
+#include "core/random.h"
+#include "guidance/scene.h"
+
+namespace flowplan::classical {
+namespace {
+
+namespace ob = ompl::base;
+namespace og = ompl::geometric;
+
+/// OMPL's uniform sampler with a seed of our own (OMPL seeds every RNG from one global sequence otherwise).
+class SeededSampler : public ob::RealVectorStateSampler {
+ public:
+  SeededSampler(const ob::StateSpace* space, uint64_t seed) : ob::RealVectorStateSampler(space) {
+    rng_.setLocalSeed(static_cast<std::uint_fast32_t>(seed));
+  }
+};
+
+/// RRT-Connect whose own random choices draw from a seed of ours.
+class SeededRrtConnect : public og::RRTConnect {
+ public:
+  SeededRrtConnect(const ob::SpaceInformationPtr& si, uint64_t seed) : og::RRTConnect(si) {
+    rng_.setLocalSeed(static_cast<std::uint_fast32_t>(seed));
+  }
+};
+
+torch::Tensor ToTensor(const ob::State* state, int64_t J) {
+  const auto* values = state->as<ob::RealVectorStateSpace::StateType>()->values;
+  torch::Tensor q = torch::empty({J}, torch::kFloat64);
+  for (int64_t j = 0; j < J; ++j) q[j] = values[j];
+  return q;
+}
+
+/// Checks a whole motion with one batched validity call over its interpolated states.
+class BatchedMotionValidator : public ob::MotionValidator {
+ public:
+  using ValidFn = std::function<torch::Tensor(const torch::Tensor&)>;  // (N, J) float64 -> (N,) bool
+  BatchedMotionValidator(ob::SpaceInformation* si, ValidFn check) : ob::MotionValidator(si), check_(std::move(check)) {}
+
+  bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
+    const torch::Tensor ok = Along(s1, s2);
+    const bool all = ok.all().item<bool>();
+    if (all) ++valid_; else ++invalid_;
+    return all;
+  }
+
+  bool checkMotion(const ob::State* s1, const ob::State* s2, std::pair<ob::State*, double>& last_valid) const override {
+    const torch::Tensor ok = Along(s1, s2);
+    const int64_t n = ok.size(0) - 1;  // segments
+    const torch::Tensor bad = (~ok).nonzero();
+    if (bad.size(0) == 0) {
+      ++valid_;
+      return true;
+    }
+    const int64_t first_bad = bad[0][0].item<int64_t>();
+    const double fraction = static_cast<double>(std::max<int64_t>(first_bad - 1, 0)) / static_cast<double>(n);
+    if (last_valid.first != nullptr) si_->getStateSpace()->interpolate(s1, s2, fraction, last_valid.first);
+    last_valid.second = fraction;
+    ++invalid_;
+    return false;
+  }
+
+ private:
+  /// Validity of s1, the interpolated states and s2: (n + 1,) bool.
+  torch::Tensor Along(const ob::State* s1, const ob::State* s2) const {
+    const auto space = si_->getStateSpace();
+    const int64_t J = space->getDimension();
+    const int64_t n = std::max<int64_t>(1, space->validSegmentCount(s1, s2));
+    const torch::Tensor a = ToTensor(s1, J), b = ToTensor(s2, J);
+    const torch::Tensor s = torch::linspace(0.0, 1.0, n + 1, torch::kFloat64).unsqueeze(1);
+    return check_(a + s * (b - a));
+  }
+  ValidFn check_;
+};
+
+/// Deterministic shortcutting: from each kept state, jump to the farthest later state in view.
+void Shortcut(og::PathGeometric& path, const ob::SpaceInformationPtr& si) {
+  std::vector<ob::State*>& states = path.getStates();
+  if (states.size() < 3) return;
+  std::vector<ob::State*> kept = {states.front()};
+  size_t i = 0;
+  std::vector<bool> keep(states.size(), false);
+  keep[0] = true;
+  while (i + 1 < states.size()) {
+    size_t j = states.size() - 1;
+    while (j > i + 1 && !si->checkMotion(states[i], states[j])) --j;
+    keep[j] = true;
+    i = j;
+  }
+  std::vector<ob::State*> reduced;
+  for (size_t k = 0; k < states.size(); ++k) {
+    if (keep[k]) {
+      reduced.push_back(states[k]);
+    } else {
+      si->freeState(states[k]);
+    }
+  }
+  states = reduced;
+}
+
+/// T states along the joint-space polyline `points` (M, J), timed s(τ) = 3τ² − 2τ³ over (T − 1)·dt:
+/// (T, J) positions and (T, J) velocities.
+std::pair<torch::Tensor, torch::Tensor> TimeParametrize(const torch::Tensor& points, int64_t T, double dt) {
+  const int64_t M = points.size(0), J = points.size(1);
+  const torch::Tensor lengths = (points.slice(0, 1) - points.slice(0, 0, M - 1)).norm(2, 1);  // (M−1,)
+  const torch::Tensor cumulative = torch::cat({torch::zeros({1}, torch::kFloat64), lengths.cumsum(0)});
+  const double total = cumulative[-1].item<double>();
+  torch::Tensor q = torch::empty({T, J}, torch::kFloat64), v = torch::zeros({T, J}, torch::kFloat64);
+  const double duration = static_cast<double>(T - 1) * dt;
+  auto c = cumulative.accessor<double, 1>();
+  for (int64_t i = 0; i < T; ++i) {
+    const double tau = static_cast<double>(i) / static_cast<double>(T - 1);
+    const double s = total * (3.0 * tau * tau - 2.0 * tau * tau * tau);
+    const double speed = total * 6.0 * tau * (1.0 - tau) / duration;  // path length per second
+    int64_t k = 0;
+    while (k + 2 < M && c[k + 1] < s) ++k;
+    const double segment = c[k + 1] - c[k];
+    const double u = segment > 0.0 ? std::clamp((s - c[k]) / segment, 0.0, 1.0) : 0.0;
+    q[i] = points[k] + u * (points[k + 1] - points[k]);
+    if (segment > 0.0) v[i] = speed * (points[k + 1] - points[k]) / segment;
+  }
+  q[T - 1] = points[M - 1];
+  return {q, v};
+}
+
+void QuietOmpl() {
+  static std::once_flag once;
+  std::call_once(once, [] { ompl::msg::setLogLevel(ompl::msg::LOG_WARN); });
+}
+
+}  // namespace
+
+RrtConnectPlanner::RrtConnectPlanner(std::shared_ptr<const kinematics::Robot> robot, int64_t horizon,
+                                     int64_t state_dim, double dt, RrtConnectConfig config)
+    : robot_(std::move(robot)), horizon_(horizon), state_dim_(state_dim), dt_(dt), config_(config) {
+  if (!robot_) throw Error("rrt_connect: expected a robot description");
+  const int64_t J = robot_->num_joints();
+  if (state_dim_ != J && state_dim_ != 2 * J) {
+    throw Error("rrt_connect: states of " + std::to_string(state_dim_) + " dimensions; expected J = " +
+                std::to_string(J) + " positions or 2J = " + std::to_string(2 * J) + " positions and velocities");
+  }
+  if (horizon_ < 2) throw Error("rrt_connect: expected a horizon of at least 2 states");
+  if (!(dt_ > 0.0)) throw Error("rrt_connect: expected a positive dt");
+  const auto& d = robot_->description();
+  for (int64_t j = 0; j < J; ++j) {
+    if (!std::isfinite(d.joint_lower[j]) || !std::isfinite(d.joint_upper[j]) || d.joint_lower[j] >= d.joint_upper[j]) {
+      throw Error("rrt_connect: joint " + std::to_string(j) + " of robot \"" + d.name +
+                  "\" has no finite range to sample in");
+    }
+  }
+  QuietOmpl();
+}
+
+torch::Tensor RrtConnectPlanner::Valid(const torch::Tensor& q, const torch::Tensor& obstacles) const {
+  const int64_t N = q.size(0), W = robot_->workspace_dim();
+  if (!obstacles.defined() || obstacles.size(0) == 0) return torch::ones({N}, torch::kBool);
+  const torch::Tensor centres = robot_->Spheres(q.to(torch::kFloat64)).centres;  // (N, S, W)
+  const torch::Tensor obs = obstacles.to(torch::kFloat64);
+  const torch::Tensor distance = (centres.unsqueeze(2) - obs.slice(1, 0, W).view({1, 1, -1, W})).norm(2, -1);
+  const torch::Tensor needed = robot_->SphereRadii().view({1, -1, 1}) + obs.select(1, W).view({1, 1, -1}) + config_.margin;
+  return (distance >= needed).flatten(1).all(1);
+}
+
+planning::PlanResult RrtConnectPlanner::Plan(const planning::PlanRequest& request) const {
+  planning::CheckEnds(request.start, request.goal, state_dim_, "plan");
+  const int64_t B = request.start.size(0), J = robot_->num_joints(), T = horizon_;
+  torch::Tensor obstacles;
+  if (request.obstacles.defined() && request.obstacles.numel() > 0) {
+    guidance::CheckObstacles(request.obstacles, static_cast<int>(robot_->workspace_dim()), "plan: obstacles");
+    obstacles = request.obstacles.to(torch::kFloat64);
+  }
+  torch::NoGradGuard no_grad;
+  const auto& d = robot_->description();
+  planning::PlanResult result;
+  result.plans = torch::empty({B, T, state_dim_}, torch::kFloat32);
+  result.found = torch::zeros({B}, torch::kBool);
+  result.seconds.assign(static_cast<size_t>(B), 0.0);
+  const torch::Tensor start_q = request.start.slice(1, 0, J).to(torch::kFloat64);
+  const torch::Tensor goal_q = request.goal.slice(1, 0, J).to(torch::kFloat64);
+  for (int64_t b = 0; b < B; ++b) {
+    const auto began = std::chrono::steady_clock::now();
+    const uint64_t seed = StreamSeed(request.seed, static_cast<uint64_t>(b));
+    auto space = std::make_shared<ob::RealVectorStateSpace>(static_cast<unsigned>(J));
+    ob::RealVectorBounds bounds(static_cast<unsigned>(J));
+    for (int64_t j = 0; j < J; ++j) {
+      bounds.setLow(static_cast<unsigned>(j), d.joint_lower[j]);
+      bounds.setHigh(static_cast<unsigned>(j), d.joint_upper[j]);
+    }
+    space->setBounds(bounds);
+    space->setStateSamplerAllocator(
+        [seed](const ob::StateSpace* s) { return std::make_shared<SeededSampler>(s, StreamSeed(seed, 1)); });
+    auto si = std::make_shared<ob::SpaceInformation>(space);
+    auto valid = [this, obstacles](const torch::Tensor& q) { return Valid(q, obstacles); };
+    si->setStateValidityChecker([&](const ob::State* s) {
+      return space->satisfiesBounds(s) && valid(ToTensor(s, J).unsqueeze(0))[0].item<bool>();
+    });
+    si->setStateValidityCheckingResolution(config_.resolution);
+    si->setMotionValidator(std::make_shared<BatchedMotionValidator>(si.get(), valid));
+    si->setup();
+
+    torch::Tensor points = torch::stack({start_q[b], goal_q[b]});  // the straight line unless a path is found
+    const torch::Tensor ends_valid = valid(points);
+    if (ends_valid.all().item<bool>()) {
+      ob::ScopedState<> start(space), goal(space);
+      for (int64_t j = 0; j < J; ++j) {
+        start[static_cast<unsigned>(j)] = start_q[b][j].item<double>();
+        goal[static_cast<unsigned>(j)] = goal_q[b][j].item<double>();
+      }
+      auto problem = std::make_shared<ob::ProblemDefinition>(si);
+      problem->setStartAndGoalStates(start, goal);
+      auto planner = std::make_shared<SeededRrtConnect>(si, StreamSeed(seed, 2));
+      if (config_.range > 0.0) planner->setRange(config_.range);
+      planner->setProblemDefinition(problem);
+      planner->setup();
+      int64_t calls = 0;
+      const ob::PlannerTerminationCondition stop([&] {
+        return ++calls > config_.max_iterations ||
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count() > config_.time_limit;
+      });
+      if (planner->solve(stop) == ob::PlannerStatus::EXACT_SOLUTION) {
+        og::PathGeometric path = *problem->getSolutionPath()->as<og::PathGeometric>();
+        if (config_.simplify) {
+          Shortcut(path, si);
+          og::PathSimplifier(si).smoothBSpline(path, 5);
+        }
+        std::vector<torch::Tensor> rows;
+        for (const ob::State* s : path.getStates()) rows.push_back(ToTensor(s, J));
+        points = torch::stack(rows);
+        result.found[b] = true;
+      }
+    }
+    auto [q, v] = TimeParametrize(points, T, dt_);
+    result.plans[b] = (state_dim_ == J ? q : torch::cat({q, v}, 1)).to(torch::kFloat32);
+    result.seconds[static_cast<size_t>(b)] =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  }
+  return result;
+}
+
+}  // namespace flowplan::classical

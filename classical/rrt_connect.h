@@ -1,0 +1,70 @@
+#pragma once
+
+// The classical reference planner: OMPL's RRT-Connect in joint space, with
+// whole-arm validity from the robot's collision spheres and the scene, path
+// shortcutting and B-spline smoothing, time-parametrized to T states at the
+// dataset's dt so that its plans compare with the learned planners'.
+
+#include <torch/torch.h>
+
+#include <memory>
+
+#include "core/config.h"
+#include "kinematics/robot.h"
+#include "planning/planner.h"
+
+namespace flowplan::classical {
+
+/// The `rrt_connect` section of an experiment config.
+struct RrtConnectConfig {
+  int64_t max_iterations = 20000;  // calls of the termination check per plan (a deterministic budget)
+  double time_limit = 10.0;        // s per plan, a safety stop on top of max_iterations
+  double range = 0.0;              // maximum tree edge, joint-space units; 0: OMPL's default (20 % of the extent)
+  double resolution = 0.005;       // motion checks every resolution × the space's extent
+  double margin = 0.01;            // world units: a state is valid when every sphere is this far from every obstacle
+  bool simplify = true;            // shortcut and smooth the path
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("max_iterations", max_iterations, "RRT-Connect iterations per plan (deterministic budget)",
+            config::Positive());
+    v.Field("time_limit", time_limit, "seconds per plan, a safety stop on top of max_iterations", config::Positive());
+    v.Field("range", range, "longest tree edge in joint space (0: OMPL's default)", config::NonNegative());
+    v.Field("resolution", resolution, "motion check resolution as a fraction of the joint space's extent",
+            config::Positive());
+    v.Field("margin", margin, "clearance every collision sphere keeps from every obstacle (world units)",
+            config::NonNegative());
+    v.Field("simplify", simplify, "shortcut and B-spline-smooth the found path");
+  }
+};
+
+/// RRT-Connect behind the Planner interface. Each of the B plans is its own
+/// search, seeded from StreamSeed(request.seed, b), so plans do not depend on
+/// batching or threads (a plan stopped by time_limit instead of max_iterations
+/// is the exception). A plan holds T states: positions along the path with a
+/// smooth start and stop (s(τ) = 3τ² − 2τ³ of the path length over
+/// (T − 1)·dt) and, when D = 2J, the velocities of that timing. Plans not found
+/// are the straight joint-space line, with found = false.
+class RrtConnectPlanner : public planning::Planner {
+ public:
+  /// The robot's joint limits must be finite; state_dim is J or 2J.
+  /// @throws flowplan::Error naming what does not fit.
+  RrtConnectPlanner(std::shared_ptr<const kinematics::Robot> robot, int64_t horizon, int64_t state_dim, double dt,
+                    RrtConnectConfig config);
+
+  planning::PlanResult Plan(const planning::PlanRequest& request) const override;
+
+  /// Whether configurations q (N, J) keep every sphere `margin` away from every obstacle (K, W+1).
+  torch::Tensor Valid(const torch::Tensor& q, const torch::Tensor& obstacles) const;
+
+  int64_t horizon() const override { return horizon_; }
+  int64_t state_dim() const override { return state_dim_; }
+
+ private:
+  std::shared_ptr<const kinematics::Robot> robot_;
+  int64_t horizon_, state_dim_;
+  double dt_;
+  RrtConnectConfig config_;
+};
+
+}  // namespace flowplan::classical
