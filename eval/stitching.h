@@ -24,8 +24,8 @@ struct EvalConfig {
 };
 
 /// Stitching error of one start/goal pair set (SPEC section 4): per plan,
-/// 0.5 * (|x_1 - start| + |x_{T-2} - goal|) over the position part of the state
-/// (the first D/2 dimensions: x, y for the particle, q for the Franka).
+/// 0.5 * (|x_1 - start| + |x_{T-2} - goal|) over the position dimensions of the
+/// state (PositionDims of its labels: x, y for the particle, q1…q7 for the Franka).
 struct StitchingResult {
   std::string pairs;                  // "test" or "train"
   double mean = 0.0;
@@ -36,17 +36,26 @@ struct StitchingResult {
   torch::Tensor pair_index;             // (num_plans,) which pair each plan targets
 };
 
-/// Per-plan stitching errors. plans: (N, T, D); start, goal: (N, D) raw -> (N,).
-torch::Tensor StitchingErrors(const torch::Tensor& plans, const torch::Tensor& start, const torch::Tensor& goal);
+/// The position dimensions of a state, from its labels (D,): every label but
+/// the time derivatives, which are named by "v" or "d" before the label of
+/// their position ("vx" of "x", "dq3" of "q3").
+/// @throws flowplan::Error if no label is a position.
+std::vector<int64_t> PositionDims(const std::vector<std::string>& state_labels);
+
+/// Per-plan stitching errors. plans: (N, T, D); start, goal: (N, D) raw;
+/// positions: indices into D -> (N,).
+torch::Tensor StitchingErrors(const torch::Tensor& plans, const torch::Tensor& start, const torch::Tensor& goal,
+                              const std::vector<int64_t>& positions);
 
 /// Plans `config.num_plans` times between the pairs (without obstacles) and
-/// scores them. `threads` workers plan fixed chunks of the plans, each seeded
+/// scores them on the positions among `state_labels`. `threads` workers plan fixed chunks of the plans, each seeded
 /// from `config.seed` and its index (planning::PlanInChunks), so the result
 /// does not depend on the thread count (call with LibTorch's intra-op threads
 /// set to 1).
 /// @throws flowplan::Error if there are no pairs.
 StitchingResult EvaluateStitching(const planning::Planner& planner, const datasets::EvalPairTensors& pairs,
-                                  const std::string& label, const EvalConfig& config, int threads = 1);
+                                  const std::vector<std::string>& state_labels, const std::string& label,
+                                  const EvalConfig& config, int threads = 1);
 
 /// {"pairs": "test", "mean": …, "stddev": …, "num_plans": …, "per_pair": {"name": mean, …}};
 /// NaN (no plans) is written as null.

@@ -232,9 +232,9 @@ void RunEvalStitching(const EvalRequest& request) {
   }
   const auto test_pairs = datasets::ToTensors(dataset.test_pairs, dataset.state_dim);
   const auto train_pairs = datasets::ToTensors(dataset.train_pairs, dataset.state_dim);
-  const eval::StitchingResult test = eval::EvaluateStitching(*loaded.planner, test_pairs, "test", loaded.config.eval, threads);
+  const eval::StitchingResult test = eval::EvaluateStitching(*loaded.planner, test_pairs, dataset.state_labels, "test", loaded.config.eval, threads);
   const eval::StitchingResult train =
-      eval::EvaluateStitching(*loaded.planner, train_pairs, "train", loaded.config.eval, threads);
+      eval::EvaluateStitching(*loaded.planner, train_pairs, dataset.state_labels, "train", loaded.config.eval, threads);
 
   const std::string run = RunFolderOf(loaded.checkpoint);
   const std::string out = request.out.empty() ? run + "/eval_stitching.json" : request.out;

@@ -286,7 +286,7 @@ class TrainingRun {
   }
 
   eval::StitchingResult Stitching(const datasets::EvalPairTensors& pairs, const std::string& label) const {
-    if (!pairs.names.empty()) return eval::EvaluateStitching(*ema_planner_, pairs, label, setup_.eval, setup_.threads);
+    if (!pairs.names.empty()) return eval::EvaluateStitching(*ema_planner_, pairs, data_.state_labels, label, setup_.eval, setup_.threads);
     eval::StitchingResult none;  // datasets without start/goal families (e.g. random reaches)
     none.pairs = label;
     none.mean = none.stddev = NAN;

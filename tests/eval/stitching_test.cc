@@ -17,7 +17,23 @@ TEST(StitchingTest, ErrorIsTheMeanPositionGapBesideTheEnds) {
   plans[0][3] = torch::tensor({1.0f, 1.0f, -7.0f, 9.0f});     // 1 away from the goal (1, 0)
   const torch::Tensor start = torch::zeros({1, 4});
   const torch::Tensor goal = torch::tensor({{1.0f, 0.0f, 5.0f, 5.0f}});
-  EXPECT_FLOAT_EQ(StitchingErrors(plans, start, goal)[0].item<float>(), 0.5f * (5.0f + 1.0f));
+  EXPECT_FLOAT_EQ(StitchingErrors(plans, start, goal, {0, 1})[0].item<float>(), 0.5f * (5.0f + 1.0f));
+}
+
+TEST(StitchingTest, PositionsComeFromTheLabelsNotFromHalfTheState) {
+  EXPECT_EQ(PositionDims({"x", "y", "vx", "vy"}), (std::vector<int64_t>{0, 1}));
+  EXPECT_EQ(PositionDims({"q1", "q2", "dq1", "dq2"}), (std::vector<int64_t>{0, 1}));
+  // Positions only, or positions after velocities, or a label that only starts with d.
+  EXPECT_EQ(PositionDims({"x", "y", "z"}), (std::vector<int64_t>{0, 1, 2}));
+  EXPECT_EQ(PositionDims({"vx", "x", "depth"}), (std::vector<int64_t>{1, 2}));
+  EXPECT_THAT([] { PositionDims({}); }, ::testing::ThrowsMessage<Error>(::testing::HasSubstr("no position")));
+  torch::Tensor plans = torch::zeros({1, 4, 3});
+  plans[0][1][0] = 2.0f;  // x of state 1: 2 away from the start
+  plans[0][1][1] = 7.0f;  // its velocity does not count
+  plans[0][2][2] = 1.5f;  // depth is a position: state T − 2 is 1.5 from the goal
+  EXPECT_FLOAT_EQ(StitchingErrors(plans, torch::zeros({1, 3}), torch::zeros({1, 3}), PositionDims({"x", "vx", "depth"}))[0]
+                      .item<float>(),
+                  0.5f * (2.0f + 1.5f));
 }
 
 planning::FlowPlanner SmallPlanner() {
@@ -30,6 +46,8 @@ planning::FlowPlanner SmallPlanner() {
                                planning::SamplerConfig{3, planning::Splitting::kMidpoint});
 }
 
+std::vector<std::string> Labels() { return {"x", "y", "vx", "vy"}; }
+
 datasets::EvalPairTensors Pairs() {
   return {torch::tensor({{0.f, 0.f, 0.f, 0.f}, {0.f, 1.f, 0.f, 0.f}}),
           torch::tensor({{1.f, 0.f, 0.f, 0.f}, {1.f, 1.f, 0.f, 0.f}}), {"a->b", "c->d"}};
@@ -40,8 +58,8 @@ TEST(StitchingTest, ResultDoesNotDependOnTheThreadCount) {
   const planning::FlowPlanner planner = SmallPlanner();
   EvalConfig config;
   config.num_plans = 40;  // three chunks of 16, the last one short
-  const StitchingResult one = EvaluateStitching(planner, Pairs(), "test", config, 1);
-  const StitchingResult three = EvaluateStitching(planner, Pairs(), "test", config, 3);
+  const StitchingResult one = EvaluateStitching(planner, Pairs(), Labels(), "test", config, 1);
+  const StitchingResult three = EvaluateStitching(planner, Pairs(), Labels(), "test", config, 3);
   EXPECT_TRUE(torch::equal(one.plans, three.plans));
   EXPECT_EQ(one.mean, three.mean);
   ASSERT_EQ(one.plans.size(0), 40);
@@ -64,16 +82,16 @@ TEST(StitchingTest, JsonReportEscapesNamesAndWritesNaNAsNull) {
 }
 
 TEST(StitchingTest, WrongShapesAreNamed) {
-  EXPECT_THAT([] { StitchingErrors(torch::zeros({4, 8}), torch::zeros({4, 4}), torch::zeros({4, 4})); },
+  EXPECT_THAT([] { StitchingErrors(torch::zeros({4, 8}), torch::zeros({4, 4}), torch::zeros({4, 4}), {0, 1}); },
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("plans: expected (N, T, D) with T >= 3, got (4, 8)")));
-  EXPECT_THAT([] { StitchingErrors(torch::zeros({4, 8, 4}), torch::zeros({4, 4}), torch::zeros({3, 4})); },
+  EXPECT_THAT([] { StitchingErrors(torch::zeros({4, 8, 4}), torch::zeros({4, 4}), torch::zeros({3, 4}), {0, 1}); },
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("goal: expected (4, 4), got (3, 4)")));
 }
 
 TEST(StitchingTest, NoPairsIsAClearError) {
   const planning::FlowPlanner planner = SmallPlanner();
   datasets::EvalPairTensors none{torch::zeros({0, 4}), torch::zeros({0, 4}), {}};
-  EXPECT_THAT([&] { EvaluateStitching(planner, none, "test", EvalConfig{}); },
+  EXPECT_THAT([&] { EvaluateStitching(planner, none, Labels(), "test", EvalConfig{}); },
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("defines no test pairs")));
 }
 
