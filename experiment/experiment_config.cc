@@ -9,7 +9,13 @@ ExperimentConfig LoadExperiment(const std::string& path, const std::vector<std::
 ExperimentConfig LoadExperimentText(const std::string& yaml, const std::string& source,
                                     const std::string& overlay_path, const std::vector<std::string>& overrides) {
   ExperimentConfig result;
-  config::Apply(config::ParseYamlText(yaml, source), result, source);
+  YAML::Node stored = config::ParseYamlText(yaml, source);
+  // Configs written before model.architecture became model.name (e.g. inside older checkpoints).
+  if (stored["model"] && stored["model"]["architecture"] && !stored["model"]["name"]) {
+    stored["model"]["name"] = YAML::Clone(stored["model"]["architecture"]);
+    stored["model"].remove("architecture");
+  }
+  config::Apply(stored, result, source);
   if (!overlay_path.empty()) config::Apply(config::ParseYamlFile(overlay_path), result, overlay_path);
   for (const auto& assignment : overrides) config::Apply(config::ParseOverride(assignment), result, config::kCommandLine);
   return result;

@@ -18,7 +18,7 @@ NetworkPtr MakeNetwork(const ModelConfig& config, int64_t state_dim, int64_t con
 TrajectoryNetPtr MakeTrajectoryNet(const ModelConfig& config, int64_t state_dim, int64_t cond_dim) {
   auto net = std::dynamic_pointer_cast<TrajectoryNet>(MakeNetwork(config, state_dim, cond_dim));
   if (!net) {
-    throw Error(std::string("model.architecture: ") + config::EnumName(config.architecture) +
+    throw Error(std::string("model.name: ") + config::EnumName(config.architecture) +
                 " is not a trajectory network (unet1d or transformer)");
   }
   return net;

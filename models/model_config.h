@@ -33,7 +33,7 @@ struct ModelConfig {
 
   template <class V>
   void Visit(V& v) {
-    v.Field("architecture", architecture, "network");
+    v.Field("name", architecture, "network");
     v.Field("unet", unet, "unet1d settings");
     v.Field("transformer", transformer, "transformer settings");
     v.Field("vae", vae, "state_vae settings");
@@ -46,7 +46,7 @@ struct ModelConfig {
 NetworkPtr MakeNetwork(const ModelConfig& config, int64_t state_dim, int64_t cond_dim);
 
 /// MakeNetwork() for a trajectory network.
-/// @throws flowplan::Error if model.architecture is not one.
+/// @throws flowplan::Error if model.name is not one.
 TrajectoryNetPtr MakeTrajectoryNet(const ModelConfig& config, int64_t state_dim, int64_t cond_dim);
 
 /// Copies every parameter and buffer of `from` into `to` (same architecture).

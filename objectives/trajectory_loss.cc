@@ -8,7 +8,7 @@ models::TrajectoryNet& AsTrajectoryNet(models::Network& net, const char* objecti
   auto* trajectory = dynamic_cast<models::TrajectoryNet*>(&net);
   if (trajectory == nullptr) {
     throw Error(std::string("objective.name: ") + objective +
-                " trains a trajectory network (model.architecture unet1d or transformer)");
+                " trains a trajectory network (model.name unet1d or transformer)");
   }
   return *trajectory;
 }

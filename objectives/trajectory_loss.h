@@ -9,7 +9,7 @@
 namespace flowplan::objectives {
 
 /// `net` as the trajectory network an objective needs.
-/// @throws flowplan::Error "objective.name: flow_matching trains a trajectory network (model.architecture …)".
+/// @throws flowplan::Error "objective.name: flow_matching trains a trajectory network (model.name …)".
 models::TrajectoryNet& AsTrajectoryNet(models::Network& net, const char* objective);
 
 /// The loss every objective that regresses a trajectory network shares, with

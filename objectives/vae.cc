@@ -14,7 +14,7 @@ ObjectiveBatch VaeObjective::Draw(const torch::Tensor& x1, at::Generator& genera
 
 torch::Tensor VaeObjective::Loss(models::Network& net, const ObjectiveBatch& batch, models::Conditioning) const {
   auto* vae = dynamic_cast<models::StateVae*>(&net);
-  if (vae == nullptr) throw Error("objective.name: vae trains a state VAE (model.architecture state_vae)");
+  if (vae == nullptr) throw Error("objective.name: vae trains a state VAE (model.name state_vae)");
   const torch::Tensor states = batch.x1.reshape({-1, batch.x1.size(2)});  // (B·T, D)
   const models::StateVae::Encoding encoding = vae->Encode(states);
   const torch::Tensor z = encoding.mean + (0.5 * encoding.log_var).exp() * batch.noise.reshape({-1, latent_dim_});

@@ -10,7 +10,7 @@ namespace {
 std::shared_ptr<models::TrajectoryNet> TrajectoryNetOf(const LearnedPlannerParts& parts, const char* objective) {
   auto net = std::dynamic_pointer_cast<models::TrajectoryNet>(parts.net);
   if (!net) {
-    throw Error(std::string("objective.name: ") + objective + " plans with a trajectory network (model.architecture "
+    throw Error(std::string("objective.name: ") + objective + " plans with a trajectory network (model.name "
                 "unet1d or transformer)");
   }
   return net;
@@ -30,7 +30,7 @@ std::unique_ptr<Planner> MakeLearnedPlanner(const LearnedPlannerParts& parts) {
                                            parts.sampler.ddpm, parts.guidance);
     case objectives::ObjectiveKind::kVae: {
       auto vae = std::dynamic_pointer_cast<models::StateVae>(parts.net);
-      if (!vae) throw Error("objective.name: vae plans with a state VAE (model.architecture state_vae)");
+      if (!vae) throw Error("objective.name: vae plans with a state VAE (model.name state_vae)");
       return std::make_unique<LatentPlanner>(vae, parts.normalizer, parts.horizon, parts.sampler.latent, parts.guidance);
     }
   }

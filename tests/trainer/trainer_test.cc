@@ -49,8 +49,9 @@ TrainingSetup TinySetup(const std::string& name) {
 }
 
 std::vector<torch::Tensor> Weights(const std::string& checkpoint, const TrainingSetup& setup) {
-  auto net = models::MakeTrajectoryNet(setup.model, 4, 0);
-  auto ema = models::MakeTrajectoryNet(setup.model, 4, 0);
+  const int64_t cond = models::ConditionDim(setup.objective.conditioning, 4);
+  auto net = models::MakeNetwork(setup.model, 4, cond);
+  auto ema = models::MakeNetwork(setup.model, 4, cond);
   checkpoints::LoadCheckpointWeights(checkpoint, {net.get(), ema.get(), nullptr});
   std::vector<torch::Tensor> out;
   for (const auto& p : net->parameters()) out.push_back(p.clone());
@@ -58,12 +59,36 @@ std::vector<torch::Tensor> Weights(const std::string& checkpoint, const Training
   return out;
 }
 
-TEST(TrainerTest, ResumingGivesTheSameWeightsAsOneRun) {
+struct ZooCase {
+  const char* name;
+  models::Architecture architecture;
+  objectives::ObjectiveKind objective;
+  models::Conditioning conditioning;
+};
+
+class ResumeTest : public ::testing::TestWithParam<ZooCase> {
+ protected:
+  TrainingSetup Setup(const std::string& name) const {
+    TrainingSetup setup = TinySetup(name + "_" + GetParam().name);
+    setup.model.architecture = GetParam().architecture;
+    setup.model.transformer.d_model = 16;
+    setup.model.transformer.heads = 2;
+    setup.model.vae.hidden = {16, 16};
+    setup.model.vae.latent = 4;
+    setup.objective.name = GetParam().objective;
+    setup.objective.conditioning = GetParam().conditioning;
+    setup.objective.ddpm.steps = 5;
+    setup.sampler.latent.iterations = 2;
+    return setup;
+  }
+};
+
+TEST_P(ResumeTest, ResumingGivesTheSameWeightsAsOneRun) {
   const auto data = TinyData();
-  const TrainingSetup straight = TinySetup("straight");
+  const TrainingSetup straight = Setup("straight");
   const TrainResult a = Train(straight, data, TrainStart::kFresh);
 
-  TrainingSetup interrupted = TinySetup("interrupted");
+  TrainingSetup interrupted = Setup("interrupted");
   interrupted.stop_at_step = 5;  // not a logging, evaluation or checkpoint step
   const TrainResult first_part = Train(interrupted, data, TrainStart::kFresh);
   EXPECT_EQ(first_part.steps, 5);
@@ -77,6 +102,21 @@ TEST(TrainerTest, ResumingGivesTheSameWeightsAsOneRun) {
   EXPECT_TRUE(torch::equal(checkpoints::ReadCheckpointHeader(a.checkpoint).rng_state,
                            checkpoints::ReadCheckpointHeader(b.checkpoint).rng_state));
 }
+
+INSTANTIATE_TEST_SUITE_P(
+    Zoo, ResumeTest,
+    ::testing::Values(
+        ZooCase{"FlowUNet", models::Architecture::kUNet1D, objectives::ObjectiveKind::kFlowMatching,
+                models::Conditioning::kInpaint},
+        ZooCase{"FlowUNetDirect", models::Architecture::kUNet1D, objectives::ObjectiveKind::kFlowMatching,
+                models::Conditioning::kDirect},
+        ZooCase{"FlowTransformer", models::Architecture::kTransformer, objectives::ObjectiveKind::kFlowMatching,
+                models::Conditioning::kInpaint},
+        ZooCase{"FlowTransformerDirect", models::Architecture::kTransformer, objectives::ObjectiveKind::kFlowMatching,
+                models::Conditioning::kDirect},
+        ZooCase{"Ddpm", models::Architecture::kUNet1D, objectives::ObjectiveKind::kDdpm, models::Conditioning::kInpaint},
+        ZooCase{"Vae", models::Architecture::kStateVae, objectives::ObjectiveKind::kVae, models::Conditioning::kInpaint}),
+    [](const auto& info) { return std::string(info.param.name); });
 
 TEST(TrainerTest, NormalizerIsFittedOnTheTrainingSplitOnly) {
   datasets::TrajectorySplits data = TinyData();
