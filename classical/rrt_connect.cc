@@ -41,10 +41,8 @@ class SeededRrtConnect : public og::RRTConnect {
 };
 
 torch::Tensor ToTensor(const ob::State* state, int64_t J) {
-  const auto* values = state->as<ob::RealVectorStateSpace::StateType>()->values;
-  torch::Tensor q = torch::empty({J}, torch::kFloat64);
-  for (int64_t j = 0; j < J; ++j) q[j] = values[j];
-  return q;
+  auto* values = state->as<ob::RealVectorStateSpace::StateType>()->values;
+  return torch::from_blob(values, {J}, torch::kFloat64).clone();
 }
 
 /// Checks a whole motion with one batched validity call over its interpolated states.
@@ -191,8 +189,11 @@ planning::PlanResult RrtConnectPlanner::Plan(const planning::PlanRequest& reques
   result.plans = torch::empty({B, T, state_dim_}, torch::kFloat32);
   result.found = torch::zeros({B}, torch::kBool);
   result.seconds.assign(static_cast<size_t>(B), 0.0);
-  const torch::Tensor start_q = request.start.slice(1, 0, J).to(torch::kFloat64);
-  const torch::Tensor goal_q = request.goal.slice(1, 0, J).to(torch::kFloat64);
+  // Ends exactly at a limit can round to just outside it in float32: clamp them onto the limits.
+  const torch::Tensor lower = torch::tensor(d.joint_lower, torch::kFloat64).slice(0, 0, J);
+  const torch::Tensor upper = torch::tensor(d.joint_upper, torch::kFloat64).slice(0, 0, J);
+  const torch::Tensor start_q = torch::max(torch::min(request.start.slice(1, 0, J).to(torch::kFloat64), upper), lower);
+  const torch::Tensor goal_q = torch::max(torch::min(request.goal.slice(1, 0, J).to(torch::kFloat64), upper), lower);
   for (int64_t b = 0; b < B; ++b) {
     const auto began = std::chrono::steady_clock::now();
     const uint64_t seed = StreamSeed(request.seed, static_cast<uint64_t>(b));

@@ -2,21 +2,35 @@
 
 namespace flowplan::experiment {
 
+namespace {
+
+/// Configs written before model.architecture became model.name (older run
+/// folders, checkpoints and exported planners) read as if written today.
+YAML::Node Migrated(YAML::Node node) {
+  if (node.IsMap() && node["model"] && node["model"].IsMap()) {
+    YAML::Node model = node["model"];
+    if (model["architecture"] && !model["name"]) {
+      model["name"] = YAML::Clone(model["architecture"]);
+      model.remove("architecture");
+    }
+  }
+  return node;
+}
+
+}  // namespace
+
 ExperimentConfig LoadExperiment(const std::string& path, const std::vector<std::string>& overrides) {
-  return config::Load<ExperimentConfig>(path, overrides);
+  ExperimentConfig result;
+  if (!path.empty()) config::Apply(Migrated(config::ParseYamlFile(path)), result, path);
+  for (const auto& assignment : overrides) config::Apply(config::ParseOverride(assignment), result, config::kCommandLine);
+  return result;
 }
 
 ExperimentConfig LoadExperimentText(const std::string& yaml, const std::string& source,
                                     const std::string& overlay_path, const std::vector<std::string>& overrides) {
   ExperimentConfig result;
-  YAML::Node stored = config::ParseYamlText(yaml, source);
-  // Configs written before model.architecture became model.name (e.g. inside older checkpoints).
-  if (stored["model"] && stored["model"]["architecture"] && !stored["model"]["name"]) {
-    stored["model"]["name"] = YAML::Clone(stored["model"]["architecture"]);
-    stored["model"].remove("architecture");
-  }
-  config::Apply(stored, result, source);
-  if (!overlay_path.empty()) config::Apply(config::ParseYamlFile(overlay_path), result, overlay_path);
+  config::Apply(Migrated(config::ParseYamlText(yaml, source)), result, source);
+  if (!overlay_path.empty()) config::Apply(Migrated(config::ParseYamlFile(overlay_path)), result, overlay_path);
   for (const auto& assignment : overrides) config::Apply(config::ParseOverride(assignment), result, config::kCommandLine);
   return result;
 }

@@ -38,13 +38,15 @@ for row in "${rows[@]}"; do
   fi
   echo "=== $name: ${overrides[*]:-(the preset)}"
   started=$(date +%s)
-  if [ -d "$run/checkpoints" ]; then
+  if compgen -G "$run/checkpoints/step_*.pt" > /dev/null; then
     "$FLOWPLAN" train --resume "$run"
   else
     rm -rf "$run"
     "$FLOWPLAN" train --config "$CONFIG" "${settings[@]}"
   fi
-  echo $(( $(date +%s) - started )) > "$run/train_seconds.txt"
+  # Training seconds summed over every invocation that trained this row.
+  before=$(cat "$run/train_seconds.txt" 2> /dev/null || echo 0)
+  echo $(( before + $(date +%s) - started )) > "$run/train_seconds.txt"
   if [ "$name" != mpd ] && [ "$name" != vae ]; then
     "$FLOWPLAN" eval stitching --ckpt "$run" sampler.splitting=midpoint --out "$run/eval_stitching_split.json"
   fi

@@ -25,14 +25,16 @@ WAYS = [("success_rate_tcp", "TCP"), ("success_rate_arm", "whole arm"), ("succes
 
 cells = {}
 for path in glob.glob(os.path.join(out, "*_r*.json")) + glob.glob(os.path.join(out, "*_r*.refused")):
-    match = re.match(r"(.+)_r([0-9.]+)\.(json|refused)$", os.path.basename(path))
+    match = re.match(r"(.+)_r([0-9]*\.?[0-9]+)\.(json|refused)$", os.path.basename(path))
+    if match is None:
+        continue
     planner, radius, kind = match.group(1), float(match.group(2)), match.group(3)
     if kind == "refused":
         cells[(planner, radius)] = {"refused": True}
         continue
     report = json.load(open(path))
     times = [s["planning_time_s"] for s in report["samples"]]
-    cells[(planner, radius)] = {key: report[key] for key, _ in WAYS} | {
+    cells[(planner, radius)] = {key: report.get(key) for key, _ in WAYS} | {
         "refused": False, "planning_time_s_median": sorted(times)[len(times) // 2], "num_samples": report["num_samples"]}
 
 radii = sorted({r for _, r in cells})
@@ -48,6 +50,8 @@ for planner, label in PLANNERS:
                 row.append("")
             elif cell["refused"]:
                 row.append("refused")
+            elif cell[key] is None:
+                row.append("–")
             else:
                 row.append(f"{cell[key]:.0%}")
                 if cell[key] >= 0.9 and (best is None or r > best):
@@ -68,6 +72,7 @@ figure, axes = plt.subplots(1, 3, figsize=(13, 3.8), sharey=True)
 for axis, (key, way) in zip(axes, WAYS):
     for planner, label in PLANNERS:
         xs = [r for r in radii if (planner, r) in cells]
+        xs = [r for r in xs if cells[(planner, r)]["refused"] or cells[(planner, r)][key] is not None]
         ys = [0.0 if cells[(planner, r)]["refused"] else cells[(planner, r)][key] for r in xs]
         axis.plot(xs, ys, marker="o", label=label)
     axis.axhline(0.9, color="grey", lw=0.8, ls="--")

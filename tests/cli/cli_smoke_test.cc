@@ -69,6 +69,16 @@ void ExpectCleanFailure(const Outcome& outcome, const std::string& names) {
   EXPECT_THAT(errors[0], HasSubstr(names));
 }
 
+TEST_F(CliTest, ConfigsWithTheOlderModelArchitectureKeyStillLoad) {
+  // Run folders and checkpoints written before model.architecture became model.name.
+  std::ofstream(Path("old.yaml")) << "model:\n  architecture: transformer\n";
+  const Outcome shown = Flowplan("config show --config " + Path("old.yaml") + " --log-level warn");
+  ExpectOk(shown);
+  EXPECT_THAT(shown.output, HasSubstr("  name: transformer"));
+  EXPECT_THAT(shown.output, ::testing::Not(HasSubstr("architecture")));
+  ExpectCleanFailure(Flowplan("config show model.architecture=unet1d"), "model.architecture");
+}
+
 TEST_F(CliTest, GenerateTrainEvalExportThenPlanFromPython) {
   ExpectOk(Generate());
   ExpectOk(Outcome{std::system((std::string(FLOWPLAN_PYTHON) + " " + FLOWPLAN_SOURCE_DIR +
