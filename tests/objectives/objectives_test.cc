@@ -123,6 +123,8 @@ struct Case {
   models::Architecture architecture;
 };
 
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
+
 class TrainsTest : public ::testing::TestWithParam<Case> {};
 
 TEST_P(TrainsTest, LossHalvesOnATinyProblem) {

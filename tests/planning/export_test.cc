@@ -18,7 +18,13 @@
 #include "sim/franka_model.h"
 #include "tests/support/scratch_dir.h"
 
+namespace flowplan::models {
+void PrintTo(Conditioning c, std::ostream* os) { *os << config::EnumName(c); }
+}  // namespace flowplan::models
+
 namespace flowplan::planning {
+void PrintTo(Splitting s, std::ostream* os) { *os << config::EnumName(s); }
+
 namespace {
 
 using ::testing::HasSubstr;

@@ -66,6 +66,8 @@ struct ZooCase {
   models::Conditioning conditioning;
 };
 
+void PrintTo(const ZooCase& c, std::ostream* os) { *os << c.name; }
+
 class ResumeTest : public ::testing::TestWithParam<ZooCase> {
  protected:
   TrainingSetup Setup(const std::string& name) const {
