@@ -59,13 +59,7 @@ torch::Tensor DdpmPlanner::PlanWithNoise(const torch::Tensor& start, const torch
   CheckRequest(start, goal, noise, renoise);
   torch::NoGradGuard no_grad;
   const guidance::GuidanceConfig& config = settings != nullptr ? *settings : guidance_.config;
-  std::unique_ptr<guidance::Guide> guide;
-  if (obstacles.defined() && obstacles.numel() > 0 && config.scale != 0.0) {
-    if (!guidance_.robot) throw Error("plan: obstacles: this planner has no robot description to guide with");
-    guidance::CheckObstacles(obstacles, static_cast<int>(guidance_.robot->workspace_dim()), "plan: obstacles");
-    guide = std::make_unique<guidance::Guide>(guidance::MakeGuidanceCost(config, guidance_.robot, guidance_.dt),
-                                              normalizer_, config);
-  }
+  const std::unique_ptr<guidance::Guide> guide = MakeCallGuide(guidance_, normalizer_, config, obstacles);
   const torch::Tensor obstacles_f = guide ? obstacles.to(torch::kFloat32) : torch::Tensor();
   const torch::Tensor start_raw = start.to(torch::kFloat32), goal_raw = goal.to(torch::kFloat32);
   const torch::Tensor s = normalizer_.Normalize(start_raw), g = normalizer_.Normalize(goal_raw);

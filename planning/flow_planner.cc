@@ -89,6 +89,15 @@ torch::Tensor FlowPlanner::PlanNormalized(const torch::Tensor& start_n, const to
   return torch::cat({refined.slice(0, 0, B), refined.slice(0, B, 2 * B)}, 1);
 }
 
+std::unique_ptr<guidance::Guide> MakeCallGuide(const GuidanceSetup& setup, const models::MinMaxNormalizer& normalizer,
+                                               const guidance::GuidanceConfig& config, const torch::Tensor& obstacles) {
+  if (!obstacles.defined() || obstacles.numel() == 0 || config.scale == 0.0) return nullptr;
+  if (!setup.robot) throw Error("plan: obstacles: this planner has no robot description to guide with");
+  guidance::CheckObstacles(obstacles, static_cast<int>(setup.robot->workspace_dim()), "plan: obstacles");
+  return std::make_unique<guidance::Guide>(guidance::MakeGuidanceCost(config, setup.robot, setup.dt), normalizer,
+                                           config);
+}
+
 torch::Tensor FlowPlanner::PlanWithNoise(const torch::Tensor& start, const torch::Tensor& goal,
                                          const torch::Tensor& noise, const torch::Tensor& renoise,
                                          const torch::Tensor& obstacles,
@@ -96,13 +105,7 @@ torch::Tensor FlowPlanner::PlanWithNoise(const torch::Tensor& start, const torch
   CheckRequest(start, goal, noise, renoise);
   torch::NoGradGuard no_grad;
   const guidance::GuidanceConfig& config = settings != nullptr ? *settings : guidance_.config;
-  std::unique_ptr<guidance::Guide> guide;
-  if (obstacles.defined() && obstacles.numel() > 0 && config.scale != 0.0) {
-    if (!guidance_.robot) throw Error("plan: obstacles: this planner has no robot description to guide with");
-    guidance::CheckObstacles(obstacles, static_cast<int>(guidance_.robot->workspace_dim()), "plan: obstacles");
-    guide = std::make_unique<guidance::Guide>(guidance::MakeGuidanceCost(config, guidance_.robot, guidance_.dt),
-                                              normalizer_, config);
-  }
+  const std::unique_ptr<guidance::Guide> guide = MakeCallGuide(guidance_, normalizer_, config, obstacles);
   const torch::Tensor start_raw = start.to(torch::kFloat32), goal_raw = goal.to(torch::kFloat32);
   const torch::Tensor obstacles_f = guide ? obstacles.to(torch::kFloat32) : torch::Tensor();
   const torch::Tensor plan_n =

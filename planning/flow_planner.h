@@ -34,6 +34,12 @@ struct GuidanceSetup {
   guidance::GuidanceConfig config;                  // a call's settings unless it gives its own
 };
 
+/// The guide of one planning call around `obstacles` (K, W+1) with `config`,
+/// or null when the call is unguided (no obstacles, or scale 0).
+/// @throws flowplan::Error if obstacles are given to a planner without a robot, or are malformed.
+std::unique_ptr<guidance::Guide> MakeCallGuide(const GuidanceSetup& setup, const models::MinMaxNormalizer& normalizer,
+                                               const guidance::GuidanceConfig& config, const torch::Tensor& obstacles);
+
 /// A trained flow planner: network, normalizer, conditioning, Euler sampler
 /// with optional splitting, and guidance around obstacles. Planning does not
 /// change it, and may run from several threads at once. The network always
