@@ -66,7 +66,10 @@ void SaveCheckpoint(const std::string& path, const CheckpointHeader& header, con
   archive.write("state_labels", c10::IValue(labels));
   archive.write("normalizer_lo", header.normalizer.lo());
   archive.write("normalizer_hi", header.normalizer.hi());
-  archive.write("rng_state", header.rng_state);
+  FLOWPLAN_DEMAND(!header.rng_states.empty());
+  archive.write("rng_state", header.rng_states[0]);
+  // Runs with several data parts (train.data_parts) have one generator per part.
+  if (header.rng_states.size() > 1) archive.write("rng_state_parts", torch::stack(header.rng_states));
   auto write_module = [&](const char* key, const torch::nn::Module* module) {
     if (module == nullptr) return;
     OutputArchive sub;
@@ -105,7 +108,13 @@ CheckpointHeader ReadCheckpointHeader(const std::string& path) {
     }
     header.normalizer = models::MinMaxNormalizer(ReadTensor(archive, path, "normalizer_lo"),
                                                  ReadTensor(archive, path, "normalizer_hi"));
-    header.rng_state = ReadTensor(archive, path, "rng_state");
+    c10::IValue parts;
+    if (archive.try_read("rng_state_parts", parts)) {
+      if (!parts.isTensor() || parts.toTensor().dim() != 2) throw Error("\"rng_state_parts\" is not a (P, S) tensor");
+      header.rng_states = parts.toTensor().unbind(0);
+    } else {
+      header.rng_states = {ReadTensor(archive, path, "rng_state")};
+    }
   } catch (const c10::Error& e) {
     throw Error(path + ": malformed checkpoint entry: " + FirstLine(e.what_without_backtrace()));
   } catch (const Error& e) {  // e.g. a normalizer with hi <= lo
@@ -114,11 +123,12 @@ CheckpointHeader ReadCheckpointHeader(const std::string& path) {
   // A CPU generator's state is a flat byte tensor of a fixed size; check it
   // here so that a foreign one is named, not rejected deep inside LibTorch.
   const int64_t state_bytes = at::detail::getDefaultCPUGenerator().get_state().numel();
-  if (header.rng_state.scalar_type() != torch::kUInt8 || header.rng_state.dim() != 1 ||
-      header.rng_state.numel() != state_bytes) {
-    throw Error(path + ": malformed checkpoint entry \"rng_state\": expected (" + std::to_string(state_bytes) +
-                ",) uint8, got " + ShapeText(header.rng_state.sizes().vec()) + " " +
-                std::string(c10::toString(header.rng_state.scalar_type())));
+  for (const torch::Tensor& state : header.rng_states) {
+    if (state.scalar_type() != torch::kUInt8 || state.dim() != 1 || state.numel() != state_bytes) {
+      throw Error(path + ": malformed checkpoint entry \"rng_state\": expected (" + std::to_string(state_bytes) +
+                  ",) uint8, got " + ShapeText(state.sizes().vec()) + " " +
+                  std::string(c10::toString(state.scalar_type())));
+    }
   }
   return header;
 }

@@ -19,7 +19,7 @@ struct CheckpointHeader {
   int64_t step = 0;                       // optimizer steps taken
   std::string config_yaml;                // the run's resolved config
   models::MinMaxNormalizer normalizer;    // fitted on the training split
-  torch::Tensor rng_state;                // state of the run's torch::Generator (uint8)
+  std::vector<torch::Tensor> rng_states;  // (S,) uint8 state of each data part's torch::Generator, part 0 first
   std::string env;                        // dataset env ("particle", "franka")
   double dt = 0.0;                        // s between states
   std::vector<std::string> state_labels;  // (D,)

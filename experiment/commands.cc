@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
+#include <optional>
 
 #include "checkpoints/checkpoint.h"
 #include "core/atomic_file.h"
@@ -17,6 +19,8 @@
 #include "datasets/generator.h"
 #include "datasets/h5.h"
 #include "datasets/trajectory_dataset.h"
+#include "distributed/communicator.h"
+#include "distributed/world.h"
 #include "eval/stitching.h"
 #include "kinematics/arm_kinematics.h"
 #include "planning/export.h"
@@ -105,7 +109,18 @@ void RunMerge(const std::vector<std::string>& inputs, const std::string& out) {
 }
 
 void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
-  const int threads = ConfigureThreads(config);
+  // Launched as one of several processes (torchrun, Slurm): join the job first,
+  // so that a missing peer is reported before any work.
+  const std::optional<distributed::World> world = distributed::WorldFromEnvironment();
+  std::unique_ptr<distributed::Communicator> communicator;
+  if (world) {
+    if (world->rank != 0 && spdlog::get_level() < spdlog::level::warn) spdlog::set_level(spdlog::level::warn);
+    spdlog::info("joining a {} job of {} processes at {}:{}", world->source, world->size, world->master_addr,
+                 world->master_port);
+    communicator = distributed::Connect(*world, config.distributed, "cpu");
+  }
+  int threads = ConfigureThreads(config);
+  if (world && config.threads == 0) threads = std::max(1, threads / world->local_size);  // share the machine
   const datasets::TrajectorySplits data =
       datasets::LoadTrajectorySplits(config.data, static_cast<uint64_t>(config.seed));
   trainer::TrainingSetup setup;
@@ -120,6 +135,8 @@ void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
   setup.sampler = config.sampler;
   setup.eval = config.eval;
   setup.stop_at_step = request.until_step;
+  setup.communicator = communicator.get();
+  setup.bucket_bytes = static_cast<int64_t>(config.distributed.bucket_mb * (1 << 20));
   spdlog::info("training {} on {} ({} threads) into {}", config::EnumName(config.model.architecture),
                config.data.path, threads, config.run_dir);
   const trainer::TrainResult result = trainer::Train(setup, data, request.start);
@@ -162,7 +179,8 @@ void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& cha
                                                        "eval.",
                                                        "guidance.",
                                                        "scene.",
-                                                       "execute."};
+                                                       "execute.",
+                                                       "distributed."};
   const auto before = config::ListKeys(trained), after = config::ListKeys(changed);
   for (size_t i = 0; i < before.size(); ++i) {
     const std::string& key = before[i].key;
@@ -173,7 +191,7 @@ void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& cha
     if (!may_change) {
       throw Error(key + ": the run was trained with " + before[i].default_value + " (" + where + "), got " +
                   after[i].default_value + "; a resumed run can change only its length, intervals, threads, "
-                  "sampler.*, eval.*, guidance.*, scene.* and execute.* (start a new run_dir for the rest)");
+                  "sampler.*, eval.*, guidance.*, scene.*, execute.* and distributed.* (start a new run_dir for the rest)");
     }
     if (key == "train.steps") {
       spdlog::warn("train.steps: {} -> {}: the cosine learning-rate schedule now spans {} steps, so the rate "

@@ -8,6 +8,7 @@
 #include "core/config.h"
 #include "datasets/generate_config.h"
 #include "datasets/trajectory_loader.h"
+#include "distributed/distributed_config.h"
 #include "eval/stitching.h"
 #include "guidance/guide.h"
 #include "guidance/scene.h"
@@ -35,6 +36,7 @@ struct ExperimentConfig {
   guidance::Scene scene;
   sim::ExecutionConfig execute;
   classical::RrtConnectConfig rrt_connect;
+  distributed::DistributedConfig distributed;
 
   template <class V>
   void Visit(V& v) {
@@ -53,6 +55,8 @@ struct ExperimentConfig {
     v.Field("scene", scene, "obstacles of `flowplan plan` when no --scene is given");
     v.Field("execute", execute, "tracking of plans in MuJoCo (`flowplan plan --execute`)");
     v.Field("rrt_connect", rrt_connect, "the classical reference planner (`flowplan plan --rrt-connect`)");
+    v.Field("distributed", distributed,
+            "data-parallel training when launched as several processes (torchrun or Slurm environment)");
   }
 };
 

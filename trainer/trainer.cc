@@ -14,6 +14,7 @@
 #include "core/interrupt.h"
 #include "core/progress.h"
 #include "core/random.h"
+#include "distributed/gradient_all_reduce.h"
 #include "models/normalizer.h"
 #include "planning/zoo.h"
 #include "trainer/training_batch.h"
@@ -47,6 +48,13 @@ class ScopedGlobalSeed {
  private:
   torch::Tensor saved_;
 };
+
+/// The seed of data part `part`'s generator; part 0 keeps the stream of runs
+/// with a single part.
+uint64_t PartSeed(uint64_t seed, int part) {
+  const uint64_t stream = StreamSeed(seed, kTrainStream);
+  return part == 0 ? stream : StreamSeed(stream, static_cast<uint64_t>(part));
+}
 
 models::NetworkPtr BuildNet(const TrainingSetup& setup, int64_t state_dim) {
   ScopedGlobalSeed seed(StreamSeed(setup.seed, kInitStream));
@@ -129,6 +137,13 @@ double ValidationLoss(const objectives::Objective& objective, models::Network& n
 
 namespace {
 
+/// The part of the training episodes one generator draws from.
+struct DataPart {
+  int index;               // p in [0, train.data_parts)
+  torch::Tensor data;      // (N_p, T, D) normalized: training episodes p, p + P, ...
+  at::Generator generator;  // seeded by PartSeed(seed, p)
+};
+
 /// One training run: the networks, optimizer, generator and run folder, and
 /// the steps that advance them.
 class TrainingRun {
@@ -144,8 +159,18 @@ class TrainingRun {
         ema_(BuildNet(setup, D_)),
         optimizer_(net_->parameters(), torch::optim::AdamWOptions(config_.lr).weight_decay(config_.weight_decay)),
         objective_(objectives::MakeObjective(setup.objective, setup.model)),
-        generator_(at::make_generator<at::CPUGeneratorImpl>(StreamSeed(setup.seed, kTrainStream))),
+        communicator_(setup.communicator != nullptr ? *setup.communicator : single_process_),
+        lead_(communicator_.rank() == 0),
         normalizer_(models::MinMaxNormalizer::Fit(data.train)) {
+    const int parts = config_.data_parts, ranks = communicator_.size();
+    if (parts % ranks != 0) {
+      throw Error("train.data_parts=" + std::to_string(parts) + " must be a multiple of the number of processes (" +
+                  std::to_string(ranks) + "): every process trains the same number of data parts");
+    }
+    if (data.train.size(0) < parts) {
+      throw Error("train.data_parts=" + std::to_string(parts) + ": the data has only " +
+                  std::to_string(data.train.size(0)) + " training episodes");
+    }
     models::CopyWeights(*net_, *ema_);
     if (const auto* trajectory_net = dynamic_cast<const models::TrajectoryNet*>(net_.get())) {
       trajectory_net->CheckHorizon(T_);
@@ -153,27 +178,40 @@ class TrainingRun {
         models::CheckHalfHorizon(*trajectory_net, T_, "objective.split_prob > 0 trains on");
       }
     }
-    run_.Create();
+    // This process's parts: p = rank, rank + W, ...; episode i of the training split is in part i mod P.
+    const torch::Tensor train_n = normalizer_.Normalize(data.train);
+    for (int part = communicator_.rank(); part < parts; part += ranks) {
+      parts_.push_back(DataPart{part, train_n.slice(0, part, train_n.size(0), parts).clone(),
+                                at::make_generator<at::CPUGeneratorImpl>(PartSeed(setup.seed, part))});
+    }
+    if (lead_) run_.Create();
     if (start == TrainStart::kResume) {
       Restore();
     } else if (!run_.CheckpointSteps().empty()) {
       throw Error(run_.root() + ": holds checkpoints of an earlier run; continue it with flowplan train --resume " +
                   run_.root() + ", or choose another run_dir");
-    } else {
+    } else if (lead_) {
       std::remove(run_.metrics().c_str());
     }
     // Written only once the run is known to start: a failed start leaves the folder as it was.
-    WriteFileAtomically(run_.config(), setup.config_yaml);
-    train_n_ = normalizer_.Normalize(data.train);
+    if (lead_) WriteFileAtomically(run_.config(), setup.config_yaml);
     val_n_ = data.val.size(0) > 0 ? normalizer_.Normalize(data.val) : data.val;
     ema_planner_ = planning::MakeLearnedPlanner(
         {ema_, normalizer_, setup.objective, T_, setup.sampler,
          planning::GuidanceSetup{kinematics::MakeRobot(data.robot, "training data"), data.dt, {}}});
     gradient_ = std::make_unique<ShardedGradient>(*net_, [&] { return BuildNet(setup_, D_); }, config_.shards,
                                                   setup.threads);
-    metrics_ = std::make_unique<MetricsLog>(run_.metrics());
-    spdlog::info("model: {} parameters, horizon {}, state dim {}, {} training / {} validation episodes",
+    if (ranks > 1) {
+      all_reduce_ = std::make_unique<distributed::GradientAllReduce>(net_->parameters(), setup.bucket_bytes);
+    }
+    if (lead_) metrics_ = std::make_unique<MetricsLog>(run_.metrics());
+    spdlog::info("model: {} parameters, horizon {}, state dim {}, {} training / {} validation episodes", 
                  models::CountParameters(*net_), T_, D_, data.train.size(0), data.val.size(0));
+    if (ranks > 1 || parts > 1) {
+      spdlog::info("{} data parts over {} process{}{}", parts, ranks, ranks == 1 ? "" : "es",
+                   all_reduce_ ? ", gradients summed in " + std::to_string(all_reduce_->buckets()) + " bucket(s)"
+                               : std::string());
+    }
   }
 
   TrainResult Run() {
@@ -185,7 +223,7 @@ class TrainingRun {
     progress.Update(step_);
     net_->train();
     while (step_ < last_step) {
-      if (InterruptRequested()) StopInterrupted(Save());
+      if (StopRequested()) StopInterrupted(Save());
       const double lr = CosineLearningRate(config_, step_);
       const double loss = Step(lr);
       window_loss_ += loss;
@@ -194,19 +232,22 @@ class TrainingRun {
       // The checkpoint comes first, so that an evaluation cut short by Ctrl-C loses nothing.
       const bool checkpoint_due = step_ % config_.checkpoint_every == 0 || step_ == last_step;
       if (checkpoint_due) result_.checkpoint = Save();
-      if ((config_.eval_every > 0 && step_ % config_.eval_every == 0) || step_ == last_step) {
+      // Rank 0 alone evaluates; the others wait for it at the next collective.
+      if (lead_ && ((config_.eval_every > 0 && step_ % config_.eval_every == 0) || step_ == last_step)) {
         try {
           Evaluate();
+          LogEvaluation();
         } catch (const Error&) {
           if (!InterruptRequested()) throw;
-          StopInterrupted(checkpoint_due ? result_.checkpoint : Save());
+          if (communicator_.size() == 1) StopInterrupted(checkpoint_due ? result_.checkpoint : Save());
+          // The other processes are already in the next step: stop with them, after it, with a checkpoint.
+          spdlog::warn("evaluation at step {} interrupted; stopping after the next step", step_);
         }
-        LogEvaluation();
       }
     }
     if (result_.checkpoint.empty()) {
       // Resumed at the final step: nothing left to train, and its metrics are logged already.
-      Evaluate();
+      if (lead_) Evaluate();
       result_.checkpoint = run_.LatestCheckpoint();
     }
     result_.steps = step_;
@@ -230,7 +271,11 @@ class TrainingRun {
     }
     checkpoints::LoadCheckpointWeights(path, {net_.get(), ema_.get(), &optimizer_});
     normalizer_ = header.normalizer;
-    generator_.set_state(header.rng_state);
+    if (static_cast<int>(header.rng_states.size()) != config_.data_parts) {
+      throw Error(path + ": holds the generators of " + std::to_string(header.rng_states.size()) +
+                  " data part(s), the run has train.data_parts=" + std::to_string(config_.data_parts));
+    }
+    for (DataPart& part : parts_) part.generator.set_state(header.rng_states[static_cast<size_t>(part.index)]);
     step_ = header.step;
     TruncateMetrics(run_.metrics(), step_);
     spdlog::info("resuming {} at step {}", path, step_);
@@ -241,17 +286,54 @@ class TrainingRun {
                 "; continue with: flowplan train --resume " + setup_.run_dir);
   }
 
+  /// Whether the run stops before the next step: Ctrl-C here, or, in a job of
+  /// several processes, in any of them (agreed on in the previous step's all-reduce).
+  bool StopRequested() const { return communicator_.size() > 1 ? stop_agreed_ : InterruptRequested(); }
+
+  /// The gradient of one data part's share of the batch, into net_'s .grad; returns its loss.
+  double PartGradient(DataPart& part, int64_t batch_size) {
+    const torch::Tensor x1 =
+        DrawTrainingTrajectories(part.data, batch_size, setup_.objective.split_prob, part.generator);
+    const models::Conditioning conditioning = setup_.objective.conditioning;
+    return gradient_->Compute(objective_->Draw(x1, part.generator),
+                              [&](models::Network& net, const objectives::ObjectiveBatch& batch) {
+                                return objective_->Loss(net, batch, conditioning);
+                              });
+  }
+
+  /// The gradient of the whole batch's mean loss into net_'s .grad (every part
+  /// draws B * (p + 1) / P - B * p / P trajectories; their losses are weighted by
+  /// that share and summed over the parts of every process); returns the loss.
+  double BatchGradient() {
+    const int64_t B = config_.batch_size, P = config_.data_parts;
+    if (P == 1) return PartGradient(parts_[0], B);
+    double loss = 0.0;
+    std::vector<torch::Tensor> sum;
+    auto params = net_->parameters();
+    for (DataPart& part : parts_) {
+      const int64_t share = B * (part.index + 1) / P - B * part.index / P;
+      const double weight = static_cast<double>(share) / static_cast<double>(B);
+      loss += PartGradient(part, share) * weight;
+      torch::NoGradGuard no_grad;
+      for (size_t i = 0; i < params.size(); ++i) {
+        const torch::Tensor g = params[i].grad().defined() ? params[i].grad() * weight : torch::zeros_like(params[i]);
+        if (sum.size() <= i) sum.push_back(g); else sum[i].add_(g);
+      }
+    }
+    for (size_t i = 0; i < params.size(); ++i) params[i].mutable_grad() = sum[i];
+    return loss;
+  }
+
   /// One optimizer step at learning rate `lr`; returns the batch loss.
   double Step(double lr) {
     SetLearningRate(optimizer_, lr);
-    const torch::Tensor x1 =
-        DrawTrainingTrajectories(train_n_, config_.batch_size, setup_.objective.split_prob, generator_);
-    const models::Conditioning conditioning = setup_.objective.conditioning;
-    const double loss = gradient_->Compute(
-        objective_->Draw(x1, generator_),
-        [&](models::Network& net, const objectives::ObjectiveBatch& batch) {
-          return objective_->Loss(net, batch, conditioning);
-        });
+    double loss = BatchGradient();
+    if (all_reduce_) {
+      std::vector<double> scalars{loss, InterruptRequested() ? 1.0 : 0.0};
+      all_reduce_->Run(communicator_, scalars);
+      loss = scalars[0];
+      stop_agreed_ = scalars[1] > 0.0;
+    }
     if (config_.grad_clip > 0.0) torch::nn::utils::clip_grad_norm_(net_->parameters(), config_.grad_clip);
     optimizer_.step();
     const double n = static_cast<double>(step_);
@@ -268,7 +350,7 @@ class TrainingRun {
     result_.train_loss = window_loss_ / static_cast<double>(window_steps_);
     spdlog::info("step {}/{} loss {:.5f} lr {:.3g} {:.2f} steps/s ETA {}", step_, config_.steps, result_.train_loss,
                  lr, rate, FormatDuration(rate > 0 ? static_cast<double>(config_.steps - step_) / rate : NAN));
-    metrics_->Write("{\"step\": " + std::to_string(step_) + ", \"loss\": " + JsonNumber(result_.train_loss) +
+    if (metrics_) metrics_->Write("{\"step\": " + std::to_string(step_) + ", \"loss\": " + JsonNumber(result_.train_loss) +
                     ", \"lr\": " + JsonNumber(lr) + ", \"steps_per_s\": " + JsonNumber(rate) + "}");
     window_loss_ = 0.0;
     window_steps_ = 0;
@@ -300,20 +382,33 @@ class TrainingRun {
                     ", \"stitch_train_std\": " + JsonNumber(result_.train.stddev) + "}");
   }
 
-  /// Writes a checkpoint of the current step and returns its path.
+  /// Writes a checkpoint of the current step and returns its path. Collective
+  /// in a job of several processes (rank 0 gathers every part's generator and writes).
   std::string Save() {
+    const std::string path = run_.checkpoint(step_);
+    std::vector<torch::Tensor> states;
+    for (const DataPart& part : parts_) states.push_back(part.generator.get_state());
+    if (communicator_.size() > 1) {
+      // (W, K * S): rank r's K parts are r, r + W, ...; part p is row p mod W, block p / W.
+      const torch::Tensor gathered = communicator_.AllGather(torch::cat(states));
+      const int64_t S = states[0].numel(), W = communicator_.size();
+      states.clear();
+      for (int64_t p = 0; p < config_.data_parts; ++p) {
+        states.push_back(gathered[p % W].slice(0, (p / W) * S, (p / W + 1) * S).clone());
+      }
+    }
+    if (!lead_) return path;
     checkpoints::CheckpointHeader header;
     header.step = step_;
     header.config_yaml = setup_.config_yaml;
     header.normalizer = normalizer_;
-    header.rng_state = generator_.get_state();
+    header.rng_states = states;
     header.env = data_.env;
     header.dt = data_.dt;
     header.state_labels = data_.state_labels;
     header.horizon = T_;
     header.robot = data_.robot;
     header.data_fingerprint = data_.fingerprint;
-    const std::string path = run_.checkpoint(step_);
     checkpoints::SaveCheckpoint(path, header, {net_.get(), ema_.get(), &optimizer_});
     run_.PruneCheckpoints(config_.keep_checkpoints);
     return path;
@@ -327,12 +422,16 @@ class TrainingRun {
   models::NetworkPtr net_, ema_;
   torch::optim::AdamW optimizer_;
   std::unique_ptr<objectives::Objective> objective_;
-  at::Generator generator_;
+  distributed::SingleProcess single_process_;
+  distributed::Communicator& communicator_;
+  const bool lead_;  // rank 0: writes the run folder and evaluates
   models::MinMaxNormalizer normalizer_;
-  torch::Tensor train_n_;  // (N_train, T, D) normalized
+  std::vector<DataPart> parts_;  // this process's parts, ascending
   torch::Tensor val_n_;    // (N_val, T, D) normalized
   std::unique_ptr<planning::Planner> ema_planner_;
   std::unique_ptr<ShardedGradient> gradient_;
+  std::unique_ptr<distributed::GradientAllReduce> all_reduce_;  // null in a single process
+  bool stop_agreed_ = false;
   std::unique_ptr<MetricsLog> metrics_;
   int64_t step_ = 0;
   double window_loss_ = 0.0;

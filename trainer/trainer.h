@@ -4,6 +4,7 @@
 #include <string>
 
 #include "datasets/trajectory_loader.h"
+#include "distributed/communicator.h"
 #include "eval/stitching.h"
 #include "models/model_config.h"
 #include "objectives/objective.h"
@@ -25,6 +26,12 @@ struct TrainingSetup {
   planning::SamplerConfig sampler;
   eval::EvalConfig eval;
   int64_t stop_at_step = 0;  // > 0: stop there with a checkpoint (the schedule still spans train.steps)
+  /// The job this process belongs to; null: a single process. In a job of W
+  /// processes each trains train.data_parts / W parts of the data, gradients
+  /// are summed over all of them, and rank 0 alone writes the run folder and
+  /// evaluates.
+  distributed::Communicator* communicator = nullptr;
+  int64_t bucket_bytes = 25 << 20;  // gradient all-reduce bucket size
 };
 
 /// What a finished run reports.
@@ -43,9 +50,12 @@ struct TrainResult {
 enum class TrainStart { kFresh, kResume };
 
 /// Trains a network with `setup.objective` on `data`, or resumes the run in
-/// `setup.run_dir` from its newest checkpoint (continuing bit-exactly). The weights do not depend on the thread count: LibTorch runs
-/// single-threaded and `setup.threads` workers share fixed gradient shards. Writes config.yaml, metrics.jsonl and
-/// checkpoints; on SIGINT writes a checkpoint of the current step and throws.
+/// `setup.run_dir` from its newest checkpoint (continuing bit-exactly). The
+/// weights do not depend on the thread count: LibTorch runs single-threaded and
+/// `setup.threads` workers share fixed gradient shards. Nor, up to the order of
+/// floating-point sums, on the number of processes (see TrainingSetup::communicator).
+/// Writes config.yaml, metrics.jsonl and checkpoints; on SIGINT (to any
+/// process of a job) writes a checkpoint of the current step and throws.
 /// @throws flowplan::Error for settings the data cannot take (horizon, split), a
 ///   fresh start in a folder that holds checkpoints, or a resume without one.
 TrainResult Train(const TrainingSetup& setup, const datasets::TrajectorySplits& data, TrainStart start);

@@ -20,6 +20,7 @@ struct TrainerConfig {
   int keep_checkpoints = 3;       // older periodic checkpoints are deleted
   int val_batch_size = 256;
   int shards = 4;                 // gradient shards per batch, spread over the worker threads
+  int data_parts = 1;             // disjoint parts of the training episodes, one generator each
 
   template <class V>
   void Visit(V& v) {
@@ -38,6 +39,11 @@ struct TrainerConfig {
     v.Field("shards", shards,
             "gradient shards per batch; threads work on shards in parallel, so results depend on this, "
             "not on the thread count",
+            config::Positive());
+    v.Field("data_parts", data_parts,
+            "disjoint parts of the training episodes (episode i in part i mod P), each drawing its share of "
+            "every batch with its own generator; a data-parallel job of W processes gives each P/W parts, so "
+            "results depend on this, not on the number of processes",
             config::Positive());
   }
 };

@@ -101,8 +101,8 @@ TEST_P(ResumeTest, ResumingGivesTheSameWeightsAsOneRun) {
   const auto wa = Weights(a.checkpoint, straight), wb = Weights(b.checkpoint, interrupted);
   ASSERT_EQ(wa.size(), wb.size());
   for (size_t i = 0; i < wa.size(); ++i) EXPECT_TRUE(torch::equal(wa[i], wb[i])) << "tensor " << i;
-  EXPECT_TRUE(torch::equal(checkpoints::ReadCheckpointHeader(a.checkpoint).rng_state,
-                           checkpoints::ReadCheckpointHeader(b.checkpoint).rng_state));
+  EXPECT_TRUE(torch::equal(checkpoints::ReadCheckpointHeader(a.checkpoint).rng_states[0],
+                           checkpoints::ReadCheckpointHeader(b.checkpoint).rng_states[0]));
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -155,7 +155,7 @@ TEST(TrainerTest, ForeignGeneratorStateIsNamed) {
   const TrainingSetup setup = TinySetup("foreign_rng");
   const std::string path = Train(setup, TinyData(), TrainStart::kFresh).checkpoint;
   checkpoints::CheckpointHeader header = checkpoints::ReadCheckpointHeader(path);
-  header.rng_state = torch::zeros({3}, torch::kUInt8);
+  header.rng_states = {torch::zeros({3}, torch::kUInt8)};
   auto net = models::MakeTrajectoryNet(setup.model, 4, 0);
   const std::string foreign = (fs::path(setup.run_dir) / "foreign.pt").string();
   checkpoints::SaveCheckpoint(foreign, header, {net.get(), net.get(), nullptr});
