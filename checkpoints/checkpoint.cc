@@ -10,7 +10,7 @@ namespace {
 using torch::serialize::InputArchive;
 using torch::serialize::OutputArchive;
 
-InputArchive OpenArchive(const std::string& path) {
+InputArchive OpenArchive(const std::string& path, const torch::Device& device = torch::kCPU) {
   {
     std::FILE* probe = std::fopen(path.c_str(), "rb");
     if (probe == nullptr) throw Error(path + ": cannot open checkpoint: no such file or not readable");
@@ -18,7 +18,7 @@ InputArchive OpenArchive(const std::string& path) {
   }
   InputArchive archive;
   try {
-    archive.load_from(path);
+    archive.load_from(path, device);
   } catch (const c10::Error& e) {
     throw Error(path + ": not a readable checkpoint (truncated or foreign file): " +
                 FirstLine(e.what_without_backtrace()));
@@ -133,8 +133,8 @@ CheckpointHeader ReadCheckpointHeader(const std::string& path) {
   return header;
 }
 
-void LoadCheckpointWeights(const std::string& path, const CheckpointModules& modules) {
-  InputArchive archive = OpenArchive(path);
+void LoadCheckpointWeights(const std::string& path, const CheckpointModules& modules, const torch::Device& device) {
+  InputArchive archive = OpenArchive(path, device);
   auto load = [&](const char* key, auto* target) {
     if (target == nullptr) return;
     InputArchive sub;

@@ -45,8 +45,10 @@ void SaveCheckpoint(const std::string& path, const CheckpointHeader& header, con
 CheckpointHeader ReadCheckpointHeader(const std::string& path);
 
 /// Loads the weights into the non-null members of `modules`, which must have the
-/// architecture the checkpoint was written from.
+/// architecture the checkpoint was written from; weights and optimizer state
+/// end up on `device`, whichever device wrote them.
 /// @throws flowplan::Error naming the file and the part that does not fit.
-void LoadCheckpointWeights(const std::string& path, const CheckpointModules& modules);
+void LoadCheckpointWeights(const std::string& path, const CheckpointModules& modules,
+                           const torch::Device& device = torch::kCPU);
 
 }  // namespace flowplan::checkpoints

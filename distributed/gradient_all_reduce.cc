@@ -31,7 +31,9 @@ void GradientAllReduce::Run(Communicator& communicator, std::vector<double>& sca
     }
     flat.push_back(torch::cat(pieces));
   }
-  flat.push_back(torch::tensor(scalars, torch::kFloat64));
+  // On the gradients' device: NCCL reduces CUDA tensors only.
+  flat.push_back(torch::tensor(scalars, torch::kFloat64).to(parameters_.empty() ? torch::Device(torch::kCPU)
+                                                                                : parameters_.front().device()));
   communicator.AllReduceSum(flat);
   for (size_t b = 0; b < buckets_.size(); ++b) {
     int64_t offset = 0;

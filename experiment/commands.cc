@@ -21,6 +21,7 @@
 #include "datasets/trajectory_dataset.h"
 #include "distributed/communicator.h"
 #include "distributed/world.h"
+#include "models/device.h"
 #include "eval/stitching.h"
 #include "kinematics/arm_kinematics.h"
 #include "planning/export.h"
@@ -109,6 +110,7 @@ void RunMerge(const std::vector<std::string>& inputs, const std::string& out) {
 }
 
 void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
+  torch::Device device = models::ParseDevice(config.device, "device");
   // Launched as one of several processes (torchrun, Slurm): join the job first,
   // so that a missing peer is reported before any work.
   const std::optional<distributed::World> world = distributed::WorldFromEnvironment();
@@ -117,7 +119,7 @@ void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
     if (world->rank != 0 && spdlog::get_level() < spdlog::level::warn) spdlog::set_level(spdlog::level::warn);
     spdlog::info("joining a {} job of {} processes at {}:{}", world->source, world->size, world->master_addr,
                  world->master_port);
-    communicator = distributed::Connect(*world, config.distributed, "cpu");
+    communicator = distributed::Connect(*world, config.distributed, device.is_cuda() ? "cuda" : "cpu");
   }
   int threads = ConfigureThreads(config);
   if (world && config.threads == 0) threads = std::max(1, threads / world->local_size);  // share the machine
@@ -129,6 +131,10 @@ void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
   setup.data_path = config.data.path;
   setup.seed = static_cast<uint64_t>(config.seed);
   setup.threads = threads;
+  if (world && device.is_cuda() && !device.has_index()) {
+    device = torch::Device(torch::kCUDA, static_cast<c10::DeviceIndex>(world->local_rank));  // one GPU per process
+  }
+  setup.device = device;
   setup.model = config.model;
   setup.objective = config.objective;
   setup.train = config.train;
@@ -231,7 +237,9 @@ LoadedPlanner LoadPlanner(const std::string& ckpt, const std::string& overlay_pa
   const int64_t D = header.normalizer.dim();
   const models::NetworkPtr net =
       models::MakeNetwork(loaded.config.model, D, models::ConditionDim(loaded.config.objective.conditioning, D));
-  checkpoints::LoadCheckpointWeights(loaded.checkpoint, {nullptr, net.get(), nullptr});
+  const torch::Device device = models::ParseDevice(loaded.config.device, "device");
+  checkpoints::LoadCheckpointWeights(loaded.checkpoint, {nullptr, net.get(), nullptr}, device);
+  net->to(device);
   net->eval();
   loaded.robot = kinematics::MakeRobot(header.robot, loaded.checkpoint);
   loaded.planner = planning::MakeLearnedPlanner({net, header.normalizer, loaded.config.objective, header.horizon,
@@ -272,7 +280,10 @@ void RunEvalStitching(const EvalRequest& request) {
 }
 
 void RunExport(const EvalRequest& request) {
-  LoadedPlanner loaded = LoadPlanner(request.ckpt, request.overlay_path, request.overrides);
+  // An exported file runs anywhere: its weights are written from the CPU.
+  std::vector<std::string> overrides = request.overrides;
+  overrides.push_back("device=cpu");
+  LoadedPlanner loaded = LoadPlanner(request.ckpt, request.overlay_path, overrides);
   const std::string out = request.out.empty() ? trainer::RunDir(RunFolderOf(loaded.checkpoint)).planner() : request.out;
   EnsureParentFolder(out);
   planning::ExportMetadata metadata;

@@ -24,6 +24,7 @@ namespace flowplan::experiment {
 struct ExperimentConfig {
   int64_t seed = 0;                  // every random draw of the run derives from it
   int threads = 0;                   // CPU threads (0: all cores); does not change results
+  std::string device = "cpu";        // cpu, cuda, cuda:N: where networks train and sample
   std::string run_dir = "runs/particle_cross";
   datasets::GenerateConfig generate;
   datasets::DataConfig data;
@@ -43,6 +44,9 @@ struct ExperimentConfig {
     v.Field("seed", seed, "base seed of every random draw", config::NonNegative());
     v.Field("threads", threads, "CPU threads, 0 for all cores (results do not depend on it)",
             config::InRange(0, 1024));
+    v.Field("device", device,
+            "where networks train and plan: cpu, cuda or cuda:N (random draws stay on the CPU; guidance, "
+            "simulation and the VAE planner run on the CPU)");
     v.Field("run_dir", run_dir, "folder of the training run (config, metrics, checkpoints, planner)");
     v.Field("generate", generate, "dataset generation");
     v.Field("data", data, "training data");

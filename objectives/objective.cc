@@ -12,6 +12,10 @@ ObjectiveBatch ObjectiveBatch::Slice(int64_t begin, int64_t end) const {
           time.defined() ? time.slice(0, begin, end) : time};
 }
 
+ObjectiveBatch ObjectiveBatch::To(const torch::Device& device) const {
+  return {x1.to(device), noise.defined() ? noise.to(device) : noise, time.defined() ? time.to(device) : time};
+}
+
 std::unique_ptr<Objective> MakeObjective(const ObjectiveConfig& config, const models::ModelConfig& model) {
   // One line per objective.
   switch (config.name) {

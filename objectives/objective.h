@@ -70,6 +70,8 @@ struct ObjectiveBatch {
   int64_t size() const { return x1.size(0); }
   /// Rows [begin, end) of every tensor.
   ObjectiveBatch Slice(int64_t begin, int64_t end) const;
+  /// Every tensor on `device` (the batch itself when it is there already).
+  ObjectiveBatch To(const torch::Device& device) const;
 };
 
 class Objective {

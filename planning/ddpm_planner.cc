@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "guidance/scene.h"
+#include "models/device.h"
 #include "models/trajectory_net.h"
 #include "planning/script_parts.h"
 
@@ -62,13 +63,15 @@ torch::Tensor DdpmPlanner::PlanWithNoise(const torch::Tensor& start, const torch
   const std::unique_ptr<guidance::Guide> guide = MakeCallGuide(guidance_, normalizer_, config, obstacles);
   const torch::Tensor obstacles_f = guide ? obstacles.to(torch::kFloat32) : torch::Tensor();
   const torch::Tensor start_raw = start.to(torch::kFloat32), goal_raw = goal.to(torch::kFloat32);
-  const torch::Tensor s = normalizer_.Normalize(start_raw), g = normalizer_.Normalize(goal_raw);
+  // The network's device (config `device`); guidance runs on the CPU, where the robot's kinematics live.
+  const torch::Device device = models::DeviceOf(*net_);
+  const torch::Tensor s = normalizer_.Normalize(start_raw).to(device), g = normalizer_.Normalize(goal_raw).to(device);
   const bool inpaint = conditioning_ == models::Conditioning::kInpaint;
   const torch::Tensor cond = models::ConditionVector(conditioning_, s, g);
   auto project = [&](const torch::Tensor& x) { return inpaint ? models::Inpaint(x, s, g) : x; };
   const int64_t B = start.size(0);
   const int guided_steps = GuidedSteps();
-  const torch::Tensor renoise_f = renoise.to(torch::kFloat32);
+  const torch::Tensor renoise_f = renoise.to(device, torch::kFloat32);
   // One denoising step at k: the posterior mean, guided; the caller adds noise.
   auto denoise = [&](const torch::Tensor& x, int k, bool guided) {
     const torch::Tensor t = torch::full({B}, static_cast<double>(k), x.options());
@@ -77,19 +80,19 @@ torch::Tensor DdpmPlanner::PlanWithNoise(const torch::Tensor& start, const torch
     torch::Tensor mean = c1_[k] * x0 + c2_[k] * x;
     if (guided && guide) {
       for (int i = 0; i < sampler_.guide_iterations; ++i) {
-        mean = project(mean - config.scale * guide->Gradient(mean, obstacles_f));
+        mean = project(mean - config.scale * guide->Gradient(mean.to(torch::kCPU), obstacles_f).to(device));
       }
     }
     return mean;
   };
-  torch::Tensor x = project(noise.to(torch::kFloat32));
+  torch::Tensor x = project(noise.to(device, torch::kFloat32));
   for (int k = schedule_.steps - 1; k >= 0; --k) {
     x = denoise(x, k, k < guided_steps);
     if (k > 0) x = x + (sampler_.noise_scale * std_[k]) * renoise_f.select(1, schedule_.steps - 1 - k);
     x = project(x);
   }
   for (int e = 0; e < sampler_.extra_steps; ++e) x = project(denoise(x, 0, true));
-  const torch::Tensor plan = normalizer_.Denormalize(x);
+  const torch::Tensor plan = normalizer_.Denormalize(x.to(torch::kCPU));
   return inpaint ? models::Inpaint(plan, start_raw, goal_raw) : plan;
 }
 

@@ -4,6 +4,7 @@
 
 #include "core/error.h"
 #include "guidance/scene.h"
+#include "models/device.h"
 #include "planning/script_parts.h"
 
 namespace flowplan::planning {
@@ -63,7 +64,10 @@ torch::Tensor FlowPlanner::Integrate(const torch::Tensor& x, const torch::Tensor
   }
   StepCorrection correct;
   if (guide != nullptr) {
-    correct = [&](const torch::Tensor& state, double t) { return guide->Step(state, t, obstacles, scale); };
+    // Guidance runs on the CPU, where the robot's kinematics live (a no-op move there).
+    correct = [&](const torch::Tensor& state, double t) {
+      return guide->Step(state.to(torch::kCPU), t, obstacles, scale).to(state.device());
+    };
   }
   return IntegrateEuler(x, Velocity(start_n, goal_n), grid, project, correct);
 }
@@ -108,9 +112,13 @@ torch::Tensor FlowPlanner::PlanWithNoise(const torch::Tensor& start, const torch
   const std::unique_ptr<guidance::Guide> guide = MakeCallGuide(guidance_, normalizer_, config, obstacles);
   const torch::Tensor start_raw = start.to(torch::kFloat32), goal_raw = goal.to(torch::kFloat32);
   const torch::Tensor obstacles_f = guide ? obstacles.to(torch::kFloat32) : torch::Tensor();
+  const torch::Device device = models::DeviceOf(*net_);  // config `device`; plans come back to the CPU
   const torch::Tensor plan_n =
-      PlanNormalized(normalizer_.Normalize(start_raw), normalizer_.Normalize(goal_raw), noise.to(torch::kFloat32),
-                     renoise.defined() ? renoise.to(torch::kFloat32) : renoise, guide.get(), obstacles_f, config.scale);
+      PlanNormalized(normalizer_.Normalize(start_raw).to(device), normalizer_.Normalize(goal_raw).to(device),
+                     noise.to(device, torch::kFloat32),
+                     renoise.defined() ? renoise.to(device, torch::kFloat32) : renoise, guide.get(), obstacles_f,
+                     config.scale)
+          .to(torch::kCPU);
   const torch::Tensor plan = normalizer_.Denormalize(plan_n);
   // The ends are the requested states exactly, not their normalize/clamp round trip.
   return conditioning_ == Conditioning::kInpaint ? Inpaint(plan, start_raw, goal_raw) : plan;

@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "core/error.h"
+#include "models/device.h"
 #include "guidance/collision_cost.h"
 #include "guidance/scene.h"
 #include "planning/script_parts.h"
@@ -27,6 +28,8 @@ LatentPlanner::LatentPlanner(std::shared_ptr<models::StateVae> vae, models::MinM
   FLOWPLAN_DEMAND(vae_ != nullptr && normalizer_.dim() == vae_->state_dim());
   if (!guidance_.robot) throw Error("latent planner: the planner has no robot description (its goal is a TCP point)");
   if (horizon_ < 2) throw Error("latent planner: expected a horizon of at least 2 states");
+  // Its optimization interleaves the decoder with the robot's kinematics, which live on the CPU.
+  if (!models::DeviceOf(*vae_).is_cpu()) throw Error("device: the VAE planner runs on the CPU only; set device=cpu");
 }
 
 torch::Tensor LatentPlanner::PlanWithNoise(const torch::Tensor& start, const torch::Tensor& goal,

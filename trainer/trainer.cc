@@ -58,7 +58,10 @@ uint64_t PartSeed(uint64_t seed, int part) {
 
 models::NetworkPtr BuildNet(const TrainingSetup& setup, int64_t state_dim) {
   ScopedGlobalSeed seed(StreamSeed(setup.seed, kInitStream));
-  return models::MakeNetwork(setup.model, state_dim, models::ConditionDim(setup.objective.conditioning, state_dim));
+  // Initialised on the CPU (the same weights on every device), then moved.
+  auto net = models::MakeNetwork(setup.model, state_dim, models::ConditionDim(setup.objective.conditioning, state_dim));
+  net->to(setup.device);
+  return net;
 }
 
 double CosineLearningRate(const TrainerConfig& config, int64_t step) {
@@ -124,11 +127,13 @@ double ValidationLoss(const objectives::Objective& objective, models::Network& n
   if (!val.defined() || val.size(0) == 0) return NAN;
   torch::NoGradGuard no_grad;
   auto generator = at::make_generator<at::CPUGeneratorImpl>(seed);
+  const torch::Device device = net.parameters().empty() ? torch::Device(torch::kCPU) : net.parameters()[0].device();
   double total = 0.0;
   int64_t count = 0;
   for (int64_t begin = 0; begin < val.size(0); begin += batch_size) {
     const torch::Tensor batch = val.slice(0, begin, std::min<int64_t>(begin + batch_size, val.size(0)));
-    total += objective.Loss(net, objective.Draw(batch, generator), conditioning).item<double>() * batch.size(0);
+    const objectives::ObjectiveBatch drawn = objective.Draw(batch, generator).To(device);  // drawn on the CPU
+    total += objective.Loss(net, drawn, conditioning).item<double>() * batch.size(0);
     count += batch.size(0);
   }
   return total / static_cast<double>(count);
@@ -269,7 +274,7 @@ class TrainingRun {
                   setup_.data_path + " now has fingerprint " + data_.fingerprint +
                   "; the data file changed since the run started (restore it, or train into a new run_dir)");
     }
-    checkpoints::LoadCheckpointWeights(path, {net_.get(), ema_.get(), &optimizer_});
+    checkpoints::LoadCheckpointWeights(path, {net_.get(), ema_.get(), &optimizer_}, setup_.device);
     normalizer_ = header.normalizer;
     if (static_cast<int>(header.rng_states.size()) != config_.data_parts) {
       throw Error(path + ": holds the generators of " + std::to_string(header.rng_states.size()) +
@@ -295,7 +300,7 @@ class TrainingRun {
     const torch::Tensor x1 =
         DrawTrainingTrajectories(part.data, batch_size, setup_.objective.split_prob, part.generator);
     const models::Conditioning conditioning = setup_.objective.conditioning;
-    return gradient_->Compute(objective_->Draw(x1, part.generator),
+    return gradient_->Compute(objective_->Draw(x1, part.generator).To(setup_.device),
                               [&](models::Network& net, const objectives::ObjectiveBatch& batch) {
                                 return objective_->Loss(net, batch, conditioning);
                               });

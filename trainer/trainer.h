@@ -20,6 +20,7 @@ struct TrainingSetup {
   std::string data_path;    // where the data came from, for messages
   uint64_t seed = 0;
   int threads = 1;  // worker threads; results do not depend on it
+  torch::Device device = torch::kCPU;  // networks, optimizer state and batches (draws stay on the CPU)
   models::ModelConfig model;
   objectives::ObjectiveConfig objective;
   TrainerConfig train;

@@ -192,6 +192,8 @@ TEST_F(CliTest, BadConfigKeyValueAndFile) {
                      "model.unet.time_scale: expected a finite number");
   ExpectCleanFailure(Flowplan("generate --config " + Tiny() + " --shard 99999999999/1"), "--shard");
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " --until -5"), "--until");
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + " device=gpu"), "device=gpu: expected cpu, cuda or cuda:N");
+  ExpectCleanFailure(Flowplan("train --config " + Tiny() + " device=cuda:1"), "device=cuda:1: this LibTorch has no CUDA");
   ExpectCleanFailure(Flowplan("generate --config " + Path("missing.yaml")), "missing.yaml");
   std::ofstream(Path("broken.yaml")) << "train:\n  steps: [1\n";
   ExpectCleanFailure(Flowplan("train --config " + Path("broken.yaml")), "broken.yaml");
