@@ -86,7 +86,10 @@ void UpdateEma(models::Network& ema, const models::Network& net, double decay) {
   const auto source_buffers = net.buffers(true);
   auto target_buffers = ema.buffers(true);
   for (size_t i = 0; i < source_buffers.size(); ++i) {
-    if (target_buffers[i].is_floating_point()) target_buffers[i].mul_(decay).add_(source_buffers[i], 1.0 - decay);
+    // Equal buffers are left alone: d·x + (1 − d)·x is not exactly x in floating point.
+    if (target_buffers[i].is_floating_point() && !torch::equal(target_buffers[i], source_buffers[i])) {
+      target_buffers[i].mul_(decay).add_(source_buffers[i], 1.0 - decay);
+    }
   }
 }
 

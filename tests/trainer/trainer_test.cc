@@ -151,6 +151,22 @@ TEST(TrainerTest, EmaFollowsTheWeightsWithWarmUp) {
   }
 }
 
+TEST(TrainerTest, EmaLeavesConstantBuffersExactlyAsTheyAre) {
+  // The UNet's sinusoid frequencies are a buffer that training never changes;
+  // averaging it with itself would drift it by rounding.
+  const TrainingSetup setup = TinySetup("ema_buffers");
+  const std::string path = Train(setup, TinyData(), TrainStart::kFresh).checkpoint;
+  auto net = models::MakeNetwork(setup.model, 4, 0);
+  auto ema = models::MakeNetwork(setup.model, 4, 0);
+  checkpoints::LoadCheckpointWeights(path, {net.get(), ema.get(), nullptr});
+  const auto fresh = models::MakeNetwork(setup.model, 4, 0)->named_buffers();
+  ASSERT_GT(fresh.size(), 0u);
+  for (const auto& item : fresh) {
+    EXPECT_TRUE(torch::equal(ema->named_buffers()[item.key()], item.value())) << item.key();
+    EXPECT_TRUE(torch::equal(net->named_buffers()[item.key()], item.value())) << item.key();
+  }
+}
+
 TEST(TrainerTest, ForeignGeneratorStateIsNamed) {
   const TrainingSetup setup = TinySetup("foreign_rng");
   const std::string path = Train(setup, TinyData(), TrainStart::kFresh).checkpoint;

@@ -1,0 +1,623 @@
+#!/usr/bin/env python3
+"""flowplan's flow planner and trainer written in plain PyTorch eager mode.
+
+The speed reference that bench/speed_bench.cc sets beside the C++ planner and
+trainer: the UNet1D (models/unet1d.cc) as torch.nn modules holding a
+checkpoint's EMA weights, the min-max normalizer (models/normalizer.cc), the
+Franka's forward kinematics and collision spheres from the checkpoint's robot
+description (kinematics/arm_kinematics.cc), the collision and smoothness
+guidance costs (guidance/) with their gradient taken by autograd, the Euler
+sampler with inpainting, guidance and midpoint splitting
+(planning/flow_planner.cc, planning/euler.cc) and a flow-matching training
+step with AdamW (objectives/flow_matching.cc, objectives/trajectory_loss.cc).
+Nothing here is imported from flowplan or read from the exported planner's
+code: the exported planner only serves as the reference the results are
+checked against (and its ik() gives the checks' start and goal joints).
+
+usage: eager_reference.py --checkpoint CKPT --export PLANNER.pt --threads N
+                          --json OUT.json [--repeats R]
+
+Checks (max abs differences, written to the JSON under "checks"):
+  network              the network's velocity at a fixed input against the export's velocity()
+  unguided_plan        a 10-step unguided plan at B = 1 against the export's plan
+  unguided_split_plan  the same with midpoint splitting
+  guided_plan          guided around one sphere, without splitting
+  guided_split_plan    guided around one sphere, with splitting
+The export computes a plan with the splitting it was exported with
+(`splitting` attribute); the other variant is composed from the export's
+normalize / integrate / denormalize / inpaint methods as its plan() composes
+them. The script exits with status 1 if `network`, `unguided_plan` or
+`unguided_split_plan` exceeds 1e-4. Guided plans take the cost gradient by
+autograd here and by written-out formulas in the export, so they agree to
+rounding, amplified by the sampler.
+
+Timings (median ms over R repeats after warm-up, the same work as
+bench/speed_bench.cc): forward_b1, forward_b64 (the network under
+torch.inference_mode()), train_step_b256 (loss, backward and AdamW step on a
+random normalized batch of 256 trajectories), plan_b1 (10 Euler steps,
+unguided, under torch.inference_mode()), plan_guided_split_b1 (guided around
+one sphere, with splitting; the network under torch.no_grad(), guidance with
+autograd). flops_b1 is the multiply-add count x 2 of the convolutions and
+linear layers in one forward pass at B = 1.
+
+Shapes: B trajectories, T states per trajectory, D state dimensions, J joints,
+L links, S collision spheres, K obstacles, W = 3 workspace dimensions.
+"""
+import argparse
+import json
+import math
+import statistics
+import sys
+import time
+
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+import yaml
+
+TOLERANCE = 1e-4  # max abs difference allowed for the network and the unguided plans
+
+# The C++ defaults (models/unet1d.h, guidance/guide.h) of keys a config may lack.
+UNET_DEFAULTS = {"down_dims": [32, 64, 128, 256], "kernel_size": 5, "groups": 8, "time_embed_dim": 32,
+                 "time_scale": 1.0}
+GUIDANCE_DEFAULTS = {"scale": 1.0, "schedule": "one_minus_t", "clip": 0.0, "collision_weight": 0.1,
+                     "smoothness_weight": 1e-6, "margin": 0.05, "smoothness_sigma": 1.0}
+
+
+# ----------------------------------------------------------------------------
+# Network: the temporal UNet of models/unet1d.cc. Attribute names follow the
+# C++ module names so that the checkpoint's "ema.*" tensors load by name.
+# ----------------------------------------------------------------------------
+
+class ConvBlock(nn.Module):
+    """Conv1d(k) -> GroupNorm -> Mish; (B, in, T) -> (B, out, T)."""
+
+    def __init__(self, channels_in, channels_out, kernel, groups):
+        super().__init__()
+        self.conv = nn.Conv1d(channels_in, channels_out, kernel, padding=kernel // 2)
+        self.norm = nn.GroupNorm(groups, channels_out)
+
+    def forward(self, x):
+        return F.mish(self.norm(self.conv(x)))
+
+
+class ResidualBlock(nn.Module):
+    """Two ConvBlocks with FiLM from the condition between them, plus a 1x1
+    residual convolution when the width changes.
+    x (B, in, T), cond (B, C) -> (B, out, T)."""
+
+    def __init__(self, channels_in, channels_out, cond_dim, kernel, groups):
+        super().__init__()
+        self.out = channels_out
+        self.block0 = ConvBlock(channels_in, channels_out, kernel, groups)
+        self.block1 = ConvBlock(channels_out, channels_out, kernel, groups)
+        self.film = nn.Linear(cond_dim, 2 * channels_out)
+        self.residual = nn.Conv1d(channels_in, channels_out, 1) if channels_in != channels_out else None
+
+    def forward(self, x, cond):
+        h = self.block0(x)                              # (B, out, T)
+        film = self.film(F.mish(cond)).unsqueeze(-1)    # (B, 2 out, 1): scale, then shift
+        h = film[:, 0:self.out] * h + film[:, self.out:2 * self.out]
+        h = self.block1(h)
+        return h + (self.residual(x) if self.residual is not None else x)
+
+
+class UNet1D(nn.Module):
+    """Velocity network: x (B, T, D) normalized, t (B,) flow time, cond (B, C)
+    or None -> (B, T, D).
+
+    Levels i = 0 .. N-1 of widths down_dims[i]; T halves after every level but
+    the last. The up path has N-1 levels, each concatenating the skip of the
+    matching down level (deepest first; the shallowest skip is not used) and
+    doubling T with a transposed convolution."""
+
+    def __init__(self, state_dim, cond_dim, down_dims, kernel_size, groups, time_embed_dim, time_scale):
+        super().__init__()
+        self.levels = len(down_dims)
+        self.cond_dim = cond_dim
+        self.time_scale = time_scale
+        e, half = time_embed_dim, time_embed_dim // 2
+        # Sinusoidal frequencies exp(-k ln(10000) / (half - 1)), k = 0 .. half-1; (half,)
+        self.register_buffer(
+            "frequencies", torch.exp(torch.arange(half, dtype=torch.float32) * (-math.log(10000.0) / (half - 1))))
+        self.time_in = nn.Linear(e, 4 * e)
+        self.time_out = nn.Linear(4 * e, e)
+        cond = e + cond_dim
+        k, g = kernel_size, groups
+        dims = [state_dim] + list(down_dims)
+        for i in range(self.levels):
+            setattr(self, f"down{i}_block0", ResidualBlock(dims[i], dims[i + 1], cond, k, g))
+            setattr(self, f"down{i}_block1", ResidualBlock(dims[i + 1], dims[i + 1], cond, k, g))
+            if i + 1 < self.levels:
+                setattr(self, f"down{i}_down", nn.Conv1d(dims[i + 1], dims[i + 1], 3, stride=2, padding=1))
+        self.mid0 = ResidualBlock(dims[-1], dims[-1], cond, k, g)
+        self.mid1 = ResidualBlock(dims[-1], dims[-1], cond, k, g)
+        for u, i in enumerate(range(self.levels - 1, 0, -1)):  # up level u maps dims[i+1] (x2) -> dims[i]
+            setattr(self, f"up{u}_block0", ResidualBlock(2 * dims[i + 1], dims[i], cond, k, g))
+            setattr(self, f"up{u}_block1", ResidualBlock(dims[i], dims[i], cond, k, g))
+            setattr(self, f"up{u}_up", nn.ConvTranspose1d(dims[i], dims[i], 4, stride=2, padding=1))
+        self.final_block = ConvBlock(dims[1], dims[1], k, g)
+        self.final_conv = nn.Conv1d(dims[1], state_dim, 1)
+
+    def time_feature(self, t):
+        """t (B,) -> (B, e)."""
+        angles = (t * self.time_scale).unsqueeze(-1) * self.frequencies.unsqueeze(0)  # (B, half)
+        embedding = torch.cat([torch.sin(angles), torch.cos(angles)], -1)            # (B, e)
+        return self.time_out(F.mish(self.time_in(embedding)))
+
+    def forward(self, x, t, cond=None):
+        feature = self.time_feature(t)                                   # (B, e)
+        if self.cond_dim > 0:
+            feature = torch.cat([feature, cond], -1)                     # (B, e + C)
+        h = x.transpose(1, 2)                                            # (B, D, T)
+        skips = []
+        for i in range(self.levels):
+            h = getattr(self, f"down{i}_block0")(h, feature)
+            h = getattr(self, f"down{i}_block1")(h, feature)
+            skips.append(h)
+            if i + 1 < self.levels:
+                h = getattr(self, f"down{i}_down")(h)                    # T -> T/2
+        h = self.mid0(h, feature)
+        h = self.mid1(h, feature)
+        for u in range(self.levels - 1):
+            h = torch.cat([h, skips.pop()], 1)
+            h = getattr(self, f"up{u}_block0")(h, feature)
+            h = getattr(self, f"up{u}_block1")(h, feature)
+            h = getattr(self, f"up{u}_up")(h)                            # T -> 2T
+        h = self.final_conv(self.final_block(h))                         # (B, D, T)
+        return h.transpose(1, 2)                                         # (B, T, D)
+
+
+def count_flops(net, x, t, cond=None):
+    """Multiply-adds x 2 of every convolution and linear layer in net(x, t, cond)."""
+    total = 0
+
+    def hook(module, inputs, output):
+        nonlocal total
+        if isinstance(module, nn.Linear):
+            total += 2 * output.numel() * module.in_features
+        elif isinstance(module, nn.ConvTranspose1d):  # every input element meets out_channels x kernel weights
+            total += 2 * inputs[0].numel() * module.out_channels * module.kernel_size[0] // module.groups
+        elif isinstance(module, nn.Conv1d):
+            total += 2 * output.numel() * module.in_channels * module.kernel_size[0] // module.groups
+
+    handles = [m.register_forward_hook(hook) for m in net.modules()
+               if isinstance(m, (nn.Linear, nn.Conv1d, nn.ConvTranspose1d))]
+    with torch.inference_mode():
+        net(x, t, cond)
+    for handle in handles:
+        handle.remove()
+    return total
+
+
+# ----------------------------------------------------------------------------
+# Normalizer and conditioning
+# ----------------------------------------------------------------------------
+
+class Normalizer:
+    """Per-dimension min-max map of raw states to [-1, 1]; lo, hi (D,)."""
+
+    def __init__(self, lo, hi):
+        self.lo = lo.float().contiguous()
+        self.hi = hi.float().contiguous()
+
+    def normalize(self, x):                       # (..., D) -> (..., D)
+        return (x - self.lo) / (self.hi - self.lo) * 2.0 - 1.0
+
+    def denormalize_unclamped(self, x):           # (..., D) -> (..., D)
+        return (x + 1.0) * 0.5 * (self.hi - self.lo) + self.lo
+
+    def denormalize(self, x):                     # clamps to [-1, 1] first
+        return self.denormalize_unclamped(torch.clamp(x, -1.0, 1.0))
+
+
+def inpaint(x, start, goal):
+    """x (B, T, D) with state 0 := start (B, D) and state T-1 := goal (B, D), out of place."""
+    return torch.cat([start.unsqueeze(1), x[:, 1:-1], goal.unsqueeze(1)], 1)
+
+
+# ----------------------------------------------------------------------------
+# Robot: forward kinematics of a tree of hinge joints and its collision spheres
+# ----------------------------------------------------------------------------
+
+def pose(pos, quat):
+    """4x4 float64 pose from a position (3,) and a quaternion (w, x, y, z)."""
+    n = math.sqrt(sum(v * v for v in quat))
+    w, x, y, z = (v / n for v in quat)
+    return torch.tensor([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y), pos[0]],
+                         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x), pos[1]],
+                         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y), pos[2]],
+                         [0.0, 0.0, 0.0, 1.0]], dtype=torch.float64)
+
+
+def cross_matrix(axis):
+    """[axis]x of the unit axis, padded to 4x4, float64."""
+    n = math.sqrt(sum(v * v for v in axis))
+    x, y, z = (v / n for v in axis)
+    return torch.tensor([[0.0, -z, y, 0.0], [z, 0.0, -x, 0.0], [-y, x, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]],
+                        dtype=torch.float64)
+
+
+class ArmKinematics(nn.Module):
+    """Differentiable forward kinematics of an arm described by flowplan's
+    robot YAML: X_link = X_parent . Trans(pos) Rot(quat) . Rot(axis, q[joint]),
+    the hinge rotation by Rodrigues' formula. Constants are built in float64
+    and stored in float32."""
+
+    def __init__(self, robot):
+        super().__init__()
+        if robot["kind"] != "arm":
+            raise ValueError(f"robot {robot['name']!r} is not an arm")
+        links = robot["links"]
+        self.num_joints = robot["num_joints"]
+        self.parents = [link["parent"] for link in links]
+        self.joints = [link["joint"] for link in links]
+        cross = [cross_matrix(link["axis"]) for link in links]
+        self.register_buffer("fixed", torch.stack([pose(l["pos"], l["quat"]) for l in links]).float())  # (L, 4, 4)
+        self.register_buffer("cross", torch.stack(cross).float())                                       # (L, 4, 4)
+        self.register_buffer("cross_sq", torch.stack([k @ k for k in cross]).float())                   # (L, 4, 4)
+        self.register_buffer("sphere_links", torch.tensor([s["link"] for s in robot["spheres"]]))        # (S,)
+        self.register_buffer("sphere_local", torch.tensor([s["centre"] for s in robot["spheres"]],
+                                                          dtype=torch.float64).float())                  # (S, 3)
+        self.register_buffer("sphere_radii", torch.tensor([s["radius"] for s in robot["spheres"]],
+                                                          dtype=torch.float64).float())                  # (S,)
+
+    def link_frames(self, q):
+        """q (N, J) rad -> link poses in the world (N, L, 4, 4)."""
+        identity = torch.eye(4, dtype=q.dtype)
+        sin_q = torch.sin(q).unsqueeze(-1).unsqueeze(-1)             # (N, J, 1, 1)
+        one_minus_cos = (1.0 - torch.cos(q)).unsqueeze(-1).unsqueeze(-1)
+        frames = []
+        for l, (parent, j) in enumerate(zip(self.parents, self.joints)):
+            if j >= 0:
+                rotation = identity + sin_q[:, j] * self.cross[l] + one_minus_cos[:, j] * self.cross_sq[l]  # (N, 4, 4)
+                local = torch.matmul(self.fixed[l], rotation)
+            else:
+                local = self.fixed[l].expand(q.size(0), 4, 4)
+            frames.append(torch.matmul(frames[parent], local) if parent >= 0 else local)
+        return torch.stack(frames, 1)
+
+    def sphere_centres(self, q):
+        """q (N, J) -> collision sphere centres (N, S, 3) in the world."""
+        carriers = self.link_frames(q).index_select(1, self.sphere_links)  # (N, S, 4, 4)
+        return torch.matmul(carriers[:, :, 0:3, 0:3], self.sphere_local.unsqueeze(-1)).squeeze(-1) + carriers[:, :, 0:3, 3]
+
+
+# ----------------------------------------------------------------------------
+# Guidance costs (values; their gradients come from autograd)
+# ----------------------------------------------------------------------------
+
+class CollisionCost:
+    """Sum over states, spheres and obstacles of relu(margin + r_s + r_k - |c_s - o_k|).
+    x (B, T, D) raw, obstacles (K, 4) -> (B,)."""
+
+    def __init__(self, kinematics, margin):
+        self.kinematics = kinematics
+        self.margin = margin
+
+    def __call__(self, x, obstacles):
+        B, T = x.shape[:2]
+        J = self.kinematics.num_joints
+        q = x[:, :, 0:J].reshape(B * T, J)                                    # (N, J), N = B T
+        centres = self.kinematics.sphere_centres(q)                           # (N, S, 3)
+        diff = centres.unsqueeze(2) - obstacles[:, 0:3].view(1, 1, -1, 3)     # (N, S, K, 3)
+        reach = self.margin + self.kinematics.sphere_radii.view(1, -1, 1) + obstacles[:, 3].view(1, 1, -1)  # (1, S, K)
+        penetration = torch.relu(reach - torch.linalg.vector_norm(diff, dim=-1))  # (N, S, K)
+        return penetration.sum([1, 2]).view(B, T).sum(1)
+
+
+class SmoothnessCost:
+    """The constant-velocity GP prior on [q, q_dot]: with e_q = q_{i+1} - q_i - dt v_i
+    and e_v = v_{i+1} - v_i, C = sum a e_q^2 + 2 b e_q e_v + c e_v^2 with
+    a = 12/(dt^3 s^2), b = -6/(dt^2 s^2), c = 4/(dt s^2). x (B, T, D) raw -> (B,)."""
+
+    def __init__(self, num_joints, dt, sigma):
+        s2 = sigma * sigma
+        self.J, self.dt = num_joints, dt
+        self.a, self.b, self.c = 12.0 / (dt * dt * dt * s2), -6.0 / (dt * dt * s2), 4.0 / (dt * s2)
+
+    def __call__(self, x, obstacles):
+        J = self.J
+        q, v = x[:, :, 0:J], x[:, :, J:2 * J]                     # (B, T, J) each
+        e_q = q[:, 1:] - q[:, :-1] - self.dt * v[:, :-1]           # (B, T-1, J)
+        e_v = v[:, 1:] - v[:, :-1]
+        return (self.a * e_q * e_q + 2.0 * self.b * e_q * e_v + self.c * e_v * e_v).sum([1, 2])
+
+
+SCHEDULES = {
+    "one_minus_t": lambda t: 1.0 - t,
+    "ratio": lambda t: (1.0 - t) / max(t, 1e-3),
+    "rising": lambda t: t,
+}
+
+
+class Guide:
+    """One guidance step on normalized trajectories x (B, T, D):
+    x - scale b_t sum_k w_k clip(grad C_k(denormalize_unclamped(x))) (hi - lo)/2,
+    clip() capping each term's raw gradient at each state to norm `clip`."""
+
+    def __init__(self, settings, kinematics, dt, normalizer):
+        self.normalizer = normalizer
+        self.schedule = SCHEDULES[settings["schedule"]]
+        self.clip = float(settings["clip"])
+        self.terms = [(float(settings["collision_weight"]), CollisionCost(kinematics, float(settings["margin"]))),
+                      (float(settings["smoothness_weight"]),
+                       SmoothnessCost(kinematics.num_joints, dt, float(settings["smoothness_sigma"])))]
+
+    def gradient(self, x_n, obstacles):
+        """(B, T, D) normalized -> (B, T, D), the weighted clipped gradient in normalized units."""
+        with torch.enable_grad():
+            raw = self.normalizer.denormalize_unclamped(x_n.detach()).requires_grad_(True)  # (B, T, D)
+            gradient = torch.zeros_like(x_n)
+            for weight, cost in self.terms:
+                if weight == 0.0:
+                    continue
+                part, = torch.autograd.grad(cost(raw, obstacles).sum(), raw)  # (B, T, D) raw units
+                if self.clip > 0.0:
+                    part = part / (torch.linalg.vector_norm(part, dim=-1, keepdim=True).clamp_min(self.clip) / self.clip)
+                gradient = gradient + weight * part
+        return gradient * (0.5 * (self.normalizer.hi - self.normalizer.lo))
+
+    def step(self, x_n, t, obstacles, scale):
+        return x_n - (scale * self.schedule(t)) * self.gradient(x_n, obstacles)
+
+
+# ----------------------------------------------------------------------------
+# Planner: Euler steps with inpainting, guidance and midpoint splitting
+# ----------------------------------------------------------------------------
+
+class FlowPlanner:
+    def __init__(self, net, normalizer, conditioning, steps, guide):
+        self.net = net
+        self.normalizer = normalizer
+        self.inpaint = conditioning == "inpaint"
+        self.steps = steps
+        self.split_steps = max(1, steps // 2)
+        self.guide = guide
+
+    def integrate(self, x, s, g, t0, steps, obstacles, scale):
+        """Euler from flow time t0 to 1: x (B, T', D) normalized, boundaries s, g (B, D);
+        guided after every step when obstacles (K, 4) is given."""
+        cond = None if self.inpaint else torch.cat([s, g], -1)  # (B, 2D) under direct conditioning
+        if self.inpaint:
+            x = inpaint(x, s, g)
+        h = (1.0 - t0) / steps
+        for i in range(steps):
+            t = torch.full([x.size(0)], t0 + i * h, dtype=x.dtype)
+            x = x + h * self.net(inpaint(x, s, g) if self.inpaint else x, t, cond)
+            if obstacles is not None:
+                x = self.guide.step(x, t0 + (i + 1) * h, obstacles, scale)
+            if self.inpaint:
+                x = inpaint(x, s, g)
+        return x
+
+    def plan(self, start, goal, noise, renoise=None, obstacles=None, scale=0.0, split=False):
+        """start, goal (B, D) raw; noise, renoise (B, T, D) standard normal; obstacles (K, 4)
+        -> (B, T, D) raw plans. Unguided when obstacles is None or scale is 0."""
+        guided = obstacles.float() if obstacles is not None and obstacles.size(0) > 0 and scale != 0.0 else None
+        start, goal = start.float(), goal.float()
+        s, g = self.normalizer.normalize(start), self.normalizer.normalize(goal)
+        x = self.integrate(noise.float(), s, g, 0.0, self.steps, guided, scale)
+        if split:
+            # Re-noise to t = 0.5, cut into halves that take the states beside the
+            # middle as their missing boundaries, refine both from t = 0.5 to 1.
+            B, T = x.shape[:2]
+            half = T // 2
+            before_mid, after_mid = x[:, half - 1], x[:, half]                   # (B, D) each
+            x = 0.5 * renoise.float() + 0.5 * x
+            halves = torch.cat([x[:, 0:half], x[:, half:T]], 0)                  # (2B, T/2, D)
+            refined = self.integrate(halves, torch.cat([s, after_mid], 0), torch.cat([before_mid, g], 0),
+                                     0.5, self.split_steps, guided, scale)
+            x = torch.cat([refined[0:B], refined[B:2 * B]], 1)                   # (B, T, D)
+        plan = self.normalizer.denormalize(x)
+        return inpaint(plan, start, goal) if self.inpaint else plan
+
+
+# ----------------------------------------------------------------------------
+# Training step: conditional flow matching on the OT path, AdamW
+# ----------------------------------------------------------------------------
+
+def flow_matching_loss(net, x1, conditioning):
+    """x1 (B, T, D) normalized data -> scalar loss. x0 ~ N(0, I), t ~ U[0, 1),
+    x_t = t x1 + (1 - t) x0, target x1 - x0; under inpainting x_t's ends are
+    x1's and the loss covers the interior states only."""
+    x0 = torch.randn_like(x1)
+    t = torch.rand(x1.size(0))
+    tb = t.view(-1, 1, 1)
+    xt = tb * x1 + (1.0 - tb) * x0
+    target = x1 - x0
+    start, goal = x1[:, 0], x1[:, -1]
+    if conditioning == "inpaint":
+        output = net(inpaint(xt, start, goal), t)
+        return F.mse_loss(output[:, 1:-1], target[:, 1:-1])
+    return F.mse_loss(net(xt, t, torch.cat([start, goal], -1)), target)
+
+
+def train_step(net, optimizer, x1, conditioning):
+    optimizer.zero_grad(set_to_none=True)
+    loss = flow_matching_loss(net, x1, conditioning)
+    loss.backward()
+    optimizer.step()
+    return loss
+
+
+# ----------------------------------------------------------------------------
+# Loading, checks, timings
+# ----------------------------------------------------------------------------
+
+def load_network(checkpoint, prefix, config, state_dim, cond_dim):
+    """The UNet1D of the checkpoint's config with the tensors named prefix + '.*'."""
+    unet = dict(UNET_DEFAULTS, **config["model"].get("unet", {}))
+    net = UNet1D(state_dim, cond_dim, unet["down_dims"], unet["kernel_size"], unet["groups"],
+                 unet["time_embed_dim"], unet["time_scale"])
+    tensors = dict(checkpoint.named_parameters())
+    tensors.update(dict(checkpoint.named_buffers()))
+    state = {name[len(prefix) + 1:]: value.detach().clone() for name, value in tensors.items()
+             if name.startswith(prefix + ".")}
+    net.load_state_dict(state, strict=True)
+    return net
+
+
+def median_ms(body, repeats, warmup=3):
+    for _ in range(warmup):
+        body()
+    times = []
+    for _ in range(repeats):
+        begin = time.perf_counter()
+        body()
+        times.append((time.perf_counter() - begin) * 1e3)
+    return statistics.median(times)
+
+
+class ExportReference:
+    """Plans of the exported planner: its own plan() for the splitting it was
+    exported with, otherwise its integrate() composed as plan() composes it."""
+
+    def __init__(self, module):
+        self.m = module
+        self.splits = module.splitting == "midpoint"
+
+    def plan(self, start, goal, noise, renoise, obstacles, scale, split):
+        m = self.m
+        if split == self.splits:
+            return m.plan(start, goal, noise, renoise if split else None, obstacles, scale), "export.plan"
+        guided = obstacles if obstacles is not None and scale != 0.0 else None
+        s, g = m.normalize(start), m.normalize(goal)
+        x = m.integrate(noise, s, g, 0.0, m.steps, guided, scale)
+        if split:
+            B, half = x.size(0), m.horizon // 2
+            before_mid, after_mid = x[:, half - 1], x[:, half]
+            x = 0.5 * renoise + 0.5 * x
+            halves = torch.cat([x[:, 0:half], x[:, half:m.horizon]], 0)
+            refined = m.integrate(halves, torch.cat([s, after_mid], 0), torch.cat([before_mid, g], 0), 0.5,
+                                  max(1, m.steps // 2), guided, scale)
+            x = torch.cat([refined[0:B], refined[B:2 * B]], 1)
+        return m.inpaint(m.denormalize(x), start, goal), "export.integrate"
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--checkpoint", required=True, help="flowplan checkpoint (.pt)")
+    parser.add_argument("--export", required=True, help="the exported planner of the same weights (.pt)")
+    parser.add_argument("--threads", type=int, required=True, help="torch intra-op threads")
+    parser.add_argument("--json", required=True, help="output JSON file")
+    parser.add_argument("--repeats", type=int, default=20, help="timed repeats per measurement (median)")
+    args = parser.parse_args()
+
+    torch.set_num_threads(args.threads)
+    torch.set_flush_denormal(True)  # as bench/speed_bench.cc does for the C++ side
+
+    checkpoint = torch.jit.load(args.checkpoint, map_location="cpu")
+    config = yaml.safe_load(checkpoint.config)
+    robot = yaml.safe_load(checkpoint.robot)
+    # Configs written before model.architecture became model.name use the old key.
+    model_name = config["model"].get("name", config["model"].get("architecture", "unet1d"))
+    objective = config.get("objective", {})
+    if model_name != "unet1d" or objective.get("name", "flow_matching") != "flow_matching":
+        sys.exit(f"{args.checkpoint}: expected model.name unet1d and objective.name flow_matching, got "
+                 f"{model_name} and {objective.get('name')}")
+    conditioning = objective.get("conditioning", "inpaint")
+    normalizer = Normalizer(checkpoint.normalizer_lo, checkpoint.normalizer_hi)
+    D, T = normalizer.lo.numel(), int(checkpoint.horizon)
+    C = 2 * D if conditioning == "direct" else 0
+    steps = int(config.get("sampler", {}).get("steps", 10))
+    settings = dict(GUIDANCE_DEFAULTS, **config.get("guidance", {}))
+    scale = float(settings["scale"])
+
+    net = load_network(checkpoint, "ema", config, D, C).eval()
+    kinematics = ArmKinematics(robot)
+    guide = Guide(settings, kinematics, float(checkpoint.dt), normalizer)
+    planner = FlowPlanner(net, normalizer, conditioning, steps, guide)
+
+    export = torch.jit.load(args.export, map_location="cpu")
+    reference = ExportReference(export)
+    compiled = yaml.safe_load(export.guidance)
+    mismatched = sorted(k for k in compiled if k in settings and compiled[k] != settings[k])
+    if mismatched:
+        print(f"warning: the export's compiled guidance differs from the checkpoint's in {mismatched}; "
+              f"the guided checks compare different settings", file=sys.stderr)
+
+    # ---- checks ------------------------------------------------------------
+    checks, references = {}, {}
+    torch.manual_seed(0)
+    x = torch.randn(2, T, D)                                   # (2, T, D) normalized
+    t = torch.tensor([0.3, 0.8])                               # (2,)
+    cond = torch.randn(2, C) if C > 0 else None
+    with torch.inference_mode():
+        checks["network"] = (net(x, t, cond) - export.velocity(x, t, cond)).abs().max().item()
+
+    start_q = export.ik(torch.tensor([[0.5, -0.3, 0.2], [0.5, 0.3, 0.2]], dtype=torch.float64)).float()  # (2, J)
+    start = torch.cat([start_q[0:1], torch.zeros(1, D - start_q.size(1))], 1)   # (1, D): q, then q_dot at rest
+    goal = torch.cat([start_q[1:2], torch.zeros(1, D - start_q.size(1))], 1)
+    noise, renoise = torch.randn(1, T, D), torch.randn(1, T, D)                  # (1, T, D)
+    sphere = torch.tensor([[0.5, 0.0, 0.2, 0.1]])                               # (K = 1, 4)
+    cases = [("unguided_plan", None, 0.0, False), ("unguided_split_plan", None, 0.0, True),
+             ("guided_plan", sphere, scale, False), ("guided_split_plan", sphere, scale, True)]
+    for name, obstacles, s, split in cases:
+        with torch.no_grad():
+            ours = planner.plan(start, goal, noise, renoise, obstacles, s, split)
+            theirs, references[name] = reference.plan(start, goal, noise, renoise, obstacles, s, split)
+        checks[name] = (ours - theirs).abs().max().item()
+    failed = [k for k in ("network", "unguided_plan", "unguided_split_plan") if not checks[k] <= TOLERANCE]
+
+    # ---- timings (the inputs of bench/speed_bench.cc) ------------------------
+    ms = {}
+    for B in (1, 64):
+        xb, tb = torch.randn(B, T, D), torch.full([B], 0.5)
+        cb = torch.zeros(B, C) if C > 0 else None
+        with torch.inference_mode():
+            ms[f"forward_b{B}"] = median_ms(lambda: net(xb, tb, cb), args.repeats)
+    flops_b1 = count_flops(net, torch.randn(1, T, D), torch.full([1], 0.5), torch.zeros(1, C) if C > 0 else None)
+
+    # A copy of the EMA weights trained with AdamW(1e-4, weight decay 0.01), as bench/speed_bench.cc does.
+    trainee = load_network(checkpoint, "ema", config, D, C).train()
+    optimizer = torch.optim.AdamW(trainee.parameters(), lr=1e-4, weight_decay=0.01)
+    x1 = torch.rand(256, T, D) * 2 - 1                         # (256, T, D) normalized
+    ms["train_step_b256"] = median_ms(lambda: train_step(trainee, optimizer, x1, conditioning),
+                                      max(5, args.repeats // 4), warmup=1)
+
+    plan_start = (normalizer.lo * 0.6 + normalizer.hi * 0.4).unsqueeze(0)   # (1, D) raw
+    plan_goal = (normalizer.lo * 0.4 + normalizer.hi * 0.6).unsqueeze(0)
+    torch.manual_seed(1)
+    plan_noise, plan_renoise = torch.randn(1, T, D), torch.randn(1, T, D)
+    with torch.inference_mode():
+        ms["plan_b1"] = median_ms(lambda: planner.plan(plan_start, plan_goal, plan_noise), args.repeats)
+    with torch.no_grad():
+        ms["plan_guided_split_b1"] = median_ms(
+            lambda: planner.plan(plan_start, plan_goal, plan_noise, plan_renoise, sphere, scale, split=True),
+            args.repeats)
+
+    result = dict(ms)
+    result.update({
+        "flops_b1": flops_b1,
+        "torch_version": torch.__version__,
+        "threads": torch.get_num_threads(),
+        "repeats": args.repeats,
+        "checkpoint": args.checkpoint,
+        "export": args.export,
+        "export_splitting": export.splitting,
+        "guidance_scale": scale,
+        "checks": {f"{k}_max_abs_diff": v for k, v in checks.items()},
+        "check_references": references,
+        "check_tolerance": TOLERANCE,
+        "checks_passed": not failed,
+    })
+    with open(args.json, "w") as f:
+        json.dump(result, f, indent=2)
+        f.write("\n")
+
+    print(f"PyTorch {torch.__version__} eager, {torch.get_num_threads()} threads, median of {args.repeats}")
+    for key, value in ms.items():
+        print(f"  {key:<22} {value:10.3f} ms")
+    print(f"  {'flops_b1':<22} {flops_b1 / 1e6:10.1f} MFLOP")
+    print("max abs difference to the export")
+    for key, value in checks.items():
+        print(f"  {key:<22} {value:10.3e}  ({references.get(key, 'export.velocity')})")
+    if failed:
+        print(f"FAILED: {', '.join(failed)} above {TOLERANCE:g}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

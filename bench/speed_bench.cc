@@ -1,0 +1,283 @@
+// flowplan beside PyTorch eager on the same weights, in one run: the Franka
+// UNet's forward pass at B = 1 and 64, a training step at B = 256, and a
+// 10-step plan at B = 1 (unguided, and guided around one sphere with
+// splitting), in-process and from the exported TorchScript file; then
+// bench/eager_reference.py runs the same work in plain PyTorch with the same
+// thread count, checks that its plans equal the exported planner's, and the
+// ratios are printed. docs/performance.md has the figures.
+//
+//   speed_bench [--checkpoint CKPT] [--threads N] [--repeats R] [--out DIR] [--python PY]
+//
+// Without --checkpoint it writes a checkpoint with freshly initialised
+// weights of configs/franka_reach.yaml's network (the timings do not depend on
+// the weights; the checks do not need trained ones).
+
+#include <spdlog/spdlog.h>
+#include <torch/script.h>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "checkpoints/checkpoint.h"
+#include "core/error.h"
+#include "experiment/commands.h"
+#include "experiment/experiment_config.h"
+#include "models/model_config.h"
+#include "objectives/objective.h"
+#include "planning/export.h"
+#include "planning/flow_planner.h"
+#include "sim/franka_model.h"
+#include "trainer/sharded_gradient.h"
+
+namespace flowplan {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+/// Median wall time of `body` in ms over `repeats` calls, after `warmup` calls.
+double MedianMs(int repeats, const std::function<void()>& body, int warmup = 3) {
+  for (int i = 0; i < warmup; ++i) body();
+  std::vector<double> ms;
+  for (int i = 0; i < repeats; ++i) {
+    const auto begin = Clock::now();
+    body();
+    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - begin).count());
+  }
+  std::nth_element(ms.begin(), ms.begin() + static_cast<long>(ms.size() / 2), ms.end());
+  return ms[ms.size() / 2];
+}
+
+/// A checkpoint of configs/franka_reach.yaml's network with fresh weights,
+/// a normalizer spanning the joint limits (and +-2 rad/s) and the Franka.
+std::string WriteFreshCheckpoint(const std::string& dir) {
+  const experiment::ExperimentConfig config =
+      experiment::LoadExperiment(std::string(FLOWPLAN_SOURCE_DIR) + "/configs/franka_reach.yaml", {});
+  const auto robot = sim::LoadFrankaModel().description();
+  const int64_t D = 14, T = 64;
+  torch::manual_seed(0);
+  auto net = models::MakeNetwork(config.model, D, models::ConditionDim(config.objective.conditioning, D));
+  auto ema = models::MakeNetwork(config.model, D, models::ConditionDim(config.objective.conditioning, D));
+  models::CopyWeights(*net, *ema);
+  torch::Tensor lo = torch::full({D}, -2.0f), hi = torch::full({D}, 2.0f);
+  for (int j = 0; j < 7; ++j) {
+    lo[j] = static_cast<float>(robot.joint_lower[j]);
+    hi[j] = static_cast<float>(robot.joint_upper[j]);
+  }
+  checkpoints::CheckpointHeader header;
+  header.step = 0;
+  header.config_yaml = experiment::ToYaml(config);
+  header.normalizer = models::MinMaxNormalizer(lo, hi);
+  header.rng_states = {at::detail::getDefaultCPUGenerator().get_state()};
+  header.env = "franka";
+  header.dt = 1.0 / 15.0;
+  for (int j = 1; j <= 7; ++j) header.state_labels.push_back("q" + std::to_string(j));
+  for (int j = 1; j <= 7; ++j) header.state_labels.push_back("dq" + std::to_string(j));
+  header.horizon = T;
+  header.robot = robot;
+  header.data_fingerprint = "none";
+  const std::string path = dir + "/fresh_franka.pt";
+  checkpoints::SaveCheckpoint(path, header, {net.get(), ema.get(), nullptr});
+  return path;
+}
+
+std::string Export(const experiment::LoadedPlanner& loaded, const std::string& path) {
+  planning::ExportMetadata metadata;
+  metadata.env = loaded.env;
+  metadata.dt = loaded.dt;
+  metadata.state_labels = loaded.state_labels;
+  metadata.config_yaml = experiment::ToYaml(loaded.config);
+  planning::ExportPlanner(*loaded.planner, metadata, path);
+  return path;
+}
+
+/// Reads the flat {"key": number} pairs of a JSON file (the reference's output).
+std::map<std::string, double> ReadNumbers(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string s = text.str();
+  std::map<std::string, double> out;
+  for (size_t at = s.find('"'); at != std::string::npos; at = s.find('"', at + 1)) {
+    const size_t end = s.find('"', at + 1);
+    if (end == std::string::npos) break;
+    const std::string key = s.substr(at + 1, end - at - 1);
+    size_t value = s.find_first_not_of(" :", end + 1);
+    if (value != std::string::npos && (std::isdigit(s[value]) || s[value] == '-')) {
+      out[key] = std::strtod(s.c_str() + value, nullptr);
+    }
+    at = end;
+  }
+  return out;
+}
+
+int Main(int argc, char** argv) {
+  std::string checkpoint, out = "build/speed_bench", python = FLOWPLAN_PYTHON;
+  int threads = 2, repeats = 20;
+  bool eager = true;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw Error(arg + ": expects a value");
+      return argv[++i];
+    };
+    if (arg == "--checkpoint") checkpoint = value();
+    else if (arg == "--threads") threads = std::stoi(value());
+    else if (arg == "--repeats") repeats = std::stoi(value());
+    else if (arg == "--out") out = value();
+    else if (arg == "--python") python = value();
+    else if (arg == "--no-eager") eager = false;
+    else throw Error("unknown argument " + arg + " (see the comment at the top of bench/speed_bench.cc)");
+  }
+  fs::create_directories(out);
+  at::globalContext().setFlushDenormal(true);
+  at::set_num_threads(threads);
+  if (checkpoint.empty()) checkpoint = WriteFreshCheckpoint(out);
+  spdlog::info("checkpoint {}, {} threads, median of {} repeats", checkpoint, threads, repeats);
+
+  const experiment::LoadedPlanner plain = experiment::LoadPlanner(checkpoint, "", {"sampler.splitting=none"});
+  const experiment::LoadedPlanner split = experiment::LoadPlanner(checkpoint, "", {"sampler.splitting=midpoint"});
+  const auto& config = plain.config;
+  const int64_t T = plain.planner->horizon(), D = plain.planner->state_dim();
+  FLOWPLAN_DEMAND(config.sampler.steps == 10);
+  const auto* flow = dynamic_cast<const planning::FlowPlanner*>(plain.planner.get());
+  const auto* flow_split = dynamic_cast<const planning::FlowPlanner*>(split.planner.get());
+  if (flow == nullptr || flow_split == nullptr) throw Error(checkpoint + ": not a flow-matching planner");
+
+  std::map<std::string, double> ms;
+  // The network alone, as the planner calls it.
+  {
+    const int64_t C = models::ConditionDim(config.objective.conditioning, D);
+    auto net = std::dynamic_pointer_cast<models::TrajectoryNet>(models::MakeNetwork(config.model, D, C));
+    checkpoints::LoadCheckpointWeights(plain.checkpoint, {nullptr, net.get(), nullptr});
+    net->eval();
+    for (int64_t B : {1, 64}) {
+      const torch::Tensor x = torch::randn({B, T, D}), t = torch::full({B}, 0.5f);
+      const torch::Tensor cond = C > 0 ? torch::zeros({B, C}) : torch::Tensor();
+      c10::InferenceMode inference;
+      ms["forward_b" + std::to_string(B)] = MedianMs(repeats, [&] { net->Forward(x, t, cond); });
+    }
+  }
+  // A training step: the trainer's sharded gradient (4 shards over the threads) and AdamW.
+  {
+    at::set_num_threads(1);  // the trainer runs LibTorch single-threaded, parallel over shards
+    const int64_t C = models::ConditionDim(config.objective.conditioning, D);
+    auto net = models::MakeNetwork(config.model, D, C);
+    checkpoints::LoadCheckpointWeights(plain.checkpoint, {nullptr, net.get(), nullptr});
+    trainer::ShardedGradient gradient(*net, [&] { return models::MakeNetwork(config.model, D, C); },
+                                      config.train.shards, threads);
+    torch::optim::AdamW optimizer(net->parameters(), torch::optim::AdamWOptions(1e-4).weight_decay(0.01));
+    const auto objective = objectives::MakeObjective(config.objective, config.model);
+    auto generator = at::make_generator<at::CPUGeneratorImpl>(0);
+    const torch::Tensor x1 = torch::rand({256, T, D}) * 2 - 1;
+    const auto conditioning = config.objective.conditioning;
+    ms["train_step_b256"] = MedianMs(std::max(5, repeats / 4), [&] {
+      gradient.Compute(objective->Draw(x1, generator), [&](models::Network& n, const objectives::ObjectiveBatch& b) {
+        return objective->Loss(n, b, conditioning);
+      });
+      optimizer.step();
+    }, 1);
+    at::set_num_threads(threads);
+  }
+  // Plans at B = 1 between two fixed states (40 % and 60 % of the normalizer range), around the 0.10 m sphere.
+  const torch::Tensor start = flow->normalizer().lo() * 0.6 + flow->normalizer().hi() * 0.4;
+  const torch::Tensor goal = flow->normalizer().lo() * 0.4 + flow->normalizer().hi() * 0.6;
+  torch::manual_seed(1);
+  const torch::Tensor s = start.unsqueeze(0).clone(), g = goal.unsqueeze(0).clone();
+  const torch::Tensor noise = torch::randn({1, T, D}), renoise = torch::randn({1, T, D});
+  const torch::Tensor obstacles = torch::tensor({{0.5f, 0.0f, 0.2f, 0.1f}});
+  {
+    c10::InferenceMode inference;
+    ms["plan_b1"] = MedianMs(repeats, [&] { flow->PlanWithNoise(s, g, noise); });
+  }
+  ms["plan_guided_split_b1"] =
+      MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, obstacles); });
+
+  const std::string plain_file = Export(plain, out + "/planner.pt");
+  const std::string split_file = Export(split, out + "/planner_split.pt");
+  {
+    torch::jit::Module module = torch::jit::load(plain_file);
+    c10::InferenceMode inference;
+    ms["plan_b1_exported"] = MedianMs(repeats, [&] { module.run_method("plan", s, g, noise); });
+  }
+  {
+    torch::jit::Module module = torch::jit::load(split_file);
+    c10::InferenceMode inference;
+    ms["plan_guided_split_b1_exported"] =
+        MedianMs(repeats, [&] { module.run_method("plan", s, g, noise, renoise, obstacles); });
+  }
+
+  std::map<std::string, double> reference;
+  if (eager) {
+    const std::string json = out + "/eager.json";
+    std::remove(json.c_str());
+    const std::string command = python + " " + FLOWPLAN_SOURCE_DIR + "/bench/eager_reference.py --checkpoint " +
+                                checkpoint + " --export " + split_file + " --threads " + std::to_string(threads) +
+                                " --repeats " + std::to_string(repeats) + " --json " + json;
+    spdlog::info("running {}", command);
+    if (std::system(command.c_str()) != 0) throw Error("the eager reference failed: " + command);
+    reference = ReadNumbers(json);
+  }
+
+  std::printf("\n%-26s %12s %12s %12s %9s\n", "", "flowplan", "exported", "eager", "eager/fp");
+  for (const std::string key : {"forward_b1", "forward_b64", "train_step_b256", "plan_b1", "plan_guided_split_b1"}) {
+    const auto exported = ms.find(key + "_exported");
+    const auto ref = reference.find(key);
+    std::printf("%-26s %9.2f ms %9s    %9s    %8s\n", key.c_str(), ms[key],
+                exported == ms.end() ? "" : (std::to_string(exported->second).substr(0, 6) + " ms").c_str(),
+                ref == reference.end() ? "-" : (std::to_string(ref->second).substr(0, 6) + " ms").c_str(),
+                ref == reference.end() ? "-" : (std::to_string(ref->second / ms[key]).substr(0, 4) + "x").c_str());
+  }
+  // The arithmetic limit of a forward pass: its FLOPs at the best rate this
+  // machine's LibTorch reaches, a large convolution of the UNet's kind (oneDNN);
+  // a large matrix product (OpenBLAS) for comparison.
+  {
+    c10::InferenceMode inference;
+    const torch::Tensor x = torch::randn({64, 256, 64}), w = torch::randn({256, 256, 5});
+    const double conv_ms = MedianMs(10, [&] { torch::conv1d(x, w, {}, 1, 2); });
+    const double conv_gflops = 2.0 * 64 * 256 * 256 * 5 * 64 / (conv_ms * 1e6);
+    const torch::Tensor a = torch::randn({1024, 1024}), b = torch::randn({1024, 1024});
+    const double gemm_ms = MedianMs(10, [&] { torch::mm(a, b); });
+    const double gemm_gflops = 2.0 * 1024 * 1024 * 1024 / (gemm_ms * 1e6);
+    std::printf("\non %d threads: convolution (64, 256, 64) * (256, 256, 5) %.1f GFLOP/s, matrix product 1024^3 "
+                "%.1f GFLOP/s\n", threads, conv_gflops, gemm_gflops);
+    ms["conv_gflops"] = conv_gflops;
+    ms["gemm_gflops"] = gemm_gflops;
+    if (reference.count("flops_b1") != 0) {
+      const double limit_ms = reference["flops_b1"] / (conv_gflops * 1e6);
+      std::printf("forward B=1: %.1f MFLOP -> arithmetic limit %.3f ms; flowplan %.2f ms = %.1fx the limit\n",
+                  reference["flops_b1"] / 1e6, limit_ms, ms["forward_b1"], ms["forward_b1"] / limit_ms);
+      ms["flops_b1"] = reference["flops_b1"];
+    }
+  }
+  std::ofstream json(out + "/flowplan.json");
+  json << "{";
+  bool first = true;
+  for (const auto& [key, value] : ms) {
+    json << (first ? "" : ", ") << "\"" << key << "\": " << value;
+    first = false;
+  }
+  json << "}\n";
+  return 0;
+}
+
+}  // namespace
+}  // namespace flowplan
+
+int main(int argc, char** argv) {
+  try {
+    return flowplan::Main(argc, argv);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+}
