@@ -165,6 +165,46 @@ std::vector<float> File::ReadFloat32(const std::string& name, std::vector<int64_
   return out;
 }
 
+std::vector<float> File::ReadFloat32Rows(const std::string& name, const std::vector<int64_t>& rows,
+                                         std::vector<int64_t>* shape) const {
+  const auto dims = Shape(name);
+  if (shape) *shape = dims;
+  if (dims.empty()) Fail(name, "cannot select rows of a scalar");
+  const int64_t row_size = Product(dims) / std::max<int64_t>(dims[0], 1);
+  std::vector<float> out(rows.size() * static_cast<size_t>(row_size));
+  if (rows.empty() || row_size == 0) return out;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    if (rows[i] < 0 || rows[i] >= dims[0] || (i > 0 && rows[i] <= rows[i - 1])) {
+      Fail(name, "row " + std::to_string(rows[i]) + " is out of range or out of order");
+    }
+  }
+  Handle set(H5Dopen2(file_.get(), name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!set.valid()) Fail(name, "cannot open dataset");
+  Handle file_space(H5Dget_space(set.get()), H5Sclose);
+  // One hyperslab per run of consecutive rows.
+  std::vector<hsize_t> start(dims.size(), 0), count(dims.begin(), dims.end());
+  bool first = true;
+  for (size_t i = 0; i < rows.size();) {
+    size_t j = i + 1;
+    while (j < rows.size() && rows[j] == rows[j - 1] + 1) ++j;
+    start[0] = static_cast<hsize_t>(rows[i]);
+    count[0] = static_cast<hsize_t>(j - i);
+    if (H5Sselect_hyperslab(file_space.get(), first ? H5S_SELECT_SET : H5S_SELECT_OR, start.data(), nullptr,
+                            count.data(), nullptr) < 0) {
+      Fail(name, "cannot select rows");
+    }
+    first = false;
+    i = j;
+  }
+  std::vector<hsize_t> memory_dims(dims.begin(), dims.end());
+  memory_dims[0] = rows.size();
+  Handle memory_space(H5Screate_simple(static_cast<int>(memory_dims.size()), memory_dims.data(), nullptr), H5Sclose);
+  if (H5Dread(set.get(), H5T_NATIVE_FLOAT, memory_space.get(), file_space.get(), H5P_DEFAULT, out.data()) < 0) {
+    Fail(name, "cannot read dataset (truncated or corrupt file)");
+  }
+  return out;
+}
+
 std::vector<double> File::ReadFloat64(const std::string& name, std::vector<int64_t>* shape) const {
   const auto dims = Shape(name);
   if (shape) *shape = dims;

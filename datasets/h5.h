@@ -63,6 +63,10 @@ class File {
   std::vector<float> ReadFloat32(const std::string& name, std::vector<int64_t>* shape) const;
   std::vector<double> ReadFloat64(const std::string& name, std::vector<int64_t>* shape) const;
   std::vector<int32_t> ReadInt32(const std::string& name, std::vector<int64_t>* shape) const;
+  /// Reads the rows `rows` (ascending, along the first axis) of a dataset;
+  /// `shape` receives its whole shape. @throws for rows out of range or not ascending.
+  std::vector<float> ReadFloat32Rows(const std::string& name, const std::vector<int64_t>& rows,
+                                     std::vector<int64_t>* shape) const;
 
   /// Attributes on an object ("/" for the file itself).
   void SetAttribute(const std::string& object, const std::string& name, const std::string& value);

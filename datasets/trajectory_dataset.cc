@@ -126,7 +126,9 @@ void WriteDataset(const std::string& path, const TrajectoryDataset& dataset) {
   target.Commit();
 }
 
-TrajectoryDataset ReadDataset(const std::string& path) {
+namespace {
+
+TrajectoryDataset ReadSome(const std::string& path, const std::vector<int64_t>* episodes) {
   h5::File file = h5::File::OpenReadOnly(path);
   if (!file.HasAttribute("/", "format") ||
       file.GetStringAttribute("/", "format") != kDatasetFormatName) {
@@ -151,11 +153,21 @@ TrajectoryDataset ReadDataset(const std::string& path) {
   dataset.rejected_episodes = file.GetIntAttribute("/", "rejected_episodes");
   dataset.simulator_warnings = file.GetIntAttribute("/", "simulator_warnings");
 
-  std::vector<int64_t> shape;
-  dataset.states = file.ReadFloat32("/states", &shape);
+  std::vector<int64_t> shape = file.Shape("/states");
   if (shape.size() != 3) {
     throw Error(path + ": /states: expected shape (N, T, D), got " + ShapeText(shape));
   }
+  if (episodes != nullptr) {
+    for (size_t i = 0; i < episodes->size(); ++i) {
+      if ((*episodes)[i] < 0 || (*episodes)[i] >= shape[0] || (i > 0 && (*episodes)[i] <= (*episodes)[i - 1])) {
+        throw Error(path + ": episode " + std::to_string((*episodes)[i]) + " is not one of its " +
+                    std::to_string(shape[0]) + " episodes in ascending order");
+      }
+    }
+  }
+  dataset.states = episodes == nullptr ? file.ReadFloat32("/states", &shape)
+                                       : file.ReadFloat32Rows("/states", *episodes, &shape);
+  if (episodes != nullptr) shape[0] = static_cast<int64_t>(episodes->size());
   dataset.num_episodes = shape[0];
   dataset.horizon = shape[1];
   dataset.state_dim = shape[2];
@@ -167,10 +179,16 @@ TrajectoryDataset ReadDataset(const std::string& path) {
   const auto bad = std::find_if(dataset.states.begin(), dataset.states.end(), [](float v) { return !std::isfinite(v); });
   if (bad != dataset.states.end()) {
     const int64_t at = bad - dataset.states.begin(), d = at % dataset.state_dim;
+    const int64_t row = at / (dataset.horizon * dataset.state_dim);
     throw Error(path + ": /states: " + std::to_string(*bad) + " at episode " +
-                std::to_string(at / (dataset.horizon * dataset.state_dim)) + ", step " +
+                std::to_string(episodes == nullptr ? row : (*episodes)[static_cast<size_t>(row)]) + ", step " +
                 std::to_string(at / dataset.state_dim % dataset.horizon) + ", dimension " + std::to_string(d) + " (" +
                 dataset.state_labels[static_cast<size_t>(d)] + "); states must be finite");
+  }
+  if (episodes != nullptr) {
+    dataset.train_pairs = ReadPairs(file, "/eval/train_pairs", dataset.state_dim);
+    dataset.test_pairs = ReadPairs(file, "/eval/test_pairs", dataset.state_dim);
+    return dataset;
   }
   dataset.commanded_start = file.ReadFloat64("/commanded_start", &shape);
   if (shape.size() != 2 || shape[0] != n) {
@@ -194,6 +212,14 @@ TrajectoryDataset ReadDataset(const std::string& path) {
   dataset.test_pairs = ReadPairs(file, "/eval/test_pairs", dataset.state_dim);
   dataset.CheckConsistent(path);
   return dataset;
+}
+
+}  // namespace
+
+TrajectoryDataset ReadDataset(const std::string& path) { return ReadSome(path, nullptr); }
+
+TrajectoryDataset ReadDatasetEpisodes(const std::string& path, const std::vector<int64_t>& episodes) {
+  return ReadSome(path, &episodes);
 }
 
 namespace {

@@ -69,6 +69,13 @@ void WriteDataset(const std::string& path, const TrajectoryDataset& dataset);
 /// missing files, foreign files, other format versions and inconsistent shapes.
 TrajectoryDataset ReadDataset(const std::string& path);
 
+/// Reads the header, the evaluation pairs and the states of the episodes
+/// `episodes` (ascending) only: num_episodes is their count, states (n, T, D)
+/// theirs; the per-episode commands, families and extras are left empty. For
+/// a process of a data-parallel job that trains on part of a large file.
+/// @throws flowplan::Error as ReadDataset, and for episodes out of range.
+TrajectoryDataset ReadDatasetEpisodes(const std::string& path, const std::vector<int64_t>& episodes);
+
 /// A 64-bit FNV-1a hash, as 16 hex digits, of everything a model learns from
 /// or is evaluated on: states, labels, dt, robot, evaluation pairs, horizon.
 /// Checkpoints record it, so that a resumed run notices a changed data file.

@@ -34,7 +34,7 @@ struct EvalPairTensors {
 /// A dataset split into training and validation episodes, as float32 tensors in
 /// raw units (normalization belongs to the model, see models::MinMaxNormalizer).
 struct TrajectorySplits {
-  torch::Tensor train;  // (N_train, T, D)
+  torch::Tensor train;  // (N_train, T, D); undefined when loaded by parts without validation (see LoadTrajectorySplits)
   torch::Tensor val;    // (N_val, T, D), possibly empty
   EvalPairTensors train_pairs;
   EvalPairTensors test_pairs;
@@ -42,14 +42,31 @@ struct TrajectorySplits {
   double dt = 0.0;
   std::vector<std::string> state_labels;  // (D,)
   kinematics::RobotDescription robot;
-  std::string fingerprint;                // DatasetFingerprint() of the file
-  int64_t horizon() const { return train.size(1); }
-  int64_t state_dim() const { return train.size(2); }
+  std::string fingerprint;                // DatasetFingerprint() of the file; empty when loaded by parts
+  int64_t num_train = 0;                  // N_train of the whole split
+  int64_t T = 0, D = 0;
+  std::vector<int> parts;                 // the data parts train_parts holds (ascending); empty: none split off
+  std::vector<torch::Tensor> train_parts;  // (N_p, T, D) per part: training episodes p, p + P, ... in split order
+  int64_t horizon() const { return T; }
+  int64_t state_dim() const { return D; }
+};
+
+/// Which training episodes a process of a data-parallel job keeps.
+struct PartSelection {
+  int count = 1;          // P: the i-th training episode (in split order) is in part i mod P
+  std::vector<int> mine;  // the parts to keep, ascending
+  bool everything = true;  // also the whole training split, the validation episodes and the fingerprint
 };
 
 /// Reads `config.path` and splits its episodes with a permutation drawn from `seed`.
 /// @throws flowplan::Error if the file is bad or leaves no training episode.
 TrajectorySplits LoadTrajectorySplits(const DataConfig& config, uint64_t seed);
+
+/// The same, keeping the training episodes of `parts.mine` in `train_parts`;
+/// without `parts.everything` only those episodes are read from the file
+/// (train and val stay undefined/empty and the fingerprint empty).
+/// @throws flowplan::Error as above, and if there are fewer training episodes than parts.
+TrajectorySplits LoadTrajectorySplits(const DataConfig& config, uint64_t seed, const PartSelection& parts);
 
 /// The same, from a dataset already in memory.
 TrajectorySplits SplitTrajectories(const TrajectoryDataset& dataset, double val_fraction,

@@ -123,8 +123,15 @@ void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
   }
   int threads = ConfigureThreads(config);
   if (world && config.threads == 0) threads = std::max(1, threads / world->local_size);  // share the machine
+  // Every process reads only its own data parts; rank 0 (or a lone process)
+  // also the whole split, for the normalizer, the validation loss and the fingerprint.
+  datasets::PartSelection parts;
+  parts.count = config.train.data_parts;
+  const int rank = world ? world->rank : 0, ranks = world ? world->size : 1;
+  for (int p = rank; p < parts.count; p += ranks) parts.mine.push_back(p);
+  parts.everything = rank == 0;
   const datasets::TrajectorySplits data =
-      datasets::LoadTrajectorySplits(config.data, static_cast<uint64_t>(config.seed));
+      datasets::LoadTrajectorySplits(config.data, static_cast<uint64_t>(config.seed), parts);
   trainer::TrainingSetup setup;
   setup.run_dir = config.run_dir;
   setup.config_yaml = ToYaml(config);

@@ -169,15 +169,15 @@ class TrainingRun {
         objective_(objectives::MakeObjective(setup.objective, setup.model)),
         communicator_(setup.communicator != nullptr ? *setup.communicator : single_process_),
         lead_(communicator_.rank() == 0),
-        normalizer_(models::MinMaxNormalizer::Fit(data.train)) {
+        normalizer_(SharedNormalizer(data)) {
     const int parts = config_.data_parts, ranks = communicator_.size();
     if (parts % ranks != 0) {
       throw Error("train.data_parts=" + std::to_string(parts) + " must be a multiple of the number of processes (" +
                   std::to_string(ranks) + "): every process trains the same number of data parts");
     }
-    if (data.train.size(0) < parts) {
+    if (data.num_train < parts) {
       throw Error("train.data_parts=" + std::to_string(parts) + ": the data has only " +
-                  std::to_string(data.train.size(0)) + " training episodes");
+                  std::to_string(data.num_train) + " training episodes");
     }
     models::CopyWeights(*net_, *ema_);
     if (const auto* trajectory_net = dynamic_cast<const models::TrajectoryNet*>(net_.get())) {
@@ -187,9 +187,18 @@ class TrainingRun {
       }
     }
     // This process's parts: p = rank, rank + W, ...; episode i of the training split is in part i mod P.
-    const torch::Tensor train_n = normalizer_.Normalize(data.train);
-    for (int part = communicator_.rank(); part < parts; part += ranks) {
-      parts_.push_back(DataPart{part, train_n.slice(0, part, train_n.size(0), parts).clone(),
+    // The loader may have split them off already (a process that read only its own episodes).
+    std::vector<int> mine;
+    for (int part = communicator_.rank(); part < parts; part += ranks) mine.push_back(part);
+    if (!data.train_parts.empty() && data.parts != mine) {
+      throw Error("the data holds parts other than this process's (train.data_parts=" + std::to_string(parts) + ")");
+    }
+    for (size_t k = 0; k < mine.size(); ++k) {
+      const int part = mine[k];
+      const torch::Tensor episodes = data.train_parts.empty()
+                                         ? data.train.slice(0, part, data.train.size(0), parts)
+                                         : data.train_parts[k];
+      parts_.push_back(DataPart{part, normalizer_.Normalize(episodes).contiguous(),
                                 at::make_generator<at::CPUGeneratorImpl>(PartSeed(setup.seed, part))});
     }
     if (lead_) run_.Create();
@@ -214,7 +223,7 @@ class TrainingRun {
     }
     if (lead_) metrics_ = std::make_unique<MetricsLog>(run_.metrics());
     spdlog::info("model: {} parameters, horizon {}, state dim {}, {} training / {} validation episodes", 
-                 models::CountParameters(*net_), T_, D_, data.train.size(0), data.val.size(0));
+                 models::CountParameters(*net_), T_, D_, data.num_train, data.val.size(0));
     if (ranks > 1 || parts > 1) {
       spdlog::info("{} data parts over {} process{}{}", parts, ranks, ranks == 1 ? "" : "es",
                    all_reduce_ ? ", gradients summed in " + std::to_string(all_reduce_->buckets()) + " bucket(s)"
@@ -272,7 +281,8 @@ class TrainingRun {
                   std::to_string(header.normalizer.dim()) + "), the data has (" + std::to_string(T_) + ", " +
                   std::to_string(D_) + ")");
     }
-    if (header.data_fingerprint != data_.fingerprint) {
+    // A process that read only its own episodes has no fingerprint; rank 0 checks for the job.
+    if (!data_.fingerprint.empty() && header.data_fingerprint != data_.fingerprint) {
       throw Error(path + ": was trained on data with fingerprint " + header.data_fingerprint + ", but " +
                   setup_.data_path + " now has fingerprint " + data_.fingerprint +
                   "; the data file changed since the run started (restore it, or train into a new run_dir)");
@@ -287,6 +297,20 @@ class TrainingRun {
     step_ = header.step;
     TruncateMetrics(run_.metrics(), step_);
     spdlog::info("resuming {} at step {}", path, step_);
+  }
+
+  /// The normalizer of the whole training split: fitted here, or, in a job of
+  /// several processes, fitted by rank 0 (which reads the whole split) and shared.
+  models::MinMaxNormalizer SharedNormalizer(const datasets::TrajectorySplits& data) {
+    if (communicator_.size() == 1) return models::MinMaxNormalizer::Fit(data.train);
+    const int64_t D = data.state_dim();
+    torch::Tensor bounds = torch::zeros({2 * D});
+    if (lead_) {
+      const auto fitted = models::MinMaxNormalizer::Fit(data.train);
+      bounds = torch::cat({fitted.lo(), fitted.hi()}).to(torch::kFloat32);
+    }
+    const torch::Tensor shared = communicator_.AllGather(bounds)[0];  // (2D,) rank 0's
+    return models::MinMaxNormalizer(shared.slice(0, 0, D).clone(), shared.slice(0, D, 2 * D).clone());
   }
 
   [[noreturn]] void StopInterrupted(const std::string& checkpoint) const {
