@@ -123,9 +123,10 @@ CheckpointHeader ReadCheckpointHeader(const std::string& path) {
   // A CPU generator's state is a flat byte tensor of a fixed size; check it
   // here so that a foreign one is named, not rejected deep inside LibTorch.
   const int64_t state_bytes = at::detail::getDefaultCPUGenerator().get_state().numel();
+  const char* key = header.rng_states.size() > 1 ? "rng_state_parts" : "rng_state";
   for (const torch::Tensor& state : header.rng_states) {
     if (state.scalar_type() != torch::kUInt8 || state.dim() != 1 || state.numel() != state_bytes) {
-      throw Error(path + ": malformed checkpoint entry \"rng_state\": expected (" + std::to_string(state_bytes) +
+      throw Error(path + ": malformed checkpoint entry \"" + key + "\": expected (" + std::to_string(state_bytes) +
                   ",) uint8, got " + ShapeText(state.sizes().vec()) + " " +
                   std::string(c10::toString(state.scalar_type())));
     }

@@ -39,6 +39,10 @@ class SingleProcess final : public Communicator {
   void Barrier() override {}
 };
 
+/// The backend `config.backend` names for a job on `device_type` ("cpu", "cuda").
+/// @throws flowplan::Error for anything but gloo, nccl and auto, and for nccl without CUDA.
+std::string ResolveBackend(const DistributedConfig& config, const std::string& device_type);
+
 /// Joins the job `world` describes through PyTorch's c10d: a TCPStore at
 /// MASTER_ADDR:MASTER_PORT (served by rank 0, or by torchrun's agent) and a
 /// Gloo process group (NCCL when `config.backend` asks for it and the build

@@ -72,11 +72,13 @@ std::optional<World> WorldFromEnvironment(const Getenv& getenv) {
     FillRendezvous(getenv, world, nullptr);
     return world;
   }
-  if (Variable(getenv, "SLURM_NTASKS")) {
+  // Inside an srun step only: a batch script or salloc shell has SLURM_NTASKS
+  // and SLURM_PROCID too, but runs one process.
+  if (Variable(getenv, "SLURM_STEP_NUM_TASKS")) {
     world.source = "slurm";
-    world.size = Required(getenv, "SLURM_NTASKS", 1, 1 << 20, "");
+    world.size = Required(getenv, "SLURM_STEP_NUM_TASKS", 1, 1 << 20, "");
     if (world.size == 1) return std::nullopt;
-    world.rank = Required(getenv, "SLURM_PROCID", 0, world.size - 1, "SLURM_NTASKS is set");
+    world.rank = Required(getenv, "SLURM_PROCID", 0, world.size - 1, "SLURM_STEP_NUM_TASKS is set");
     world.local_rank = Optional(getenv, "SLURM_LOCALID", 0, world.size - 1, 0);
     const auto per_node = Variable(getenv, "SLURM_NTASKS_PER_NODE");
     if (!per_node) {

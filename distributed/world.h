@@ -20,9 +20,9 @@ struct World {
 
 /// Reads the job from environment variables, through `getenv` (injectable for tests):
 /// torchrun's RANK, WORLD_SIZE, LOCAL_RANK, LOCAL_WORLD_SIZE, MASTER_ADDR,
-/// MASTER_PORT (and TORCHELASTIC_USE_AGENT_STORE), else Slurm's SLURM_PROCID,
-/// SLURM_NTASKS, SLURM_LOCALID, SLURM_NTASKS_PER_NODE with MASTER_ADDR (or
-/// SLURM_LAUNCH_NODE_IPADDR) and MASTER_PORT. Returns nothing when neither
+/// MASTER_PORT (and TORCHELASTIC_USE_AGENT_STORE), else, inside an srun step,
+/// Slurm's SLURM_PROCID, SLURM_STEP_NUM_TASKS, SLURM_LOCALID,
+/// SLURM_NTASKS_PER_NODE with MASTER_ADDR (or SLURM_LAUNCH_NODE_IPADDR) and MASTER_PORT. Returns nothing when neither
 /// describes a job of more than one process.
 /// @throws flowplan::Error naming the variable that is missing or malformed.
 std::optional<World> WorldFromEnvironment(const std::function<const char*(const char*)>& getenv);

@@ -111,6 +111,7 @@ void RunMerge(const std::vector<std::string>& inputs, const std::string& out) {
 
 void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
   torch::Device device = models::ParseDevice(config.device, "device");
+  distributed::ResolveBackend(config.distributed, device.is_cuda() ? "cuda" : "cpu");  // a bad value fails here too
   // Launched as one of several processes (torchrun, Slurm): join the job first,
   // so that a missing peer is reported before any work.
   const std::optional<distributed::World> world = distributed::WorldFromEnvironment();
@@ -139,7 +140,8 @@ void RunTrain(const ExperimentConfig& config, const TrainRequest& request) {
   setup.seed = static_cast<uint64_t>(config.seed);
   setup.threads = threads;
   if (world && device.is_cuda() && !device.has_index()) {
-    device = torch::Device(torch::kCUDA, static_cast<c10::DeviceIndex>(world->local_rank));  // one GPU per process
+    // One GPU per process on each machine.
+    device = models::ParseDevice("cuda:" + std::to_string(world->local_rank), "device (LOCAL_RANK)");
   }
   setup.device = device;
   setup.model = config.model;
@@ -193,7 +195,8 @@ void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& cha
                                                        "guidance.",
                                                        "scene.",
                                                        "execute.",
-                                                       "distributed."};
+                                                       "distributed.",
+                                                       "device"};
   const auto before = config::ListKeys(trained), after = config::ListKeys(changed);
   for (size_t i = 0; i < before.size(); ++i) {
     const std::string& key = before[i].key;

@@ -257,11 +257,13 @@ class TrainingRun {
         } catch (const Error&) {
           if (!InterruptRequested()) throw;
           if (communicator_.size() == 1) StopInterrupted(checkpoint_due ? result_.checkpoint : Save());
-          // The other processes are already in the next step: stop with them, after it, with a checkpoint.
-          spdlog::warn("evaluation at step {} interrupted; stopping after the next step", step_);
+          // The other processes are already in the next step: all stop together once its all-reduce
+          // carries the interrupt (after the loop, if this was the last step).
+          spdlog::warn("evaluation at step {} interrupted; stopping with the other processes", step_);
         }
       }
     }
+    if (InterruptRequested()) StopInterrupted(run_.LatestCheckpoint());  // an evaluation of the last step cut short
     if (result_.checkpoint.empty()) {
       // Resumed at the final step: nothing left to train, and its metrics are logged already.
       if (lead_) Evaluate();
@@ -282,10 +284,19 @@ class TrainingRun {
                   std::to_string(D_) + ")");
     }
     // A process that read only its own episodes has no fingerprint; rank 0 checks for the job.
-    if (!data_.fingerprint.empty() && header.data_fingerprint != data_.fingerprint) {
-      throw Error(path + ": was trained on data with fingerprint " + header.data_fingerprint + ", but " +
-                  setup_.data_path + " now has fingerprint " + data_.fingerprint +
-                  "; the data file changed since the run started (restore it, or train into a new run_dir)");
+    const bool changed = !data_.fingerprint.empty() && header.data_fingerprint != data_.fingerprint;
+    const std::string message = path + ": was trained on data with fingerprint " + header.data_fingerprint +
+                                ", but " + setup_.data_path + " now has fingerprint " + data_.fingerprint +
+                                "; the data file changed since the run started (restore it, or train into a new "
+                                "run_dir)";
+    if (communicator_.size() > 1) {
+      // Rank 0 alone read the whole file; every process learns its verdict.
+      const torch::Tensor verdict = communicator_.AllGather(torch::full({1}, changed ? 1.0f : 0.0f));
+      if (verdict[0][0].item<float>() > 0.0f) {
+        throw Error(lead_ ? message : path + ": rank 0 found that the data file changed since the run started");
+      }
+    } else if (changed) {
+      throw Error(message);
     }
     checkpoints::LoadCheckpointWeights(path, {net_.get(), ema_.get(), &optimizer_}, setup_.device);
     normalizer_ = header.normalizer;
@@ -295,7 +306,7 @@ class TrainingRun {
     }
     for (DataPart& part : parts_) part.generator.set_state(header.rng_states[static_cast<size_t>(part.index)]);
     step_ = header.step;
-    TruncateMetrics(run_.metrics(), step_);
+    if (lead_) TruncateMetrics(run_.metrics(), step_);
     spdlog::info("resuming {} at step {}", path, step_);
   }
 

@@ -71,10 +71,10 @@ class DistributedTest : public ::testing::Test {
   static std::string Flowplan() { return FLOWPLAN_BINARY; }
   static std::string Tiny() { return std::string(FLOWPLAN_SOURCE_DIR) + "/tests/cli/tiny.yaml"; }
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-  /// The training arguments every run here shares: 2 data parts of 2 gradient shards, 1 thread each.
-  std::string Settings(const std::string& run) const {
-    return " data.path=" + Path("data.h5") + " run_dir=" + Path(run) +
-           " train.data_parts=2 train.shards=2 train.steps=12 train.checkpoint_every=4 threads=1";
+  /// The training arguments every run here shares: `parts` data parts of 2 gradient shards, 1 thread each.
+  std::string Settings(const std::string& run, int parts = 2) const {
+    return " data.path=" + Path("data.h5") + " run_dir=" + Path(run) + " train.data_parts=" + std::to_string(parts) +
+           " train.shards=2 train.steps=12 train.checkpoint_every=4 threads=1";
   }
 
   /// Starts `ranks` processes of one job (rank r runs `arguments[r]`), waits for
@@ -102,6 +102,22 @@ class DistributedTest : public ::testing::Test {
     return codes;
   }
 
+  /// The largest difference of the networks' outputs and plans of two runs' exports.
+  double MaxOutputDifference(const std::string& run_a, const std::string& run_b) {
+    int code = 0;
+    for (const std::string& run : {run_a, run_b}) {
+      const std::string output = Shell(Flowplan() + " export --ckpt " + Path(run) + " --out " + Path(run + ".pt"), &code);
+      EXPECT_EQ(code, 0) << output;
+    }
+    const std::string output = Shell(std::string(FLOWPLAN_PYTHON) + " " + FLOWPLAN_SOURCE_DIR +
+                                         "/tests/distributed/compare_planners.py " + Path(run_a + ".pt") + " " +
+                                         Path(run_b + ".pt"), &code);
+    EXPECT_EQ(code, 0) << output;
+    const size_t velocity = output.find("\"velocity\": "), plan = output.find("\"plan\": ");
+    if (code != 0 || velocity == std::string::npos || plan == std::string::npos) return 1e9;
+    return std::max(std::stod(output.substr(velocity + 12)), std::stod(output.substr(plan + 8)));
+  }
+
   double MaxWeightDifference(const std::string& a, const std::string& b) {
     int code = 0;
     const std::string output = Shell(std::string(FLOWPLAN_PYTHON) + " " + FLOWPLAN_SOURCE_DIR +
@@ -115,10 +131,15 @@ class DistributedTest : public ::testing::Test {
   fs::path dir_;
 };
 
-// Summation order is the only difference between the two (Gloo sums the two
-// ranks' gradients, one process adds its parts in order); with two ranks both
-// add the same two numbers, so the weights agree far below this tolerance.
-constexpr double kTolerance = 1e-6;
+// Summation order is the only difference between one process and several
+// (Gloo sums the ranks' gradients, one process adds its parts in order). With
+// two parts on two processes both add the same two numbers: the weights are
+// bit-identical. With four parts on two processes the order differs, and
+// AdamW turns the rounding of gradients that are zero in exact arithmetic (a
+// convolution bias before a GroupNorm) into steps of either sign: those
+// weights differ, what the networks compute does not (compare_planners.py),
+// to this tolerance on outputs in [-1, 1].
+constexpr double kTolerance = 1e-5;
 
 TEST_F(DistributedTest, TwoProcessesTrainWhatOneProcessTrainsOnTheCombinedBatch) {
   int code = 0;
@@ -129,8 +150,8 @@ TEST_F(DistributedTest, TwoProcessesTrainWhatOneProcessTrainsOnTheCombinedBatch)
   ASSERT_EQ(codes[0], 0) << ReadText(Path("log0"));
   ASSERT_EQ(codes[1], 0) << ReadText(Path("log1"));
   EXPECT_THAT(ReadText(Path("log0")), HasSubstr("2 data parts over 2 processes"));
-  EXPECT_LT(MaxWeightDifference(Path("single/checkpoints/step_00000012.pt"), Path("pair/checkpoints/step_00000012.pt")),
-            kTolerance);
+  EXPECT_EQ(MaxWeightDifference(Path("single/checkpoints/step_00000012.pt"), Path("pair/checkpoints/step_00000012.pt")),
+            0.0);
   // Rank 0 alone writes the run folder: one metrics file with one row per logged step.
   const std::string pair_metrics = ReadText(Path("pair/metrics.jsonl"));
   const std::string single_metrics = ReadText(Path("single/metrics.jsonl"));
@@ -138,17 +159,25 @@ TEST_F(DistributedTest, TwoProcessesTrainWhatOneProcessTrainsOnTheCombinedBatch)
             std::count(single_metrics.begin(), single_metrics.end(), '\n'));
   EXPECT_EQ(ReadText(Path("log1")), "");  // the other ranks report warnings and errors only
 
-  // The job stopped at step 8 and resumed by both processes ends where the uninterrupted one did.
-  const std::string first = "train --config " + Tiny() + Settings("resumed") + " --until 8";
+  // Four parts on two processes (two each), stopped at step 8 and resumed by
+  // both, end where one process with four parts does.
+  const std::string single4 = Shell(Flowplan() + " train --config " + Tiny() + Settings("single4", 4), &code);
+  ASSERT_EQ(code, 0) << single4;
+  const std::string first = "train --config " + Tiny() + Settings("resumed", 4) + " --until 8";
   ASSERT_EQ(Launch(2, {first, first}, FreePort()), (std::vector<int>{0, 0})) << ReadText(Path("log0"));
   ASSERT_TRUE(fs::exists(Path("resumed/checkpoints/step_00000008.pt")));
   ASSERT_FALSE(fs::exists(Path("resumed/checkpoints/step_00000012.pt")));
   const std::string again = "train --resume " + Path("resumed");
   ASSERT_EQ(Launch(2, {again, again}, FreePort()), (std::vector<int>{0, 0})) << ReadText(Path("log0"));
   EXPECT_THAT(ReadText(Path("log0")), HasSubstr("resuming"));
-  EXPECT_LT(MaxWeightDifference(Path("single/checkpoints/step_00000012.pt"),
-                                Path("resumed/checkpoints/step_00000012.pt")),
-            kTolerance);
+  EXPECT_LT(MaxOutputDifference("single4", "resumed"), kTolerance);
+  // Rank 0 alone rewrote the metrics on resume: one loss row per logged step, as uninterrupted.
+  auto loss_rows = [](const std::string& text) {
+    size_t rows = 0;
+    for (size_t at = text.find("\"loss\""); at != std::string::npos; at = text.find("\"loss\"", at + 1)) ++rows;
+    return rows;
+  };
+  EXPECT_EQ(loss_rows(ReadText(Path("resumed/metrics.jsonl"))), loss_rows(ReadText(Path("single4/metrics.jsonl"))));
   // And a single process resumes the job's run (the parts, not the processes, make the run).
   const std::string alone = Shell(Flowplan() + " train --resume " + Path("pair") + " train.steps=16", &code);
   EXPECT_EQ(code, 0) << alone;
@@ -192,6 +221,20 @@ TEST_F(DistributedTest, APeerThatDiesEndsTheOthers) {
   // Rank 0 notices in the step's all-reduce, or in a checkpoint's all-gather.
   EXPECT_THAT(log, ::testing::ContainsRegex("rank 0 of 2: all-(reduce|gather) failed: a peer exited")) << log;
   EXPECT_LT(seconds, 120.0) << log;
+}
+
+TEST_F(DistributedTest, AChangedDataFileStopsEveryProcessOnResume) {
+  const std::string args = "train --config " + Tiny() + Settings("changed") + " --until 4";
+  ASSERT_EQ(Launch(2, {args, args}, FreePort()), (std::vector<int>{0, 0})) << ReadText(Path("log0"));
+  int code = 0;
+  const std::string regenerated = Shell(Flowplan() + " generate --config " + Tiny() + " seed=2 generate.out=" +
+                                        Path("data.h5") + " --log-level warn", &code);
+  ASSERT_EQ(code, 0) << regenerated;
+  // Only rank 0 reads the whole file and can tell; rank 1 reads its episodes only and learns the verdict.
+  const std::string again = "train --resume " + Path("changed");
+  EXPECT_EQ(Launch(2, {again, again}, FreePort()), (std::vector<int>{1, 1}));
+  EXPECT_THAT(ReadText(Path("log0")), HasSubstr("the data file changed since the run started"));
+  EXPECT_THAT(ReadText(Path("log1")), HasSubstr("rank 0 found that the data file changed"));
 }
 
 TEST_F(DistributedTest, DataPartsMustBeShareableByTheProcesses) {

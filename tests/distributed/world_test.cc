@@ -32,7 +32,9 @@ std::string ErrorOf(const std::map<std::string, std::string>& variables) {
 TEST(WorldTest, NoLauncherOrOneProcessIsNoJob) {
   EXPECT_FALSE(FromVariables({}).has_value());
   EXPECT_FALSE(FromVariables({{"WORLD_SIZE", "1"}, {"RANK", "0"}}).has_value());
-  EXPECT_FALSE(FromVariables({{"SLURM_NTASKS", "1"}, {"SLURM_PROCID", "0"}}).has_value());
+  EXPECT_FALSE(FromVariables({{"SLURM_STEP_NUM_TASKS", "1"}, {"SLURM_PROCID", "0"}}).has_value());
+  // A batch script or salloc shell of a multi-task allocation (no srun step) is one process.
+  EXPECT_FALSE(FromVariables({{"SLURM_NTASKS", "8"}, {"SLURM_PROCID", "0"}, {"MASTER_ADDR", "h"}}).has_value());
 }
 
 TEST(WorldTest, ReadsTorchrunVariables) {
@@ -57,6 +59,7 @@ TEST(WorldTest, ReadsTorchrunVariables) {
 TEST(WorldTest, ReadsSlurmVariablesWithDefaults) {
   const auto world = FromVariables({{"SLURM_PROCID", "5"},
                                     {"SLURM_NTASKS", "8"},
+                                    {"SLURM_STEP_NUM_TASKS", "8"},
                                     {"SLURM_LOCALID", "1"},
                                     {"SLURM_NTASKS_PER_NODE", "2(x4)"},
                                     {"SLURM_LAUNCH_NODE_IPADDR", "10.0.0.2"}});
@@ -70,7 +73,7 @@ TEST(WorldTest, ReadsSlurmVariablesWithDefaults) {
   EXPECT_FALSE(world->agent_hosts_store);
   EXPECT_EQ(world->source, "slurm");
   // torchrun's variables win over Slurm's (torchrun inside an allocation).
-  EXPECT_EQ(FromVariables({{"SLURM_PROCID", "5"}, {"SLURM_NTASKS", "8"}, {"RANK", "1"}, {"WORLD_SIZE", "2"},
+  EXPECT_EQ(FromVariables({{"SLURM_PROCID", "5"}, {"SLURM_STEP_NUM_TASKS", "8"}, {"RANK", "1"}, {"WORLD_SIZE", "2"},
                            {"MASTER_ADDR", "127.0.0.1"}})->rank,
             1);
 }
@@ -82,7 +85,7 @@ TEST(WorldTest, NamesTheVariableAtFault) {
   EXPECT_THAT(ErrorOf({{"WORLD_SIZE", "2"}, {"RANK", "1"}}), HasSubstr("MASTER_ADDR is not set"));
   EXPECT_THAT(ErrorOf({{"WORLD_SIZE", "2"}, {"RANK", "1"}, {"MASTER_ADDR", "h"}, {"MASTER_PORT", "70000"}}),
               HasSubstr("MASTER_PORT=70000"));
-  EXPECT_THAT(ErrorOf({{"SLURM_NTASKS", "2"}, {"SLURM_PROCID", "0"}}), HasSubstr("MASTER_ADDR is not set"));
+  EXPECT_THAT(ErrorOf({{"SLURM_STEP_NUM_TASKS", "2"}, {"SLURM_PROCID", "0"}}), HasSubstr("MASTER_ADDR is not set"));
 }
 
 }  // namespace
