@@ -56,5 +56,34 @@ TEST(GradientAllReduceTest, SumsEveryGradientAndScalarInBucketsOfTheGivenSize) {
   EXPECT_FALSE(torch::equal(params[1].grad(), torch::zeros({3, 4})));
 }
 
+/// Rank 0 of two, where rank 1's buckets hold 1000, 1001, 1002, ... element by element.
+class OtherRankCounts final : public Communicator {
+ public:
+  int rank() const override { return 0; }
+  int size() const override { return 2; }
+  void AllReduceSum(std::vector<torch::Tensor>& tensors) override {
+    for (auto& t : tensors) t.add_(torch::arange(t.numel(), t.options()) + 1000);
+  }
+  torch::Tensor AllGather(const torch::Tensor& tensor) override { return torch::stack({tensor, tensor}); }
+  void Barrier() override {}
+};
+
+TEST(GradientAllReduceTest, EveryElementComesBackToItsOwnParameterAndPlace) {
+  std::vector<torch::Tensor> params = {torch::zeros({2, 3}), torch::zeros({4}), torch::zeros({5})};
+  for (auto& p : params) {
+    p.set_requires_grad(true);
+    p.mutable_grad() = torch::full_like(p, 0.5);
+  }
+  GradientAllReduce reduce(params, 40);  // buckets [6 + 4 floats], [5 floats]
+  ASSERT_EQ(reduce.buckets(), 2u);
+  OtherRankCounts ranks;
+  std::vector<double> scalars{2.0};
+  reduce.Run(ranks, scalars);
+  EXPECT_TRUE(torch::equal(params[0].grad(), torch::arange(6).reshape({2, 3}).to(torch::kFloat32) + 1000.5));
+  EXPECT_TRUE(torch::equal(params[1].grad(), torch::arange(6, 10).to(torch::kFloat32) + 1000.5));
+  EXPECT_TRUE(torch::equal(params[2].grad(), torch::arange(5).to(torch::kFloat32) + 1000.5));
+  EXPECT_EQ(scalars, (std::vector<double>{1002.0}));
+}
+
 }  // namespace
 }  // namespace flowplan::distributed
