@@ -232,6 +232,22 @@ void RunResume(const std::string& run_dir, const std::vector<std::string>& overr
   RunTrain(config, TrainRequest{trainer::TrainStart::kResume, until_step});
 }
 
+void RunProblems(const ExperimentConfig& config, const std::string& out) {
+  const kinematics::ArmKinematics arm(sim::LoadFrankaModel().description());
+  guidance::BlockedProblemSet set;
+  try {
+    set = guidance::MakeBlockedProblems(arm, config.problems, static_cast<uint64_t>(config.seed));
+  } catch (const Error& e) {
+    throw Error(std::string("problems.") + e.what());
+  }
+  EnsureParentFolder(out);
+  WriteFileAtomically(out, config::ToYaml(set));
+  size_t spheres = 0;
+  for (const auto& problem : set.problems) spheres += problem.scene.spheres.size();
+  spdlog::info("wrote {}: {} problems, {} spheres, each blocking the straight TCP path with its first", out,
+               set.problems.size(), spheres);
+}
+
 LoadedPlanner LoadPlanner(const std::string& ckpt, const std::string& overlay_path,
                           const std::vector<std::string>& overrides) {
   LoadedPlanner loaded;

@@ -59,6 +59,11 @@ void CheckResumable(const ExperimentConfig& trained, const ExperimentConfig& cha
 /// stored config in the message.
 void CheckSameNetwork(const ExperimentConfig& trained, const ExperimentConfig& changed, const std::string& where);
 
+/// Draws `config.problems` for the Franka (seed: config.seed) and writes them
+/// as YAML to `out` (docs/planning.md).
+/// @throws flowplan::Error for a bad problems section or an unwritable `out`.
+void RunProblems(const ExperimentConfig& config, const std::string& out);
+
 /// A planner restored from a checkpoint (EMA weights), with the config it was trained with.
 struct LoadedPlanner {
   ExperimentConfig config;

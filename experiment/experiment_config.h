@@ -10,6 +10,7 @@
 #include "datasets/trajectory_loader.h"
 #include "distributed/distributed_config.h"
 #include "eval/stitching.h"
+#include "guidance/blocked_problems.h"
 #include "guidance/guide.h"
 #include "guidance/scene.h"
 #include "models/model_config.h"
@@ -38,6 +39,7 @@ struct ExperimentConfig {
   sim::ExecutionConfig execute;
   classical::RrtConnectConfig rrt_connect;
   distributed::DistributedConfig distributed;
+  guidance::BlockedProblemsConfig problems;
 
   template <class V>
   void Visit(V& v) {
@@ -59,6 +61,7 @@ struct ExperimentConfig {
     v.Field("scene", scene, "obstacles of `flowplan plan` when no --scene is given");
     v.Field("execute", execute, "tracking of plans in MuJoCo (`flowplan plan --execute`)");
     v.Field("rrt_connect", rrt_connect, "the classical reference planner (`flowplan plan --rrt-connect`)");
+    v.Field("problems", problems, "random planning problems with blocked straight paths (`flowplan problems`)");
     v.Field("distributed", distributed,
             "data-parallel training when launched as several processes (torchrun or Slurm environment)");
   }

@@ -164,6 +164,11 @@ int Main(int argc, char** argv) {
   auto* keys = config_command->add_subcommand("keys", "list every config key with its default and meaning");
 
   // fk
+  auto* problems = app.add_subcommand("problems", "draw random Franka problems whose straight path is blocked (problems.*)");
+  add_config(problems, false);
+  std::string problems_out;
+  problems->add_option("--out", problems_out, "YAML file of problems")->required();
+
   auto* fk = app.add_subcommand("fk", "print the Franka TCP position of joint angles (MuJoCo and LibTorch)");
   std::string joint_angles;
   fk->add_option("--q", joint_angles, "7 joint angles in rad, comma-separated: --q=0,-0.785,0,-2.356,0,1.571,0.785")
@@ -220,6 +225,8 @@ int Main(int argc, char** argv) {
     flowplan::experiment::RunPlan(plan_command);
   } else if (show->parsed()) {
     std::cout << flowplan::experiment::ToYaml(flowplan::experiment::LoadExperiment(config_path, overrides));
+  } else if (problems->parsed()) {
+    flowplan::experiment::RunProblems(flowplan::experiment::LoadExperiment(config_path, overrides), problems_out);
   } else if (fk->parsed()) {
     flowplan::experiment::RunFrankaFk(flowplan::experiment::ParseJointAngles(joint_angles));
   } else if (keys->parsed()) {

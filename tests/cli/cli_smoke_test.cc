@@ -193,6 +193,9 @@ TEST_F(CliTest, BadConfigKeyValueAndFile) {
   ExpectCleanFailure(Flowplan("generate --config " + Tiny() + " --shard 99999999999/1"), "--shard");
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " --until -5"), "--until");
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " device=gpu"), "device=gpu: expected cpu, cuda or cuda:N");
+  ExpectCleanFailure(Flowplan("problems problems.min_spheres=9 --out " + Path("p.yaml")),
+                     "problems.min_spheres: larger than max_spheres");
+  EXPECT_FALSE(fs::exists(Path("p.yaml")));
   ExpectCleanFailure(Flowplan("train --config " + Tiny() + " device=cuda:1"), "device=cuda:1: this LibTorch has no CUDA");
   ExpectCleanFailure(Flowplan("generate --config " + Path("missing.yaml")), "missing.yaml");
   std::ofstream(Path("broken.yaml")) << "train:\n  steps: [1\n";
