@@ -38,6 +38,18 @@ std::vector<int64_t> SplitOrder(int64_t n, uint64_t seed) {
   return order;
 }
 
+/// What the splits carry of the dataset besides its episodes.
+void CopyDescription(const TrajectoryDataset& dataset, TrajectorySplits& splits) {
+  splits.train_pairs = ToTensors(dataset.train_pairs, dataset.state_dim);
+  splits.test_pairs = ToTensors(dataset.test_pairs, dataset.state_dim);
+  splits.env = dataset.env;
+  splits.dt = dataset.dt;
+  splits.state_labels = dataset.state_labels;
+  splits.robot = dataset.robot;
+  splits.T = dataset.horizon;
+  splits.D = dataset.state_dim;
+}
+
 int64_t ValidationCount(int64_t n, double val_fraction, const std::string& where) {
   const int64_t n_val = static_cast<int64_t>(std::floor(val_fraction * static_cast<double>(n)));
   if (n - n_val < 1) {
@@ -61,16 +73,9 @@ TrajectorySplits SplitTrajectories(const TrajectoryDataset& dataset, double val_
   // Validation episodes first in the permutation; sorted so the split is easy to audit.
   splits.val = all.index_select(0, std::get<0>(index.slice(0, 0, n_val).sort())).clone();
   splits.train = all.index_select(0, std::get<0>(index.slice(0, n_val, n).sort())).clone();
-  splits.train_pairs = ToTensors(dataset.train_pairs, dataset.state_dim);
-  splits.test_pairs = ToTensors(dataset.test_pairs, dataset.state_dim);
-  splits.env = dataset.env;
-  splits.dt = dataset.dt;
-  splits.state_labels = dataset.state_labels;
-  splits.robot = dataset.robot;
+  CopyDescription(dataset, splits);
   splits.fingerprint = DatasetFingerprint(dataset);
   splits.num_train = splits.train.size(0);
-  splits.T = dataset.horizon;
-  splits.D = dataset.state_dim;
   return splits;
 }
 
@@ -126,14 +131,7 @@ TrajectorySplits LoadTrajectorySplits(const DataConfig& config, uint64_t seed, c
     splits.train_parts.push_back(kept.slice(0, k, kept.size(0), K).clone());
   }
   splits.val = torch::empty({0, dataset.horizon, dataset.state_dim});
-  splits.train_pairs = ToTensors(dataset.train_pairs, dataset.state_dim);
-  splits.test_pairs = ToTensors(dataset.test_pairs, dataset.state_dim);
-  splits.env = dataset.env;
-  splits.dt = dataset.dt;
-  splits.state_labels = dataset.state_labels;
-  splits.robot = dataset.robot;
-  splits.T = dataset.horizon;
-  splits.D = dataset.state_dim;
+  CopyDescription(dataset, splits);
   return splits;
 }
 
