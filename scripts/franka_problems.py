@@ -1,0 +1,112 @@
+#!/usr/bin/env python3
+"""Every planner on every problem of a `flowplan problems` file.
+
+For each problem and planner, runs `flowplan plan` (joint start and goal, the
+problem's spheres as the scene, --execute) and keeps its JSON report in
+OUT/<planner>/<i>.json; a report that exists is not made again, so an
+interrupted run continues where it stopped. Then writes OUT/summary.json and
+OUT/summary.md: per planner, the success rate over all plans counted three
+ways (TCP, whole arm, executed in MuJoCo; each also requiring the goal within
+3 cm and feasible speeds, as in `flowplan plan`), the share of problems with
+at least one successful plan (whole arm), and the median planning time.
+
+usage: franka_problems.py PROBLEMS.yaml [--run RUN] [--config CONFIG] [--out OUT]
+                          [--planners fp,fp_split,rrt_connect] [--samples N] [--limit K]
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+import yaml
+
+PLANNERS = {"fp": "FP", "fp_split": "FP + split", "rrt_connect": "RRT-Connect"}
+WAYS = [("success_rate_tcp", "TCP"), ("success_rate_arm", "whole arm"), ("success_rate_executed", "executed")]
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("problems")
+    parser.add_argument("--run", default="runs/franka_reach")
+    parser.add_argument("--config", default="configs/franka_reach.yaml")
+    parser.add_argument("--out", default=None)
+    parser.add_argument("--planners", default="fp,fp_split,rrt_connect")
+    parser.add_argument("--samples", type=int, default=8)
+    parser.add_argument("--limit", type=int, default=0, help="first K problems only (0: all)")
+    parser.add_argument("--flowplan", default=os.environ.get("FLOWPLAN", "build/apps/flowplan/flowplan"))
+    args = parser.parse_args()
+    out = args.out or os.path.join(args.run, "problems")
+    problems = yaml.safe_load(open(args.problems))["problems"]
+    if args.limit > 0:
+        problems = problems[: args.limit]
+    planners = args.planners.split(",")
+    for planner in planners:
+        if planner not in PLANNERS:
+            sys.exit(f"--planners: unknown planner {planner} (known: {', '.join(PLANNERS)})")
+        os.makedirs(os.path.join(out, planner), exist_ok=True)
+    os.makedirs(os.path.join(out, "scenes"), exist_ok=True)
+
+    for i, problem in enumerate(problems):
+        scene = os.path.join(out, "scenes", f"{i}.yaml")
+        if not os.path.exists(scene):
+            with open(scene + ".tmp", "w") as f:
+                yaml.safe_dump({"spheres": problem["scene"]["spheres"]}, f)
+            os.replace(scene + ".tmp", scene)
+        for planner in planners:
+            prefix = os.path.join(out, planner, str(i))
+            if os.path.exists(prefix + ".json") or os.path.exists(prefix + ".refused"):
+                continue
+            source = {"fp": ["--ckpt", args.run],
+                      "fp_split": ["--ckpt", args.run, "sampler.splitting=midpoint"],
+                      "rrt_connect": ["--rrt-connect", "--config", args.config]}[planner]
+            command = [args.flowplan, "plan", *source,
+                       "--start", ",".join(repr(q) for q in problem["start_q"]),
+                       "--goal", ",".join(repr(q) for q in problem["goal_q"]),
+                       "--scene", scene, "-n", str(args.samples), "--seed", "1", "--execute", "--no-plot",
+                       "--log-level", "warn", "--out", prefix]
+            done = subprocess.run(command, capture_output=True, text=True)
+            if done.returncode != 0:
+                if "inside obstacle" in done.stderr + done.stdout:
+                    with open(prefix + ".refused.tmp", "w") as f:
+                        f.write(done.stderr + done.stdout)
+                    os.replace(prefix + ".refused.tmp", prefix + ".refused")
+                else:
+                    sys.exit(f"problem {i}, {planner}: {' '.join(command)}\n{done.stderr}{done.stdout}")
+        print(f"problem {i + 1}/{len(problems)} done", flush=True)
+    summarize(out, planners, len(problems))
+
+
+def summarize(out, planners, count):
+    summary = {"problems": count, "planners": {}}
+    lines = ["| planner | problems | TCP | whole arm | executed | problems solved (arm) | planning time (s, median) |",
+             "|---|---|---|---|---|---|---|"]
+    for planner in planners:
+        rates = {key: [] for key, _ in WAYS}
+        solved, times, refused = 0, [], 0
+        for i in range(count):
+            prefix = os.path.join(out, planner, str(i))
+            if os.path.exists(prefix + ".refused"):
+                refused += 1
+                for key, _ in WAYS:
+                    rates[key].append(0.0)
+                continue
+            report = json.load(open(prefix + ".json"))
+            for key, _ in WAYS:
+                rates[key].append(report[key])
+            solved += report["success_rate_arm"] > 0
+            times += [s["planning_time_s"] for s in report["samples"]]
+        row = {key: sum(values) / len(values) for key, values in rates.items()}
+        row |= {"problems_solved_arm": solved / count, "refused": refused,
+                "planning_time_s_median": sorted(times)[len(times) // 2] if times else None}
+        summary["planners"][planner] = row
+        lines.append(f"| {PLANNERS[planner]} | {count} | " + " | ".join(f"{row[key]:.0%}" for key, _ in WAYS) +
+                     f" | {row['problems_solved_arm']:.0%} | {row['planning_time_s_median']:.3f} |")
+    text = "\n".join(lines) + "\n"
+    open(os.path.join(out, "summary.md"), "w").write(text)
+    json.dump(summary, open(os.path.join(out, "summary.json"), "w"), indent=1)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
