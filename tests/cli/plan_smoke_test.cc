@@ -139,6 +139,22 @@ TEST_F(ParticlePlanTest, BadInputsEndInOneClearLine) {
 }
 
 /// A Franka reach model trained for two steps: enough to exercise IK, FK, guidance and execution.
+TEST(FrankaPlanTest, RandomBlockedProblemsAreSolvedByRrtConnectThroughTheProblemsScript) {
+  const fs::path dir = flowplan::testing::ScratchDir();
+  const std::string problems = (dir / "problems.yaml").string(), out = (dir / "out").string();
+  ExpectOk(Flowplan("problems problems.count=2 seed=4 --log-level warn --out " + problems));
+  ExpectOk(RunCommand("cd " + std::string(FLOWPLAN_SOURCE_DIR) + " && " + FLOWPLAN_PYTHON +
+                      " scripts/franka_problems.py " + problems + " --planners rrt_connect --samples 2 --out " + out +
+                      " --flowplan " + FLOWPLAN_BINARY));
+  const Outcome summary = RunCommand(std::string(FLOWPLAN_PYTHON) + " -c \"import json; s = json.load(open('" + out +
+                                     "/summary.json')); r = s['planners']['rrt_connect']; "
+                                     "print(s['problems'], r['success_rate_arm'], r['problems_solved_arm'])\"");
+  ExpectOk(summary);
+  // The classical planner checks the whole arm against the spheres itself: every plan is clear.
+  EXPECT_EQ(summary.output, "2 1.0 1.0\n");
+  EXPECT_TRUE(fs::exists(out + "/rrt_connect/0.json") && fs::exists(out + "/rrt_connect/1.json"));
+}
+
 TEST(FrankaPlanTest, PlansFromTcpPointsExecutesInMujocoAndRejectsUnreachableTargets) {
   const fs::path dir = flowplan::testing::ScratchDir();
   auto path = [&](const std::string& name) { return (dir / name).string(); };
