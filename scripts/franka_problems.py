@@ -12,6 +12,7 @@ at least one successful plan (whole arm), and the median planning time.
 
 usage: franka_problems.py PROBLEMS.yaml [--run RUN] [--config CONFIG] [--out OUT]
                           [--planners fp,fp_split,rrt_connect] [--samples N] [--limit K]
+                          [--set KEY=VALUE ...]   (config overrides for every `flowplan plan` call)
 """
 import argparse
 import json
@@ -35,6 +36,8 @@ def main():
     parser.add_argument("--samples", type=int, default=8)
     parser.add_argument("--limit", type=int, default=0, help="first K problems only (0: all)")
     parser.add_argument("--flowplan", default=os.environ.get("FLOWPLAN", "build/apps/flowplan/flowplan"))
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="config override for every planner call, e.g. data.path=... for RRT-Connect's robot")
     args = parser.parse_args()
     out = args.out or os.path.join(args.run, "problems")
     problems = yaml.safe_load(open(args.problems))["problems"]
@@ -64,7 +67,7 @@ def main():
                        "--start", ",".join(repr(q) for q in problem["start_q"]),
                        "--goal", ",".join(repr(q) for q in problem["goal_q"]),
                        "--scene", scene, "-n", str(args.samples), "--seed", "1", "--execute", "--no-plot",
-                       "--log-level", "warn", "--out", prefix]
+                       "--log-level", "warn", "--out", prefix, *args.set]
             done = subprocess.run(command, capture_output=True, text=True)
             if done.returncode != 0:
                 if "inside obstacle" in done.stderr + done.stdout:

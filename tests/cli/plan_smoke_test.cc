@@ -142,10 +142,13 @@ TEST_F(ParticlePlanTest, BadInputsEndInOneClearLine) {
 TEST(FrankaPlanTest, RandomBlockedProblemsAreSolvedByRrtConnectThroughTheProblemsScript) {
   const fs::path dir = flowplan::testing::ScratchDir();
   const std::string problems = (dir / "problems.yaml").string(), out = (dir / "out").string();
+  const std::string data = (dir / "reach.h5").string();  // RRT-Connect takes the robot from its config's data
+  ExpectOk(Flowplan("generate --config " + Source("configs/franka_reach.yaml") + " generate.episodes=2 generate.out=" +
+                    data + " --log-level warn"));
   ExpectOk(Flowplan("problems problems.count=2 seed=4 --log-level warn --out " + problems));
   ExpectOk(RunCommand("cd " + std::string(FLOWPLAN_SOURCE_DIR) + " && " + FLOWPLAN_PYTHON +
                       " scripts/franka_problems.py " + problems + " --planners rrt_connect --samples 2 --out " + out +
-                      " --flowplan " + FLOWPLAN_BINARY));
+                      " --flowplan " + FLOWPLAN_BINARY + " --set data.path=" + data));
   const Outcome summary = RunCommand(std::string(FLOWPLAN_PYTHON) + " -c \"import json; s = json.load(open('" + out +
                                      "/summary.json')); r = s['planners']['rrt_connect']; "
                                      "print(s['problems'], r['success_rate_arm'], r['problems_solved_arm'])\"");
