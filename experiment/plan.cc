@@ -230,17 +230,29 @@ torch::Tensor ResolveState(const std::string& name, const std::string& values, c
   return state.to(torch::kFloat32);
 }
 
+// A start or goal whose TCP lies inside an obstacle is refused: no plan can
+// succeed, however it is counted. One whose TCP is clear but whose other
+// collision spheres touch an obstacle is planned (the paper counts only the
+// TCP) with a warning: no plan of it can succeed counted by the whole arm.
 void CheckOutsideObstacles(const std::string& name, const torch::Tensor& state, const Subject& subject,
                            const torch::Tensor& obstacles) {
   if (obstacles.size(0) == 0) return;
-  const torch::Tensor clearance =
-      guidance::SphereClearance(*subject.robot, state.view({1, 1, -1}).to(torch::kFloat64), obstacles.to(torch::kFloat64))
-          .view({-1});  // (K,)
-  for (int64_t k = 0; k < clearance.size(0); ++k) {
-    const double c = clearance[k].item<double>();
+  const torch::Tensor o = obstacles.to(torch::kFloat64);                      // (K, W+1)
+  const int64_t J = subject.robot->num_joints(), W = subject.robot->workspace_dim();
+  const torch::Tensor tcp = subject.robot->Tcp(state.slice(0, 0, J).view({1, J}).to(torch::kFloat64)).view({1, W});
+  const torch::Tensor tcp_clearance = (tcp - o.slice(1, 0, W)).norm(2, -1) - o.select(1, W);  // (K,)
+  const torch::Tensor arm_clearance =
+      guidance::SphereClearance(*subject.robot, state.view({1, 1, -1}).to(torch::kFloat64), o).view({-1});  // (K,)
+  for (int64_t k = 0; k < o.size(0); ++k) {
+    const double c = tcp_clearance[k].item<double>();
     if (c < 0) {
-      throw Error("plan: the " + name + " is inside obstacle " + std::to_string(k) + " (the robot's collision spheres "
-                  "reach " + JsonNumber(-c) + " into it); move the " + name + " or the obstacle");
+      throw Error("plan: the " + name + " is inside obstacle " + std::to_string(k) + " (its TCP lies " +
+                  JsonNumber(-c) + " deep in it); move the " + name + " or the obstacle");
+    }
+    const double a = arm_clearance[k].item<double>();
+    if (a < 0) {
+      spdlog::warn("plan: the {}'s collision spheres reach {:.4g} into obstacle {} (its TCP is clear): no plan can "
+                   "succeed counted by the whole arm or executed", name, -a, k);
     }
   }
 }

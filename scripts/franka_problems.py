@@ -13,16 +13,21 @@ at least one successful plan (whole arm), and the median planning time.
 usage: franka_problems.py PROBLEMS.yaml [--run RUN] [--config CONFIG] [--out OUT]
                           [--planners fp,fp_split,rrt_connect] [--samples N] [--limit K]
                           [--set KEY=VALUE ...]   (config overrides for every `flowplan plan` call)
+                          [--planner NAME="ARGS" ...]
+--planner names a planner and the `flowplan plan` arguments that choose it,
+e.g. --planner mpd="--ckpt runs/reach_mpd"; given at least once, it replaces
+--planners (whose fp, fp_split and rrt_connect come from --run and --config).
 """
 import argparse
 import json
 import os
+import shlex
 import subprocess
 import sys
 
 import yaml
 
-PLANNERS = {"fp": "FP", "fp_split": "FP + split", "rrt_connect": "RRT-Connect"}
+LABELS = {"fp": "FP", "fp_split": "FP + split", "rrt_connect": "RRT-Connect", "mpd": "MPD", "vae": "VAE planner"}
 WAYS = [("success_rate_tcp", "TCP"), ("success_rate_arm", "whole arm"), ("success_rate_executed", "executed")]
 
 
@@ -36,6 +41,8 @@ def main():
     parser.add_argument("--samples", type=int, default=8)
     parser.add_argument("--limit", type=int, default=0, help="first K problems only (0: all)")
     parser.add_argument("--flowplan", default=os.environ.get("FLOWPLAN", "build/apps/flowplan/flowplan"))
+    parser.add_argument("--planner", action="append", default=[], metavar='NAME="ARGS"',
+                        help="a planner and its `flowplan plan` arguments (replaces --planners)")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="config override for every planner call, e.g. data.path=... for RRT-Connect's robot")
     args = parser.parse_args()
@@ -43,10 +50,22 @@ def main():
     problems = yaml.safe_load(open(args.problems))["problems"]
     if args.limit > 0:
         problems = problems[: args.limit]
-    planners = args.planners.split(",")
+    sources = {"fp": ["--ckpt", args.run],
+               "fp_split": ["--ckpt", args.run, "sampler.splitting=midpoint"],
+               "rrt_connect": ["--rrt-connect", "--config", args.config]}
+    if args.planner:
+        sources = {}
+        for spec in args.planner:
+            name, _, planner_args = spec.partition("=")
+            if not name or not planner_args:
+                sys.exit(f'--planner {spec!r}: expected NAME="ARGS"')
+            sources[name] = shlex.split(planner_args)
+        planners = list(sources)
+    else:
+        planners = args.planners.split(",")
     for planner in planners:
-        if planner not in PLANNERS:
-            sys.exit(f"--planners: unknown planner {planner} (known: {', '.join(PLANNERS)})")
+        if planner not in sources:
+            sys.exit(f"--planners: unknown planner {planner} (known: {', '.join(sources)})")
         os.makedirs(os.path.join(out, planner), exist_ok=True)
     os.makedirs(os.path.join(out, "scenes"), exist_ok=True)
 
@@ -60,10 +79,7 @@ def main():
             prefix = os.path.join(out, planner, str(i))
             if os.path.exists(prefix + ".json") or os.path.exists(prefix + ".refused"):
                 continue
-            source = {"fp": ["--ckpt", args.run],
-                      "fp_split": ["--ckpt", args.run, "sampler.splitting=midpoint"],
-                      "rrt_connect": ["--rrt-connect", "--config", args.config]}[planner]
-            command = [args.flowplan, "plan", *source,
+            command = [args.flowplan, "plan", *sources[planner],
                        "--start", ",".join(repr(q) for q in problem["start_q"]),
                        "--goal", ",".join(repr(q) for q in problem["goal_q"]),
                        "--scene", scene, "-n", str(args.samples), "--seed", "1", "--execute", "--no-plot",
@@ -103,7 +119,7 @@ def summarize(out, planners, count):
         row |= {"problems_solved_arm": solved / count, "refused": refused,
                 "planning_time_s_median": sorted(times)[len(times) // 2] if times else None}
         summary["planners"][planner] = row
-        lines.append(f"| {PLANNERS[planner]} | {count} | " + " | ".join(f"{row[key]:.0%}" for key, _ in WAYS) +
+        lines.append(f"| {LABELS.get(planner, planner)} | {count} | " + " | ".join(f"{row[key]:.0%}" for key, _ in WAYS) +
                      f" | {row['problems_solved_arm']:.0%} | {row['planning_time_s_median']:.3f} |")
     text = "\n".join(lines) + "\n"
     open(os.path.join(out, "summary.md"), "w").write(text)

@@ -1,0 +1,480 @@
+#!/usr/bin/env python3
+"""The Franka benchmarks (SPEC section 4 and beyond), one resumable run.
+
+usage: scripts/franka_bench.py [--quick] [--root DIR] [--only STAGE,...] [--flowplan BIN]
+
+Stages, in order; each writes its output atomically and is skipped when the
+output exists, so a stopped run continues where it stopped (a stopped
+training resumes from its newest checkpoint):
+
+  data        ROOT/data/<set>.h5            `flowplan generate` of every data set
+  train-reach ROOT/train/reach_*/done.json  `flowplan train` of FP, MPD and the VAE on franka_reach
+  sweep       ROOT/sweep/<planner>_r<R>.*   the paper's scene, one sphere of radius R, every
+                                            planner, plans executed in MuJoCo
+  scales      ROOT/scales/s<S>_r<R>.*       FP + split at several guidance scales
+  problems    ROOT/problems/...             random blocked scenes (`flowplan problems`), every planner
+  examples    ROOT/results/example_*.png    a few plans of every planner, drawn
+  train-cross ROOT/train/cross_*/done.json  `flowplan train` of every franka_cross row
+  stitching   ROOT/stitching/<row>.json     `flowplan eval stitching` of every franka_cross row
+  recount     ROOT/results/recount.json     scripts/recount_plans.py on every saved plan (always redone)
+  results     ROOT/results/*.md|json|png    tables and plots (always redone from what exists)
+
+--quick runs every stage at toy size (ROOT defaults to runs/franka_bench_quick).
+The sizes of the full run and how they were chosen: docs/results.md.
+"""
+import argparse
+import glob
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+REACH_CONFIG = "configs/franka_reach.yaml"
+# franka_cross data sets: name, config, augmentation scheme as the paper names it.
+CROSS_SETS = [("franka_cross", "configs/franka_cross.yaml", "per-joint noise"),
+              ("franka_cross_same_noise", "configs/franka_cross_same_noise.yaml", "same noise"),
+              ("franka_cross_no_noise", "configs/franka_cross_no_noise.yaml", "no noise"),
+              ("franka_cross_random_pos", "configs/franka_cross_random_pos.yaml", "random positions"),
+              ("franka_cross_random_forces", "configs/franka_cross_random_forces.yaml", "random forces")]
+SEEDS = [0, 1, 2]
+# Table 1 on franka_cross: label, row name prefix, overrides, seeds.
+TABLE1 = [("FP", "cross_fp", [], SEEDS),
+          ("FP w/o inpainting", "cross_fp_direct", ["objective.conditioning=direct"], [0]),
+          ("Transformer", "cross_transformer", ["model.name=transformer"], [0]),
+          ("Transformer w/o inpainting", "cross_transformer_direct",
+           ["model.name=transformer", "objective.conditioning=direct"], [0]),
+          ("MPD", "cross_mpd", ["objective.name=ddpm"], [0])]
+PAPER_TABLE1 = {"FP": "0.16 ± 0.07", "FP w/o inpainting": "0.71 ± 0.24", "Transformer": "0.30 ± 0.09",
+                "Transformer w/o inpainting": "1.73 ± 0.49", "MPD": "1.00 ± 0.97"}
+PAPER_TABLE2 = {"per-joint noise": "0.16 ± 0.07", "same noise": "1.62 ± 0.25", "no noise": "0.81 ± 0.05",
+                "random positions": "0.54 ± 0.06", "random forces": "0.85 ± 0.23"}
+# Obstacle planners: name, label, `flowplan plan` source (train row or RRT-Connect), extra overrides.
+PLANNERS = [("mpd", "MPD", "reach_mpd", []),
+            ("vae", "VAE planner", "reach_vae", []),
+            ("fp", "FP", "reach_fp", []),
+            ("fp_split", "FP + split", "reach_fp", ["sampler.splitting=midpoint"]),
+            ("rrt_connect", "RRT-Connect", None, [])]
+PAPER_RADIUS = {"mpd": 0.03, "vae": 0.05, "fp": 0.15, "fp_split": 0.20}
+WAYS = [("success_rate_tcp", "TCP"), ("success_rate_arm", "whole arm"), ("success_rate_executed", "executed")]
+SCENE = "configs/scenes/franka_sphere.yaml"
+START_TCP, GOAL_TCP = "0.5,-0.3,0.2", "0.5,0.3,0.2"
+
+FULL = {"episodes": None, "train": [], "num_plans": 64, "radii": [round(0.025 * i, 3) for i in range(14)],
+        "sweep_plans": 64, "scales": [0.5, 1.0, 1.75, 2.5, 3.5, 5.0], "scale_radii": [0.1, 0.15, 0.2, 0.25],
+        "problems": 100, "problem_plans": 8, "example_radii": [0.1, 0.2], "example_plans": 8}
+QUICK = {"episodes": 256,
+         "train": ["train.steps=20", "train.batch_size=16", "train.eval_every=0", "train.checkpoint_every=10",
+                   "train.log_every=10", "train.val_batch_size=16"],
+         "num_plans": 8, "radii": [0.0, 0.1, 0.2, 0.3], "sweep_plans": 4, "scales": [1.0, 2.5],
+         "scale_radii": [0.15], "problems": 2, "problem_plans": 2, "example_radii": [0.1], "example_plans": 2}
+
+
+def train_rows():
+    """Every training row: name -> (config, data set, overrides, seed)."""
+    rows = {}
+    for _, prefix, overrides, seeds in TABLE1:
+        for seed in seeds:
+            rows[f"{prefix}_s{seed}" if len(seeds) > 1 else prefix] = (CROSS_SETS[0][1], "franka_cross", overrides, seed)
+    for name, config, _ in CROSS_SETS[1:]:
+        for seed in SEEDS:
+            rows[f"{name[len('franka_'):]}_fp_s{seed}"] = (config, name, [], seed)
+    rows["reach_fp"] = (REACH_CONFIG, "franka_reach", [], 0)
+    rows["reach_mpd"] = (REACH_CONFIG, "franka_reach", ["objective.name=ddpm"], 0)
+    rows["reach_vae"] = (REACH_CONFIG, "franka_reach", ["model.name=state_vae", "objective.name=vae"], 0)
+    return rows
+
+
+def table2_rows():
+    """label -> row names (3 seeds) of FP trained on each augmentation scheme."""
+    out = {CROSS_SETS[0][2]: [f"cross_fp_s{s}" for s in SEEDS]}
+    for name, _, label in CROSS_SETS[1:]:
+        out[label] = [f"{name[len('franka_'):]}_fp_s{s}" for s in SEEDS]
+    return out
+
+
+class Bench:
+    def __init__(self, args):
+        self.root = args.root
+        self.size = QUICK if args.quick else FULL
+        self.flowplan = args.flowplan
+        self.python = sys.executable
+        self.quick = args.quick
+        self.log = None
+
+    def path(self, *parts):
+        return os.path.join(self.root, *parts)
+
+    def call(self, command, accept_refusal=False):
+        """Runs a command, its output appended to ROOT/bench.log; returns (ok, output)."""
+        started = time.time()
+        done = subprocess.run(command, capture_output=True, text=True)
+        with open(self.path("bench.log"), "a") as log:
+            log.write(f"$ {' '.join(command)}\n{done.stdout}{done.stderr}[exit {done.returncode}, "
+                      f"{time.time() - started:.1f} s]\n")
+        if done.returncode != 0 and not (accept_refusal and "inside obstacle" in done.stdout + done.stderr):
+            sys.exit(f"failed: {' '.join(command)}\n{done.stderr[-3000:]}{done.stdout[-2000:]}")
+        return done.returncode == 0, done.stdout + done.stderr
+
+    # -- data -----------------------------------------------------------------
+    def data(self):
+        sets = [(name, config) for name, config, _ in CROSS_SETS] + [("franka_reach", REACH_CONFIG)]
+        for name, config in sets:
+            out = self.path("data", f"{name}.h5")
+            if os.path.exists(out):
+                continue
+            episodes = [f"generate.episodes={self.size['episodes']}"] if self.size["episodes"] else []
+            print(f"data: {name}", flush=True)
+            self.call([self.flowplan, "generate", "--config", config, f"generate.out={out}", *episodes])
+
+    # -- train ----------------------------------------------------------------
+    def train_reach(self):
+        self.train([row for row in train_rows() if row.startswith("reach_")])
+
+    def train_cross(self):
+        self.train([row for row in train_rows() if row.startswith("cross_")])
+
+    def train(self, rows):
+        for row in rows:
+            config, data, overrides, seed = train_rows()[row]
+            run = self.path("train", row)
+            done = os.path.join(run, "done.json")
+            if os.path.exists(done):
+                continue
+            print(f"train: {row}", flush=True)
+            started = time.time()
+            if glob.glob(os.path.join(run, "checkpoints", "step_*.pt")):
+                self.call([self.flowplan, "train", "--resume", run])
+            else:
+                shutil.rmtree(run, ignore_errors=True)
+                self.call([self.flowplan, "train", "--config", config, f"seed={seed}", f"run_dir={run}",
+                           f"data.path={self.path('data', data + '.h5')}", *overrides, *self.size["train"]])
+            seconds = time.time() - started
+            partial = os.path.join(run, "train_seconds.txt")  # seconds of earlier, stopped invocations
+            if os.path.exists(partial):
+                seconds += float(open(partial).read())
+            steps = max(json.loads(line).get("step", 0) for line in open(os.path.join(run, "metrics.jsonl")))
+            write_json(done, {"row": row, "config": config, "data": data, "overrides": overrides, "seed": seed,
+                              "steps": steps, "train_seconds": round(seconds, 1)})
+
+    # -- stitching ------------------------------------------------------------
+    def stitching(self):
+        for row, (_, data, _, _) in train_rows().items():
+            out = self.path("stitching", f"{row}.json")
+            if not data.startswith("franka_cross") or os.path.exists(out):
+                continue
+            os.makedirs(os.path.dirname(out), exist_ok=True)
+            print(f"stitching: {row}", flush=True)
+            self.call([self.flowplan, "eval", "stitching", "--ckpt", self.path("train", row), "--out", out + ".tmp",
+                       f"eval.num_plans={self.size['num_plans']}"])
+            os.replace(out + ".tmp", out)
+
+    # -- planning around spheres ---------------------------------------------
+    def planner_source(self, planner):
+        _, _, row, overrides = next(p for p in PLANNERS if p[0] == planner)
+        if row is None:
+            return ["--rrt-connect", "--config", REACH_CONFIG, f"data.path={self.path('data', 'franka_reach.h5')}"]
+        return ["--ckpt", self.path("train", row), *overrides]
+
+    def plan_cell(self, prefix, planner, radius, plans, extra=(), plot=False):
+        """One `flowplan plan` call on the paper's scene; PREFIX.json (or PREFIX.refused) marks it done."""
+        if os.path.exists(prefix + ".json") or os.path.exists(prefix + ".refused"):
+            return
+        os.makedirs(os.path.dirname(prefix), exist_ok=True)
+        scene = ["--scene", SCENE, "--radius", str(radius)] if radius > 0 else ["--scene", self.empty_scene()]
+        ok, output = self.call([self.flowplan, "plan", *self.planner_source(planner), *extra, "--start-tcp", START_TCP,
+                                "--goal-tcp", GOAL_TCP, *scene, "-n", str(plans), "--seed", "1", "--execute",
+                                *([] if plot else ["--no-plot"]), "--log-level", "warn", "--out", prefix],
+                               accept_refusal=True)
+        if not ok:
+            write_text(prefix + ".refused", output)
+
+    def empty_scene(self):
+        path = self.path("scenes", "empty.yaml")
+        if not os.path.exists(path):
+            write_text(path, "spheres: []\n")
+        return path
+
+    def sweep(self):
+        for radius in self.size["radii"]:
+            for planner, *_ in PLANNERS:
+                self.plan_cell(self.path("sweep", f"{planner}_r{radius:g}"), planner, radius, self.size["sweep_plans"])
+            print(f"sweep: radius {radius:g} done", flush=True)
+
+    def scales(self):
+        for radius in self.size["scale_radii"]:
+            for scale in self.size["scales"]:
+                self.plan_cell(self.path("scales", f"s{scale:g}_r{radius:g}"), "fp_split", radius,
+                               self.size["sweep_plans"], extra=[f"guidance.scale={scale}"])
+            print(f"scales: radius {radius:g} done", flush=True)
+
+    def problems(self):
+        problems = self.path("problems.yaml")
+        if not os.path.exists(problems):
+            self.call([self.flowplan, "problems", "--out", problems, f"problems.count={self.size['problems']}"])
+        summary = self.path("problems", "summary.json")
+        if os.path.exists(summary) and set(json.load(open(summary))["planners"]) == {p for p, *_ in PLANNERS}:
+            return
+        specs = []
+        for planner, *_ in PLANNERS:
+            specs += ["--planner", f"{planner}={' '.join(self.planner_source(planner))}"]
+        print("problems: every planner on every problem", flush=True)
+        self.call([self.python, "scripts/franka_problems.py", problems, "--out", self.path("problems"),
+                   "--samples", str(self.size["problem_plans"]), "--flowplan", self.flowplan, *specs])
+
+    def examples(self):
+        for radius in self.size["example_radii"]:
+            for planner, *_ in PLANNERS:
+                self.plan_cell(self.path("results", f"example_{planner}_r{radius:g}"), planner, radius,
+                               self.size["example_plans"], plot=True)
+
+    def recount(self):
+        plans = [self.path(d) for d in ("sweep", "scales") if os.path.isdir(self.path(d))]
+        plans += [self.path("problems", p) for p, *_ in PLANNERS if os.path.isdir(self.path("problems", p))]
+        self.call([self.python, "scripts/recount_plans.py", "--out", self.path("results", "recount.json"), *plans])
+
+    def results(self):
+        os.makedirs(self.path("results"), exist_ok=True)
+        summary = {"root": self.root, "quick": self.quick, "sizes": self.size}
+        text = [f"Made by `scripts/franka_bench.py{' --quick' if self.quick else ''} --root {self.root}`.\n"]
+        text += stitching_tables(self.root, summary)
+        text += obstacle_tables(self.root, self.size, summary)
+        text += problem_table(self.root, summary)
+        recount = self.path("results", "recount.json")
+        if os.path.exists(recount):
+            r = json.load(open(recount))
+            summary["recount"] = {k: r[k] for k in ("files", "plans", "differ")}
+            text.append(f"Independent recount (scripts/recount_plans.py, its own kinematics) of {r['plans']} saved plans "
+                        f"in {r['files']} files: {r['differ']} files with a different TCP or whole-arm count.\n")
+        text.append(training_table(self.root, summary))
+        write_text(self.path("results", "summary.md"), "\n".join(text))
+        write_json(self.path("results", "summary.json"), summary)
+        print("\n".join(text))
+
+
+def write_text(path, text):
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    with open(path + ".tmp", "w") as f:
+        f.write(text)
+    os.replace(path + ".tmp", path)
+
+
+def write_json(path, value):
+    write_text(path, json.dumps(value, indent=1) + "\n")
+
+
+def mean_std(values):
+    n = len(values)
+    mean = sum(values) / n
+    return mean, (sum((v - mean) ** 2 for v in values) / n) ** 0.5
+
+
+def stitching_of(root, row):
+    path = os.path.join(root, "stitching", f"{row}.json")
+    return json.load(open(path))["test"] if os.path.exists(path) else None
+
+
+def stitching_cell(root, rows):
+    """(text, json) of one table cell: one row, or several seeds."""
+    found = [(row, stitching_of(root, row)) for row in rows]
+    found = [(row, r) for row, r in found if r is not None]
+    if not found:
+        return "not run", None
+    if len(rows) == 1:
+        r = found[0][1]
+        return f"{r['mean']:.2f} ± {r['stddev']:.2f}", {"mean": r["mean"], "stddev": r["stddev"]}
+    means = [r["mean"] for _, r in found]
+    mean, spread = mean_std(means)
+    seeds = ", ".join(f"{r['mean']:.2f} ± {r['stddev']:.2f}" for _, r in found)
+    missing = "" if len(found) == len(rows) else f"; {len(rows) - len(found)} of {len(rows)} seeds not run"
+    return (f"{mean:.2f} (seeds: {seeds}{missing})",
+            {"mean_of_seeds": mean, "std_of_seed_means": spread,
+             "seeds": {row: {"mean": r["mean"], "stddev": r["stddev"]} for row, r in found}})
+
+
+def stitching_tables(root, summary):
+    text = ["### Stitching, table 1 (franka_cross, per-joint torque noise)\n",
+            "Stitching error on the two test pairs, 64 plans (mean ± std over the plans; FP: the mean over its seeds, "
+            "then every seed's mean ± std).\n", "| model | ours | paper |", "|---|---|---|"]
+    summary["table1"] = {}
+    for label, prefix, _, seeds in TABLE1:
+        rows = [f"{prefix}_s{s}" for s in seeds] if len(seeds) > 1 else [prefix]
+        cell, value = stitching_cell(root, rows)
+        summary["table1"][label] = value
+        text.append(f"| {label} | {cell} | {PAPER_TABLE1[label]} |")
+    text += ["", "### Stitching, table 2 (FP trained on each augmentation scheme)\n",
+             "| augmentation | ours | paper |", "|---|---|---|"]
+    summary["table2"] = {}
+    for label, rows in table2_rows().items():
+        cell, value = stitching_cell(root, rows)
+        summary["table2"][label] = value
+        text.append(f"| {label} | {cell} | {PAPER_TABLE2[label]} |")
+    return text + [""]
+
+
+def read_cells(folder, pattern_keys):
+    """{key: report summary or {'refused': True}} of the plan cells in a folder."""
+    cells = {}
+    for key, prefix in pattern_keys:
+        if os.path.exists(prefix + ".refused"):
+            cells[key] = {"refused": True}
+        elif os.path.exists(prefix + ".json"):
+            report = json.load(open(prefix + ".json"))
+            times = sorted(s["planning_time_s"] for s in report["samples"])
+            cells[key] = {k: report.get(k) for k, _ in WAYS} | {
+                "refused": False, "num_samples": report["num_samples"],
+                "planning_time_s_median": times[len(times) // 2], "wall_time_s": report["wall_time_s"]}
+    return cells
+
+
+def rate_text(cell, key):
+    if cell is None:
+        return ""
+    if cell["refused"]:
+        return "refused"
+    return "–" if cell[key] is None else f"{cell[key]:.0%}"
+
+
+def obstacle_tables(root, size, summary):
+    radii = size["radii"]
+    cells = read_cells(root, [((p, r), os.path.join(root, "sweep", f"{p}_r{r:g}")) for p, *_ in PLANNERS for r in radii])
+    summary["sweep"] = [{"planner": p, "radius": r, **c} for (p, r), c in sorted(cells.items())]
+    summary["largest_radius_90"] = {}
+    text = ["### Obstacle avoidance (franka_reach models, the paper's scene)\n",
+            f"Success over {size['sweep_plans']} plans per radius, counted three ways (each also needs the last TCP "
+            "within 3 cm of the goal and feasible joint speeds); a refused radius is one whose start or goal posture "
+            "already touches the sphere.\n",
+            "| planner, counted by | " + " | ".join(f"{r:g}" for r in radii) + " | largest radius ≥ 90 % | paper |",
+            "|---|" + "---|" * (len(radii) + 2)]
+    for planner, label, *_ in PLANNERS:
+        for key, way in WAYS:
+            best = None
+            for r in radii:
+                c = cells.get((planner, r))
+                if c and not c["refused"] and c[key] is not None and c[key] >= 0.9:
+                    best = r if best is None or r > best else best
+            # "Largest radius" is the largest r with every radius up to r at >= 90 %.
+            contiguous = None
+            for r in radii:
+                c = cells.get((planner, r))
+                if not c or c["refused"] or c[key] is None or c[key] < 0.9:
+                    break
+                contiguous = r
+            summary["largest_radius_90"][f"{planner}/{way}"] = contiguous
+            paper = PAPER_RADIUS.get(planner) if key == "success_rate_tcp" else None
+            text.append(f"| {label}, {way} | " + " | ".join(rate_text(cells.get((planner, r)), key) for r in radii) +
+                        f" | {'–' if contiguous is None else f'{contiguous:g}'} | {'' if paper is None else paper} |")
+    text.append("\nPlanning time per plan (s; median over the radii of each cell's median; a learned planner's is "
+                "the wall time of each `flowplan plan` call, without execution, divided by its plans): " +
+                ", ".join(f"{label} {median_time(cells, planner, radii):.3f}" for planner, label, *_ in PLANNERS
+                          if median_time(cells, planner, radii) is not None) + "\n")
+    plot_sweep(cells, radii, os.path.join(root, "results", "success_vs_radius.png"))
+    scale_cells = read_cells(root, [((s, r), os.path.join(root, "scales", f"s{s:g}_r{r:g}"))
+                                    for s in size["scales"] for r in size["scale_radii"]])
+    summary["scales"] = [{"scale": s, "radius": r, **c} for (s, r), c in sorted(scale_cells.items())]
+    text += ["### Guidance scale, FP + split\n", "| scale | " + " | ".join(
+        f"r {r:g}: TCP / arm / executed" for r in size["scale_radii"]) + " |",
+        "|---|" + "---|" * len(size["scale_radii"])]
+    for s in size["scales"]:
+        text.append(f"| {s:g} | " + " | ".join(
+            " / ".join(rate_text(scale_cells.get((s, r)), k) for k, _ in WAYS) for r in size["scale_radii"]) + " |")
+    return text + [""]
+
+
+def median_time(cells, planner, radii):
+    """Median over the cells of a planner of the planning time per plan (the call's wall time / its plans)."""
+    times = []
+    for r in radii:
+        c = cells.get((planner, r))
+        if c and not c["refused"]:
+            times.append(c["wall_time_s"] / c["num_samples"])
+    return sorted(times)[len(times) // 2] if times else None
+
+
+def plot_sweep(cells, radii, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    figure, axes = plt.subplots(1, 3, figsize=(13, 3.8), sharey=True)
+    for axis, (key, way) in zip(axes, WAYS):
+        for planner, label, *_ in PLANNERS:
+            xs = [r for r in radii if (planner, r) in cells and
+                  (cells[(planner, r)]["refused"] or cells[(planner, r)][key] is not None)]
+            ys = [0.0 if cells[(planner, r)]["refused"] else cells[(planner, r)][key] for r in xs]
+            axis.plot(xs, ys, marker="o", ms=3, label=label)
+        axis.axhline(0.9, color="grey", lw=0.8, ls="--")
+        axis.set_title(f"success: {way}")
+        axis.set_xlabel("sphere radius (m)")
+    axes[0].set_ylabel("success rate")
+    axes[0].legend(fontsize=8)
+    figure.tight_layout()
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    figure.savefig(path + ".tmp.png", dpi=70)
+    os.replace(path + ".tmp.png", path)
+    plt.close(figure)
+
+
+def problem_table(root, summary):
+    path = os.path.join(root, "problems", "summary.json")
+    if not os.path.exists(path):
+        return ["### Random blocked scenes: not run\n"]
+    problems = json.load(open(path))
+    summary["problems"] = problems
+    text = [f"### Random blocked scenes ({problems['problems']} problems of `flowplan problems`, 1–8 spheres)\n",
+            "| planner | TCP | whole arm | executed | problems solved (arm) | planning time per call (s, median) |",
+            "|---|---|---|---|---|---|"]
+    for planner, label, *_ in PLANNERS:
+        row = problems["planners"].get(planner)
+        if row:
+            text.append(f"| {label} | " + " | ".join(f"{row[k]:.0%}" for k, _ in WAYS) +
+                        f" | {row['problems_solved_arm']:.0%} | {row['planning_time_s_median']:.3f} |")
+    return text + [""]
+
+
+def training_table(root, summary):
+    text = ["### Training runs\n", "| row | steps | seconds |", "|---|---|---|"]
+    summary["train"] = {}
+    for row in train_rows():
+        path = os.path.join(root, "train", row, "done.json")
+        if os.path.exists(path):
+            done = json.load(open(path))
+            summary["train"][row] = done
+            text.append(f"| {row} | {done['steps']} | {done['train_seconds']:.0f} |")
+        else:
+            text.append(f"| {row} | not run | |")
+    return "\n".join(text) + "\n"
+
+
+STAGES = ["data", "train-reach", "sweep", "scales", "problems", "examples", "train-cross", "stitching", "recount",
+          "results"]
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="every stage at toy size")
+    parser.add_argument("--root", help="output folder (runs/franka_bench, quick: runs/franka_bench_quick)")
+    parser.add_argument("--only", help=f"comma-separated stages to run ({', '.join(STAGES)})")
+    parser.add_argument("--flowplan", default=os.environ.get("FLOWPLAN", "build/apps/flowplan/flowplan"))
+    args = parser.parse_args()
+    args.root = args.root or ("runs/franka_bench_quick" if args.quick else "runs/franka_bench")
+    stages = STAGES if not args.only else args.only.split(",")
+    for stage in stages:
+        if stage not in STAGES:
+            sys.exit(f"--only: unknown stage {stage!r} (stages: {', '.join(STAGES)})")
+    repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    args.root = os.path.relpath(os.path.abspath(args.root), repo)
+    args.flowplan = os.path.relpath(os.path.abspath(args.flowplan), repo)
+    os.chdir(repo)
+    if not os.access(args.flowplan, os.X_OK):
+        sys.exit(f"--flowplan: {args.flowplan} is not an executable (build first: make build)")
+    os.makedirs(args.root, exist_ok=True)
+    bench = Bench(args)
+    for stage in stages:
+        started = time.time()
+        getattr(bench, stage.replace("-", "_"))()
+        print(f"== {stage}: {time.time() - started:.0f} s", flush=True)
+
+
+if __name__ == "__main__":
+    main()

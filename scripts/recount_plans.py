@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""Recounts the TCP-only and whole-arm successes of saved Franka plans.
+
+usage: recount_plans.py [--out RESULT.json] PLAN_OR_FOLDER ...
+
+For every `flowplan plan` output pair PREFIX.h5 / PREFIX.json (a folder is
+searched for them), recomputes from the plans in the HDF5 file, with forward
+kinematics written here (modified Denavit-Hartenberg parameters of the Panda;
+no flowplan code), each plan's TCP path, the clearance of the TCP and of every
+collision sphere of the arm to every obstacle, the goal distance and the joint
+speeds, and from them the two success counts of `flowplan plan`: the TCP never
+inside an obstacle, and no collision sphere of the arm inside one; both also
+need the last TCP within the goal tolerance and joint speeds within
+max_speed_ratio times the limits. The collision spheres (link, centre in the
+link frame, radius) are geometry, read from the file's `robot` attribute.
+
+Prints one line per file (its counts and flowplan's), writes them to
+RESULT.json if asked, and exits 1 if any count differs.
+"""
+import argparse
+import glob
+import json
+import os
+import sys
+
+import h5py
+import numpy as np
+import yaml
+
+# Panda, modified DH (Craig): (a_{i-1}, d_i, alpha_{i-1}) of joints 1..7.
+DH = [(0, 0.333, 0), (0, 0, -np.pi / 2), (0, 0.316, np.pi / 2), (0.0825, 0, np.pi / 2),
+      (-0.0825, 0.384, -np.pi / 2), (0, 0, np.pi / 2), (0.088, 0, np.pi / 2)]
+VELOCITY_LIMITS = np.array([2.175] * 4 + [2.61] * 3)  # rad/s, Franka's datasheet
+
+
+def transform(rotation_z=0.0, translation=(0.0, 0.0, 0.0)):
+    c, s = np.cos(rotation_z), np.sin(rotation_z)
+    frame = np.eye(4)
+    frame[:2, :2] = [[c, -s], [s, c]]
+    frame[:3, 3] = translation
+    return frame
+
+
+def link_frames(q):
+    """q (N, 7) -> {link name: (N, 4, 4) pose in the base frame}."""
+    n = len(q)
+    frame = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
+    frames = {"link0": frame.copy()}
+    for joint, (a, d, alpha) in enumerate(DH):
+        ca, sa = np.cos(alpha), np.sin(alpha)
+        ct, st = np.cos(q[:, joint]), np.sin(q[:, joint])
+        step = np.zeros((n, 4, 4))
+        step[:, 0] = np.stack([ct, -st, np.zeros(n), np.full(n, a)], -1)
+        step[:, 1] = np.stack([st * ca, ct * ca, np.full(n, -sa), np.full(n, -d * sa)], -1)
+        step[:, 2] = np.stack([st * sa, ct * sa, np.full(n, ca), np.full(n, d * ca)], -1)
+        step[:, 3, 3] = 1
+        frame = frame @ step
+        frames[f"link{joint + 1}"] = frame
+    # Flange 0.107 m along link 7's z; the hand turned -45 degrees about it;
+    # the fingers' frames 0.0584 m further (the right one turned half a turn).
+    frames["hand"] = frame @ transform(-np.pi / 4, (0, 0, 0.107))
+    frames["left_finger"] = frames["hand"] @ transform(0.0, (0, 0, 0.0584))
+    frames["right_finger"] = frames["hand"] @ transform(np.pi, (0, 0, 0.0584))
+    frames["tcp"] = frame @ transform(0.0, (0, 0, 0.214))
+    return frames
+
+
+def recount(prefix):
+    with h5py.File(prefix + ".h5", "r") as f:
+        if f.attrs["env"] != "franka":
+            raise SystemExit(f"{prefix}.h5: env {f.attrs['env']!r}, only franka plans are recounted")
+        plans = f["plans"][...].astype(np.float64)      # (N, T, D)
+        obstacles = f["obstacles"][...].astype(np.float64).reshape(-1, 4)  # (K, 4)
+        goal_tcp = f["goal_tcp"][...].astype(np.float64)
+        dt = float(f.attrs["dt"])
+        robot = yaml.safe_load(f.attrs["robot"])
+    report = json.load(open(prefix + ".json"))
+    n, t = plans.shape[:2]
+    q = plans[..., :7].reshape(-1, 7)
+    frames = link_frames(q)
+    tcp = frames["tcp"][:, :3, 3].reshape(n, t, 3)
+    names = [link["name"] for link in robot["links"]]
+    centres = np.stack([(frames[names[s["link"]]] @ np.append(s["centre"], 1.0))[:, :3] for s in robot["spheres"]],
+                       1).reshape(n, t, -1, 3)                    # (N, T, S, 3)
+    radii = np.array([s["radius"] for s in robot["spheres"]])    # (S,)
+    if len(obstacles):
+        tcp_gap = (np.linalg.norm(tcp[:, :, None] - obstacles[:, :3], axis=-1) - obstacles[:, 3]).min((1, 2))
+        arm_gap = (np.linalg.norm(centres[:, :, :, None] - obstacles[:, :3], axis=-1) - radii[:, None] -
+                   obstacles[:, 3]).min((1, 2, 3))
+    else:
+        tcp_gap = arm_gap = np.full(n, np.inf)
+    goal = np.linalg.norm(tcp[:, -1] - goal_tcp, axis=-1)
+    ratio = (np.abs(np.diff(plans[..., :7], axis=1)) / dt / VELOCITY_LIMITS).max((1, 2))
+    reached = (goal <= report["goal_tolerance"]) & (ratio <= report["max_speed_ratio"])
+    mine = {"tcp": int(np.sum(reached & (tcp_gap >= 0))), "arm": int(np.sum(reached & (arm_gap >= 0)))}
+    theirs = {"tcp": int(sum(s["success_tcp"] for s in report["samples"])),
+              "arm": int(sum(s["success_arm"] for s in report["samples"]))}
+    return {"file": prefix, "plans": n, "recounted": mine, "flowplan": theirs}
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("paths", nargs="+")
+    parser.add_argument("--out")
+    args = parser.parse_args()
+    prefixes = []
+    for path in args.paths:
+        if os.path.isdir(path):
+            found = sorted(glob.glob(os.path.join(path, "**", "*.h5"), recursive=True))
+            prefixes += [p[:-3] for p in found if os.path.exists(p[:-3] + ".json")]
+        else:
+            prefixes.append(path[:-3] if path.endswith(".h5") else path)
+    if not prefixes:
+        raise SystemExit(f"no plan files (PREFIX.h5 with PREFIX.json) in {' '.join(args.paths)}")
+    results = [recount(prefix) for prefix in prefixes]
+    differ = [r for r in results if r["recounted"] != r["flowplan"]]
+    for r in results:
+        mark = "" if r["recounted"] == r["flowplan"] else "   <-- differs"
+        print(f"{r['file']}: TCP {r['recounted']['tcp']}/{r['plans']} (flowplan {r['flowplan']['tcp']}), "
+              f"arm {r['recounted']['arm']}/{r['plans']} (flowplan {r['flowplan']['arm']}){mark}")
+    summary = {"files": len(results), "differ": len(differ),
+               "plans": sum(r["plans"] for r in results), "results": results}
+    if args.out:
+        with open(args.out + ".tmp", "w") as f:
+            json.dump(summary, f, indent=1)
+        os.replace(args.out + ".tmp", args.out)
+    print(f"{len(results)} files, {summary['plans']} plans: {len(differ)} with a different count")
+    sys.exit(1 if differ else 0)
+
+
+if __name__ == "__main__":
+    main()

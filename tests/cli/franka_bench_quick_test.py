@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""scripts/franka_bench.py --quick end to end, then what a stopped or repeated run does.
+
+usage: franka_bench_quick_test.py FLOWPLAN_BINARY SCRATCH_DIR
+
+1. The quick run fills every table (both stitching tables, the radius sweep of
+   all five planners, the guidance-scale sweep, the random scenes) and the
+   independent recount agrees with flowplan's counts.
+2. Run again, it redoes nothing but the recount and the tables.
+3. A stitching row evaluated again from its checkpoint gives the same figures.
+4. A training row stopped after its first checkpoint resumes from it (not from
+   scratch) and ends at the full step count.
+5. The recount is not blind: a report with one success flag flipped is caught.
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+flowplan, scratch = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
+repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+root = os.path.join(scratch, "bench")
+shutil.rmtree(root, ignore_errors=True)
+
+
+def bench(*extra):
+    done = subprocess.run([sys.executable, os.path.join(repo, "scripts", "franka_bench.py"), "--quick", "--root", root,
+                           "--flowplan", flowplan, *extra], capture_output=True, text=True)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    return done.stdout
+
+
+def log_commands():
+    with open(os.path.join(root, "bench.log")) as f:
+        return [line for line in f if line.startswith("$ ")]
+
+
+# 1. Every table filled; the recount agrees.
+bench()
+summary = json.load(open(os.path.join(root, "results", "summary.json")))
+for table in ("table1", "table2"):
+    assert len(summary[table]) == 5 and all(v is not None for v in summary[table].values()), summary[table]
+for label, value in summary["table2"].items():
+    assert len(value["seeds"]) == 3, (label, value)
+planners = ["mpd", "vae", "fp", "fp_split", "rrt_connect"]
+cells = {(c["planner"], c["radius"]) for c in summary["sweep"]}
+assert cells == {(p, r) for p in planners for r in (0.0, 0.1, 0.2, 0.3)}, sorted(cells)
+assert len(summary["scales"]) == 2, summary["scales"]
+assert sorted(summary["problems"]["planners"]) == sorted(planners), summary["problems"]
+assert summary["recount"]["differ"] == 0 and summary["recount"]["plans"] > 0, summary["recount"]
+# RRT-Connect checks the whole arm itself: at 0.1 m every plan it returns is clear.
+rrt = next(c for c in summary["sweep"] if c["planner"] == "rrt_connect" and c["radius"] == 0.1)
+assert rrt["success_rate_arm"] == 1.0, rrt
+for name in ["success_vs_radius.png", "summary.md"] + [f"example_{p}_r0.1.png" for p in planners]:
+    assert os.path.getsize(os.path.join(root, "results", name)) > 0, name
+
+# 2. A second run redoes nothing but the recount.
+before = len(log_commands())
+bench()
+again = log_commands()[before:]
+assert len(again) == 1 and "recount_plans.py" in again[0], again
+
+# 3. Re-evaluated from its checkpoint, a stitching row gives the same figures.
+row = os.path.join(root, "stitching", "cross_fp_s1.json")
+first = json.load(open(row))["test"]
+os.remove(row)
+bench("--only", "stitching")
+second = json.load(open(row))["test"]
+assert (first["mean"], first["stddev"]) == (second["mean"], second["stddev"]), (first, second)
+
+# 4. A row stopped after its first checkpoint resumes from it.
+run = os.path.join(root, "train", "reach_vae")
+os.remove(os.path.join(run, "done.json"))
+checkpoints = sorted(os.listdir(os.path.join(run, "checkpoints")))
+assert len(checkpoints) >= 2, checkpoints
+for name in checkpoints[1:]:
+    os.remove(os.path.join(run, "checkpoints", name))
+before = len(log_commands())
+bench("--only", "train-reach")
+again = log_commands()[before:]
+assert len(again) == 1 and "train --resume" in again[0] and again[0].rstrip().endswith("reach_vae"), again
+assert json.load(open(os.path.join(run, "done.json")))["steps"] == 20
+
+# 5. A report whose counts do not match its plans is caught.
+cell = os.path.join(root, "sweep", "fp_r0")
+tampered = os.path.join(scratch, "tampered")
+shutil.copy(cell + ".h5", tampered + ".h5")
+report = json.load(open(cell + ".json"))
+report["samples"][0]["success_tcp"] = not report["samples"][0]["success_tcp"]
+json.dump(report, open(tampered + ".json", "w"))
+done = subprocess.run([sys.executable, os.path.join(repo, "scripts", "recount_plans.py"), tampered],
+                      capture_output=True, text=True)
+assert done.returncode == 1 and "differs" in done.stdout, done.stdout + done.stderr
+print("franka_bench --quick: every table, resume, re-evaluation and recount ok")
