@@ -77,8 +77,8 @@ def train_rows():
     for _, prefix, overrides, seeds in TABLE1:
         for seed in seeds:
             rows[f"{prefix}_s{seed}" if len(seeds) > 1 else prefix] = (CROSS_SETS[0][1], "franka_cross", overrides, seed)
-    for name, config, _ in CROSS_SETS[1:]:
-        for seed in SEEDS:
+    for seed in SEEDS:  # seed by seed, so that a partial run has every scheme
+        for name, config, _ in CROSS_SETS[1:]:
             rows[f"{name[len('franka_'):]}_fp_s{seed}"] = (config, name, [], seed)
     rows["reach_fp"] = (REACH_CONFIG, "franka_reach", [], 0)
     rows["reach_mpd"] = (REACH_CONFIG, "franka_reach", ["objective.name=ddpm"], 0)
