@@ -144,16 +144,19 @@ class Bench:
                 continue
             print(f"train: {row}", flush=True)
             started = time.time()
-            if glob.glob(os.path.join(run, "checkpoints", "step_*.pt")):
-                self.call([self.flowplan, "train", "--resume", run])
-            else:
-                shutil.rmtree(run, ignore_errors=True)
-                self.call([self.flowplan, "train", "--config", config, f"seed={seed}", f"run_dir={run}",
-                           f"data.path={self.path('data', data + '.h5')}", *overrides, *self.size["train"]])
-            seconds = time.time() - started
-            partial = os.path.join(run, "train_seconds.txt")  # seconds of earlier, stopped invocations
-            if os.path.exists(partial):
-                seconds += float(open(partial).read())
+            partial = os.path.join(run, "train_seconds.txt")  # seconds of this row's stopped invocations
+            try:
+                if glob.glob(os.path.join(run, "checkpoints", "step_*.pt")):
+                    self.call([self.flowplan, "train", "--resume", run])
+                else:
+                    shutil.rmtree(run, ignore_errors=True)
+                    self.call([self.flowplan, "train", "--config", config, f"seed={seed}", f"run_dir={run}",
+                               f"data.path={self.path('data', data + '.h5')}", *overrides, *self.size["train"]])
+            finally:  # also when stopped: the next invocation adds its own time
+                earlier = float(open(partial).read()) if os.path.exists(partial) else 0.0
+                if os.path.isdir(run):
+                    write_text(partial, f"{earlier + time.time() - started:.1f}\n")
+            seconds = float(open(partial).read())
             steps = max(json.loads(line).get("step", 0) for line in open(os.path.join(run, "metrics.jsonl")))
             write_json(done, {"row": row, "config": config, "data": data, "overrides": overrides, "seed": seed,
                               "steps": steps, "train_seconds": round(seconds, 1)})
