@@ -243,16 +243,18 @@ void CheckOutsideObstacles(const std::string& name, const torch::Tensor& state, 
   const torch::Tensor tcp_clearance = (tcp - o.slice(1, 0, W)).norm(2, -1) - o.select(1, W);  // (K,)
   const torch::Tensor arm_clearance =
       guidance::SphereClearance(*subject.robot, state.view({1, 1, -1}).to(torch::kFloat64), o).view({-1});  // (K,)
+  // A point robot is its one sphere: it is refused as soon as that touches.
+  const bool point = subject.robot->description().kind == kinematics::RobotKind::kPoint;
   for (int64_t k = 0; k < o.size(0); ++k) {
-    const double c = tcp_clearance[k].item<double>();
-    if (c < 0) {
-      throw Error("plan: the " + name + " is inside obstacle " + std::to_string(k) + " (its TCP lies " +
-                  JsonNumber(-c) + " deep in it); move the " + name + " or the obstacle");
+    const double c = tcp_clearance[k].item<double>(), a = arm_clearance[k].item<double>();
+    if (c < 0 || (point && a < 0)) {
+      throw Error("plan: the " + name + " is inside obstacle " + std::to_string(k) + " (" +
+                  (point ? "the robot reaches " + JsonNumber(-a) : "its TCP lies " + JsonNumber(-c)) +
+                  " deep in it); move the " + name + " or the obstacle");
     }
-    const double a = arm_clearance[k].item<double>();
     if (a < 0) {
       spdlog::warn("plan: the {}'s collision spheres reach {:.4g} into obstacle {} (its TCP is clear): no plan can "
-                   "succeed counted by the whole arm or executed", name, -a, k);
+                   "succeed counted by the whole arm", name, -a, k);
     }
   }
 }
@@ -418,7 +420,9 @@ void RunPlan(const PlanCommand& command) {
                     ", \"planning_time_s\": " + JsonNumber(result.seconds[i]);
     if (!executed.empty()) {
       const sim::ExecutionResult& e = executed[i];
-      const bool success = e.contacts.empty() && e.goal_distance <= tolerance;
+      // The plan itself must be feasible too: an infeasible plan is not what the arm
+      // tracked, however its execution ended.
+      const bool success = e.contacts.empty() && e.goal_distance <= tolerance && feasible;
       exec_ok += success;
       std::string contacts;
       for (const auto& c : e.contacts) {
@@ -466,7 +470,7 @@ void RunPlan(const PlanCommand& command) {
   spdlog::info("{} plans in {:.2f} s: success {}/{} (TCP clear, goal within {} m), {}/{} (whole robot clear){}; "
                "wrote {}.h5, {}.json, {}",
                N, wall, tcp_ok, N, tolerance, arm_ok, N,
-               executed.empty() ? std::string() : fmt::format(", executed {}/{} (no contact, goal reached)", exec_ok, N),
+               executed.empty() ? std::string() : fmt::format(", executed {}/{} (feasible, no contact, goal reached)", exec_ok, N),
                prefix, prefix, figure);
 }
 
