@@ -26,6 +26,7 @@ import argparse
 import glob
 import json
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -106,14 +107,15 @@ class Bench:
     def path(self, *parts):
         return os.path.join(self.root, *parts)
 
-    def call(self, command, accept_refusal=False):
+    def call(self, command, accept_refusal=False, accept_failure=False):
         """Runs a command, its output appended to ROOT/bench.log; returns (ok, output)."""
         started = time.time()
         done = subprocess.run(command, capture_output=True, text=True)
         with open(self.path("bench.log"), "a") as log:
             log.write(f"$ {' '.join(command)}\n{done.stdout}{done.stderr}[exit {done.returncode}, "
                       f"{time.time() - started:.1f} s]\n")
-        if done.returncode != 0 and not (accept_refusal and "inside obstacle" in done.stdout + done.stderr):
+        refused = accept_refusal and "inside obstacle" in done.stdout + done.stderr
+        if done.returncode != 0 and not refused and not accept_failure:
             sys.exit(f"failed: {' '.join(command)}\n{done.stderr[-3000:]}{done.stdout[-2000:]}")
         return done.returncode == 0, done.stdout + done.stderr
 
@@ -161,15 +163,25 @@ class Bench:
             write_json(done, {"row": row, "config": config, "data": data, "overrides": overrides, "seed": seed,
                               "steps": steps, "train_seconds": round(seconds, 1)})
 
+    def trained(self, row):
+        """The run folder of a row whose training has finished (its done.json)."""
+        run = self.path("train", row)
+        if not os.path.exists(os.path.join(run, "done.json")):
+            sys.exit(f"{run}: not trained to the end (no done.json); run the train-reach / train-cross stage first")
+        return run
+
     # -- stitching ------------------------------------------------------------
     def stitching(self):
         for row, (_, data, _, _) in train_rows().items():
             out = self.path("stitching", f"{row}.json")
             if not data.startswith("franka_cross") or os.path.exists(out):
                 continue
+            if not os.path.exists(self.path("train", row, "done.json")):
+                print(f"stitching: {row} not trained yet, skipped", flush=True)
+                continue
             os.makedirs(os.path.dirname(out), exist_ok=True)
             print(f"stitching: {row}", flush=True)
-            self.call([self.flowplan, "eval", "stitching", "--ckpt", self.path("train", row), "--out", out + ".tmp",
+            self.call([self.flowplan, "eval", "stitching", "--ckpt", self.trained(row), "--out", out + ".tmp",
                        f"eval.num_plans={self.size['num_plans']}"])
             os.replace(out + ".tmp", out)
 
@@ -178,11 +190,13 @@ class Bench:
         _, _, row, overrides = next(p for p in PLANNERS if p[0] == planner)
         if row is None:
             return ["--rrt-connect", "--config", REACH_CONFIG, f"data.path={self.path('data', 'franka_reach.h5')}"]
-        return ["--ckpt", self.path("train", row), *overrides]
+        return ["--ckpt", self.trained(row), *overrides]
 
     def plan_cell(self, prefix, planner, radius, plans, extra=(), plot=False):
-        """One `flowplan plan` call on the paper's scene; PREFIX.json (or PREFIX.refused) marks it done."""
-        if os.path.exists(prefix + ".json") or os.path.exists(prefix + ".refused"):
+        """One `flowplan plan` call on the paper's scene; PREFIX.json (or PREFIX.refused) marks it done,
+        and with a figure PREFIX.png too (drawn after the report)."""
+        if (os.path.exists(prefix + ".json") and (not plot or os.path.exists(prefix + ".png"))) or \
+                os.path.exists(prefix + ".refused"):
             return
         os.makedirs(os.path.dirname(prefix), exist_ok=True)
         scene = ["--scene", SCENE, "--radius", str(radius)] if radius > 0 else ["--scene", self.empty_scene()]
@@ -221,7 +235,7 @@ class Bench:
             return
         specs = []
         for planner, *_ in PLANNERS:
-            specs += ["--planner", f"{planner}={' '.join(self.planner_source(planner))}"]
+            specs += ["--planner", f"{planner}={shlex.join(self.planner_source(planner))}"]
         print("problems: every planner on every problem", flush=True)
         self.call([self.python, "scripts/franka_problems.py", problems, "--out", self.path("problems"),
                    "--samples", str(self.size["problem_plans"]), "--flowplan", self.flowplan, *specs])
@@ -235,13 +249,16 @@ class Bench:
     def recount(self):
         plans = [self.path(d) for d in ("sweep", "scales") if os.path.isdir(self.path(d))]
         plans += [self.path("problems", p) for p, *_ in PLANNERS if os.path.isdir(self.path("problems", p))]
-        self.call([self.python, "scripts/recount_plans.py", "--out", self.path("results", "recount.json"), *plans])
+        ok, _ = self.call([self.python, "scripts/recount_plans.py", "--out", self.path("results", "recount.json"), *plans],
+                          accept_failure=True)
+        if not ok:
+            print("recount: some files differ (ROOT/results/recount.json, ROOT/bench.log)", flush=True)
 
     def results(self):
         os.makedirs(self.path("results"), exist_ok=True)
         summary = {"root": self.root, "quick": self.quick, "sizes": self.size}
         text = [f"Made by `scripts/franka_bench.py{' --quick' if self.quick else ''} --root {self.root}`.\n"]
-        text += stitching_tables(self.root, summary)
+        text += stitching_tables(self.root, self.size, summary)
         text += obstacle_tables(self.root, self.size, summary)
         text += problem_table(self.root, summary)
         recount = self.path("results", "recount.json")
@@ -267,10 +284,11 @@ def write_json(path, value):
     write_text(path, json.dumps(value, indent=1) + "\n")
 
 
-def mean_std(values):
+def mean_and_sample_std(values):
+    """Mean and the sample standard deviation (n - 1; None for one value)."""
     n = len(values)
     mean = sum(values) / n
-    return mean, (sum((v - mean) ** 2 for v in values) / n) ** 0.5
+    return mean, (sum((v - mean) ** 2 for v in values) / (n - 1)) ** 0.5 if n > 1 else None
 
 
 def stitching_of(root, row):
@@ -288,18 +306,20 @@ def stitching_cell(root, rows):
         r = found[0][1]
         return f"{r['mean']:.2f} ± {r['stddev']:.2f}", {"mean": r["mean"], "stddev": r["stddev"]}
     means = [r["mean"] for _, r in found]
-    mean, spread = mean_std(means)
+    mean, spread = mean_and_sample_std(means)
     seeds = ", ".join(f"{r['mean']:.2f} ± {r['stddev']:.2f}" for _, r in found)
     missing = "" if len(found) == len(rows) else f"; {len(rows) - len(found)} of {len(rows)} seeds not run"
-    return (f"{mean:.2f} (seeds: {seeds}{missing})",
+    across = "" if spread is None else f" ± {spread:.2f}"
+    return (f"{mean:.2f}{across} (seeds: {seeds}{missing})",
             {"mean_of_seeds": mean, "std_of_seed_means": spread,
              "seeds": {row: {"mean": r["mean"], "stddev": r["stddev"]} for row, r in found}})
 
 
-def stitching_tables(root, summary):
+def stitching_tables(root, size, summary):
     text = ["### Stitching, table 1 (franka_cross, per-joint torque noise)\n",
-            "Stitching error on the two test pairs, 64 plans (mean ± std over the plans; FP: the mean over its seeds, "
-            "then every seed's mean ± std).\n", "| model | ours | paper |", "|---|---|---|"]
+            f"Stitching error on the two test pairs, {size['num_plans']} plans (mean ± std over the plans; a row of "
+            "several seeds: the mean of the seeds' means ± their sample standard deviation, then every seed's "
+            "mean ± std over its plans).\n", "| model | ours | paper |", "|---|---|---|"]
     summary["table1"] = {}
     for label, prefix, _, seeds in TABLE1:
         rows = [f"{prefix}_s{s}" for s in seeds] if len(seeds) > 1 else [prefix]
@@ -324,10 +344,10 @@ def read_cells(folder, pattern_keys):
             cells[key] = {"refused": True}
         elif os.path.exists(prefix + ".json"):
             report = json.load(open(prefix + ".json"))
-            times = sorted(s["planning_time_s"] for s in report["samples"])
             cells[key] = {k: report.get(k) for k, _ in WAYS} | {
                 "refused": False, "num_samples": report["num_samples"],
-                "planning_time_s_median": times[len(times) // 2], "wall_time_s": report["wall_time_s"]}
+                "wall_time_s": report["wall_time_s"], "planning_time_s_per_plan": report["wall_time_s"] /
+                report["num_samples"]}
     return cells
 
 
@@ -346,18 +366,14 @@ def obstacle_tables(root, size, summary):
     summary["largest_radius_90"] = {}
     text = ["### Obstacle avoidance (franka_reach models, the paper's scene)\n",
             f"Success over {size['sweep_plans']} plans per radius, counted three ways (each also needs the last TCP "
-            "within 3 cm of the goal and feasible joint speeds); a refused radius is one whose start or goal posture "
-            "already touches the sphere.\n",
+            "within 3 cm of the goal and joint speeds within 1.5 times the limits); radius 0 is the empty scene; "
+            "\"refused\": the start or goal TCP lies inside the sphere (counted as no success); \"largest radius\": the "
+            "largest r such that every radius from 0 to r reaches 90 %.\n",
             "| planner, counted by | " + " | ".join(f"{r:g}" for r in radii) + " | largest radius ≥ 90 % | paper |",
             "|---|" + "---|" * (len(radii) + 2)]
     for planner, label, *_ in PLANNERS:
         for key, way in WAYS:
-            best = None
-            for r in radii:
-                c = cells.get((planner, r))
-                if c and not c["refused"] and c[key] is not None and c[key] >= 0.9:
-                    best = r if best is None or r > best else best
-            # "Largest radius" is the largest r with every radius up to r at >= 90 %.
+            # "Largest radius": the largest r with every radius from 0 up to r at >= 90 %.
             contiguous = None
             for r in radii:
                 c = cells.get((planner, r))
@@ -368,8 +384,8 @@ def obstacle_tables(root, size, summary):
             paper = PAPER_RADIUS.get(planner) if key == "success_rate_tcp" else None
             text.append(f"| {label}, {way} | " + " | ".join(rate_text(cells.get((planner, r)), key) for r in radii) +
                         f" | {'–' if contiguous is None else f'{contiguous:g}'} | {'' if paper is None else paper} |")
-    text.append("\nPlanning time per plan (s; median over the radii of each cell's median; a learned planner's is "
-                "the wall time of each `flowplan plan` call, without execution, divided by its plans): " +
+    text.append("\nPlanning time per plan (s): the wall time of a `flowplan plan` call's planning (both cores, "
+                "execution excluded) divided by its plans, the median over the radii: " +
                 ", ".join(f"{label} {median_time(cells, planner, radii):.3f}" for planner, label, *_ in PLANNERS
                           if median_time(cells, planner, radii) is not None) + "\n")
     plot_sweep(cells, radii, os.path.join(root, "results", "success_vs_radius.png"))
@@ -391,7 +407,7 @@ def median_time(cells, planner, radii):
     for r in radii:
         c = cells.get((planner, r))
         if c and not c["refused"]:
-            times.append(c["wall_time_s"] / c["num_samples"])
+            times.append(c["planning_time_s_per_plan"])
     return sorted(times)[len(times) // 2] if times else None
 
 
@@ -425,13 +441,13 @@ def problem_table(root, summary):
     problems = json.load(open(path))
     summary["problems"] = problems
     text = [f"### Random blocked scenes ({problems['problems']} problems of `flowplan problems`, 1–8 spheres)\n",
-            "| planner | TCP | whole arm | executed | problems solved (arm) | planning time per call (s, median) |",
+            "| planner | TCP | whole arm | executed | problems solved (arm) | planning time per plan (s) |",
             "|---|---|---|---|---|---|"]
     for planner, label, *_ in PLANNERS:
         row = problems["planners"].get(planner)
         if row:
             text.append(f"| {label} | " + " | ".join(f"{row[k]:.0%}" for k, _ in WAYS) +
-                        f" | {row['problems_solved_arm']:.0%} | {row['planning_time_s_median']:.3f} |")
+                        f" | {row['problems_solved_arm']:.0%} | {row['planning_time_s_per_plan']:.3f} |")
     return text + [""]
 
 

@@ -102,7 +102,7 @@ def summarize(out, planners, count):
              "|---|---|---|---|---|---|---|"]
     for planner in planners:
         rates = {key: [] for key, _ in WAYS}
-        solved, times, refused = 0, [], 0
+        solved, times, refused, wall, plans = 0, [], 0, 0.0, 0
         for i in range(count):
             prefix = os.path.join(out, planner, str(i))
             if os.path.exists(prefix + ".refused"):
@@ -115,15 +115,21 @@ def summarize(out, planners, count):
                 rates[key].append(report[key])
             solved += report["success_rate_arm"] > 0
             times += [s["planning_time_s"] for s in report["samples"]]
+            wall += report["wall_time_s"]
+            plans += report["num_samples"]
         row = {key: sum(values) / len(values) for key, values in rates.items()}
         row |= {"problems_solved_arm": solved / count, "refused": refused,
-                "planning_time_s_median": sorted(times)[len(times) // 2] if times else None}
+                "planning_time_s_median": sorted(times)[len(times) // 2] if times else None,
+                # the planning wall time of every call (execution excluded) over the plans it made
+                "planning_time_s_per_plan": wall / plans if plans else None}
         summary["planners"][planner] = row
         lines.append(f"| {LABELS.get(planner, planner)} | {count} | " + " | ".join(f"{row[key]:.0%}" for key, _ in WAYS) +
                      f" | {row['problems_solved_arm']:.0%} | {row['planning_time_s_median']:.3f} |")
     text = "\n".join(lines) + "\n"
-    open(os.path.join(out, "summary.md"), "w").write(text)
-    json.dump(summary, open(os.path.join(out, "summary.json"), "w"), indent=1)
+    for name, content in (("summary.md", text), ("summary.json", json.dumps(summary, indent=1))):
+        with open(os.path.join(out, name + ".tmp"), "w") as f:
+            f.write(content)
+        os.replace(os.path.join(out, name + ".tmp"), os.path.join(out, name))
     print(text)
 
 

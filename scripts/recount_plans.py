@@ -14,8 +14,11 @@ need the last TCP within the goal tolerance and joint speeds within
 max_speed_ratio times the limits. The collision spheres (link, centre in the
 link frame, radius) are geometry, read from the file's `robot` attribute.
 
+It also compares, plan by plan, the values behind the counts (smallest TCP
+and arm clearance, goal distance, speed ratio) with those in PREFIX.json.
 Prints one line per file (its counts and flowplan's), writes them to
-RESULT.json if asked, and exits 1 if any count differs.
+RESULT.json if asked, and exits 1 if any count or value differs (by more than
+1e-4).
 """
 import argparse
 import glob
@@ -31,6 +34,7 @@ import yaml
 DH = [(0, 0.333, 0), (0, 0, -np.pi / 2), (0, 0.316, np.pi / 2), (0.0825, 0, np.pi / 2),
       (-0.0825, 0.384, -np.pi / 2), (0, 0, np.pi / 2), (0.088, 0, np.pi / 2)]
 VELOCITY_LIMITS = np.array([2.175] * 4 + [2.61] * 3)  # rad/s, Franka's datasheet
+TOLERANCE = 1e-4  # largest difference of a per-plan value (relative above 1: m, or a speed ratio)
 
 
 def transform(rotation_z=0.0, translation=(0.0, 0.0, 0.0)):
@@ -91,11 +95,25 @@ def recount(prefix):
         tcp_gap = arm_gap = np.full(n, np.inf)
     goal = np.linalg.norm(tcp[:, -1] - goal_tcp, axis=-1)
     ratio = (np.abs(np.diff(plans[..., :7], axis=1)) / dt / VELOCITY_LIMITS).max((1, 2))
+    # Per plan, the values behind the counts, against flowplan's (largest difference).
+    samples = report["samples"]
+    gaps = {"tcp_clearance": (tcp_gap, [min(s["tcp_clearance"], default=np.inf) for s in samples]),
+            "arm_clearance": (arm_gap, [min(s["arm_clearance"], default=np.inf) for s in samples]),
+            "goal_distance": (goal, [s["goal_distance"] for s in samples]),
+            "speed_ratio": (ratio, [s["speed_ratio"] for s in samples])}
+    worst = {}
+    for key, (values, theirs) in gaps.items():
+        theirs = np.array(theirs, dtype=np.float64)
+        finite = np.isfinite(values) & np.isfinite(theirs)
+        same_inf = np.all(np.isfinite(values) == np.isfinite(theirs))
+        worst[key] = float(np.max(np.abs(values[finite] - theirs[finite]) / np.maximum(1, np.abs(theirs[finite])),
+                                  initial=0.0)) if same_inf else float("inf")
     reached = (goal <= report["goal_tolerance"]) & (ratio <= report["max_speed_ratio"])
     mine = {"tcp": int(np.sum(reached & (tcp_gap >= 0))), "arm": int(np.sum(reached & (arm_gap >= 0)))}
     theirs = {"tcp": int(sum(s["success_tcp"] for s in report["samples"])),
               "arm": int(sum(s["success_arm"] for s in report["samples"]))}
-    return {"file": prefix, "plans": n, "recounted": mine, "flowplan": theirs}
+    return {"file": prefix, "plans": n, "recounted": mine, "flowplan": theirs, "largest_difference": worst,
+            "agrees": mine == theirs and all(v <= TOLERANCE for v in worst.values())}
 
 
 def main():
@@ -113,9 +131,9 @@ def main():
     if not prefixes:
         raise SystemExit(f"no plan files (PREFIX.h5 with PREFIX.json) in {' '.join(args.paths)}")
     results = [recount(prefix) for prefix in prefixes]
-    differ = [r for r in results if r["recounted"] != r["flowplan"]]
+    differ = [r for r in results if not r["agrees"]]
     for r in results:
-        mark = "" if r["recounted"] == r["flowplan"] else "   <-- differs"
+        mark = "" if r["agrees"] else f"   <-- differs {r['largest_difference']}"
         print(f"{r['file']}: TCP {r['recounted']['tcp']}/{r['plans']} (flowplan {r['flowplan']['tcp']}), "
               f"arm {r['recounted']['arm']}/{r['plans']} (flowplan {r['flowplan']['arm']}){mark}")
     summary = {"files": len(results), "differ": len(differ),

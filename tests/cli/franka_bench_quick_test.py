@@ -10,13 +10,16 @@ usage: franka_bench_quick_test.py FLOWPLAN_BINARY SCRATCH_DIR
 3. A stitching row evaluated again from its checkpoint gives the same figures.
 4. A training row stopped after its first checkpoint resumes from it (not from
    scratch) and ends at the full step count.
-5. The recount is not blind: a report with one success flag flipped is caught.
+5. The recount is not blind: a report with one success flag flipped, or plans
+   changed under their report, are caught.
 """
 import json
 import os
 import shutil
 import subprocess
 import sys
+
+import h5py
 
 flowplan, scratch = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
@@ -89,7 +92,24 @@ shutil.copy(cell + ".h5", tampered + ".h5")
 report = json.load(open(cell + ".json"))
 report["samples"][0]["success_tcp"] = not report["samples"][0]["success_tcp"]
 json.dump(report, open(tampered + ".json", "w"))
-done = subprocess.run([sys.executable, os.path.join(repo, "scripts", "recount_plans.py"), tampered],
-                      capture_output=True, text=True)
+
+
+def recount(prefix):
+    return subprocess.run([sys.executable, os.path.join(repo, "scripts", "recount_plans.py"), prefix],
+                          capture_output=True, text=True)
+
+
+done = recount(tampered)
+assert done.returncode == 1 and "differs" in done.stdout, done.stdout + done.stderr
+# ... and so are plans that are not those the report scored (the geometry is recomputed).
+cell = os.path.join(root, "sweep", "rrt_connect_r0.1")
+shutil.copy(cell + ".json", tampered + ".json")
+shutil.copy(cell + ".h5", tampered + ".h5")
+assert recount(tampered).returncode == 0, recount(tampered).stdout
+with h5py.File(tampered + ".h5", "r+") as f:
+    plans = f["plans"][...]
+    plans[0, :, 1] += 0.2  # shoulder joint of plan 0: its whole arm moves
+    f["plans"][...] = plans
+done = recount(tampered)
 assert done.returncode == 1 and "differs" in done.stdout, done.stdout + done.stderr
 print("franka_bench --quick: every table, resume, re-evaluation and recount ok")
