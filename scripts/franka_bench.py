@@ -23,11 +23,13 @@ training resumes from its newest checkpoint):
 The sizes of the full run and how they were chosen: docs/results.md.
 """
 import argparse
+import fcntl
 import glob
 import json
 import os
 import shlex
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -105,7 +107,7 @@ class Bench:
         self.flowplan = args.flowplan
         self.python = sys.executable
         self.quick = args.quick
-        self.log = None
+        self.child = None  # the running command
 
     def path(self, *parts):
         return os.path.join(self.root, *parts)
@@ -113,10 +115,19 @@ class Bench:
     def call(self, command, accept_refusal=False, accept_failure=False):
         """Runs a command, its output appended to ROOT/bench.log; returns (ok, output)."""
         started = time.time()
-        done = subprocess.run(command, capture_output=True, text=True)
-        with open(self.path("bench.log"), "a") as log:
-            log.write(f"$ {' '.join(command)}\n{done.stdout}{done.stderr}[exit {done.returncode}, "
-                      f"{time.time() - started:.1f} s]\n")
+        self.child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        stdout = stderr = ""
+        try:
+            stdout, stderr = self.child.communicate()
+        except KeyboardInterrupt:  # the command got the signal too (main forwards SIGTERM): let it stop cleanly
+            stdout, stderr = self.child.communicate()
+            raise
+        finally:
+            with open(self.path("bench.log"), "a") as log:
+                log.write(f"$ {shlex.join(command)}\n{stdout}{stderr}[exit {self.child.returncode}, "
+                          f"{time.time() - started:.1f} s]\n")
+        done = subprocess.CompletedProcess(command, self.child.returncode, stdout, stderr)
+        self.child = None
         refused = accept_refusal and "inside obstacle" in done.stdout + done.stderr
         if done.returncode != 0 and not refused and not accept_failure:
             sys.exit(f"failed: {' '.join(command)}\n{done.stderr[-3000:]}{done.stdout[-2000:]}")
@@ -127,11 +138,13 @@ class Bench:
         sets = [(name, config) for name, config, _ in CROSS_SETS] + [("franka_reach", REACH_CONFIG)]
         for name, config in sets:
             out = self.path("data", f"{name}.h5")
-            if os.path.exists(out):
+            lock = claim(out + ".lock")
+            if lock is None or os.path.exists(out):
                 continue
             episodes = [f"generate.episodes={self.size['episodes']}"] if self.size["episodes"] else []
             print(f"data: {name}", flush=True)
             self.call([self.flowplan, "generate", "--config", config, f"generate.out={out}", *episodes])
+            lock.close()
 
     # -- train ----------------------------------------------------------------
     def train_reach(self):
@@ -146,6 +159,13 @@ class Bench:
             run = self.path("train", row)
             done = os.path.join(run, "done.json")
             if os.path.exists(done):
+                continue
+            lock = claim(self.path("train", f"{row}.lock"))
+            if lock is None:
+                print(f"train: {row} is being trained by another driver, skipped", flush=True)
+                continue
+            if os.path.exists(done):  # finished by another driver since
+                lock.close()
                 continue
             print(f"train: {row}", flush=True)
             started = time.time()
@@ -165,6 +185,7 @@ class Bench:
             steps = max(json.loads(line).get("step", 0) for line in open(os.path.join(run, "metrics.jsonl")))
             write_json(done, {"row": row, "config": config, "data": data, "overrides": overrides, "seed": seed,
                               "steps": steps, "train_seconds": round(seconds, 1)})
+            lock.close()
 
     def trained(self, row):
         """The run folder of a row whose training has finished (its done.json)."""
@@ -182,11 +203,14 @@ class Bench:
             if not os.path.exists(self.path("train", row, "done.json")):
                 print(f"stitching: {row} not trained yet, skipped", flush=True)
                 continue
-            os.makedirs(os.path.dirname(out), exist_ok=True)
+            lock = claim(out + ".lock")
+            if lock is None or os.path.exists(out):
+                continue
             print(f"stitching: {row}", flush=True)
             self.call([self.flowplan, "eval", "stitching", "--ckpt", self.trained(row), "--out", out + ".tmp",
                        f"eval.num_plans={self.size['num_plans']}"])
             os.replace(out + ".tmp", out)
+            lock.close()
 
     # -- planning around spheres ---------------------------------------------
     def planner_source(self, planner):
@@ -201,7 +225,9 @@ class Bench:
         if (os.path.exists(prefix + ".json") and (not plot or os.path.exists(prefix + ".png"))) or \
                 os.path.exists(prefix + ".refused"):
             return
-        os.makedirs(os.path.dirname(prefix), exist_ok=True)
+        lock = claim(prefix + ".lock")
+        if lock is None or os.path.exists(prefix + ".json"):
+            return
         scene = ["--scene", SCENE, "--radius", str(radius)] if radius > 0 else ["--scene", self.empty_scene()]
         ok, output = self.call([self.flowplan, "plan", *self.planner_source(planner), *extra, "--start-tcp", START_TCP,
                                 "--goal-tcp", GOAL_TCP, *scene, "-n", str(plans), "--seed", "1", "--execute",
@@ -209,6 +235,8 @@ class Bench:
                                accept_refusal=True)
         if not ok:
             write_text(prefix + ".refused", output)
+        lock.close()
+        os.remove(prefix + ".lock")
 
     def empty_scene(self):
         path = self.path("scenes", "empty.yaml")
@@ -230,6 +258,10 @@ class Bench:
             print(f"scales: radius {radius:g} done", flush=True)
 
     def problems(self):
+        lock = claim(self.path("problems.lock"))
+        if lock is None:
+            print("problems: another driver is on them, skipped", flush=True)
+            return
         problems = self.path("problems.yaml")
         if not os.path.exists(problems):
             self.call([self.flowplan, "problems", "--out", problems, f"problems.count={self.size['problems']}"])
@@ -274,6 +306,20 @@ class Bench:
         write_text(self.path("results", "summary.md"), "\n".join(text))
         write_json(self.path("results", "summary.json"), summary)
         print("\n".join(text))
+
+
+def claim(path):
+    """An exclusive lock on PATH (an open file; close it to release), or None if another process holds it.
+    Several drivers may share a root (e.g. two on a four-core machine): each row is trained and evaluated
+    by whichever locks it first."""
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    lock = open(path, "w")
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        lock.close()
+        return None
+    return lock
 
 
 def write_text(path, text):
@@ -492,10 +538,20 @@ def main():
         sys.exit(f"--flowplan: {args.flowplan} is not an executable (build first: make build)")
     os.makedirs(args.root, exist_ok=True)
     bench = Bench(args)
-    for stage in stages:
-        started = time.time()
-        getattr(bench, stage.replace("-", "_"))()
-        print(f"== {stage}: {time.time() - started:.0f} s", flush=True)
+
+    def stop(signum, frame):  # SIGTERM: the running command gets it once, then stops like Ctrl-C
+        if bench.child is not None and bench.child.poll() is None:
+            bench.child.send_signal(signal.SIGTERM)
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
+    try:
+        for stage in stages:
+            started = time.time()
+            getattr(bench, stage.replace("-", "_"))()
+            print(f"== {stage}: {time.time() - started:.0f} s", flush=True)
+    except KeyboardInterrupt:
+        sys.exit(f"stopped during {stage}; run the same command again to continue")
 
 
 if __name__ == "__main__":
