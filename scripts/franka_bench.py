@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The Franka benchmarks (SPEC section 4 and beyond), one resumable run.
 
-usage: scripts/franka_bench.py [--quick] [--root DIR] [--only STAGE,...] [--flowplan BIN]
+usage: scripts/franka_bench.py [--quick] [--root DIR] [--only STAGE,...] [--rows ROW,...] [--flowplan BIN]
 
 Stages, in order; each writes its output atomically and is skipped when the
 output exists, so a stopped run continues where it stopped (a stopped
@@ -19,6 +19,8 @@ training resumes from its newest checkpoint):
   recount     ROOT/results/recount.json     scripts/recount_plans.py on every saved plan (always redone)
   results     ROOT/results/*.md|json|png    tables and plots (always redone from what exists)
 
+--rows limits the training and stitching stages to the named rows, trained in the
+order given (e.g. --rows cross_mpd,cross_fp_s0 --only train-cross,stitching).
 --quick runs every stage at toy size (ROOT defaults to runs/franka_bench_quick).
 The sizes of the full run and how they were chosen: docs/results.md.
 """
@@ -110,6 +112,11 @@ class Bench:
         self.python = sys.executable
         self.quick = args.quick
         self.child = None  # the running command
+        self.rows = args.rows  # None: every row
+
+    def selected(self, rows):
+        """The rows among `rows` that --rows selects, in --rows order (all of them without --rows)."""
+        return list(rows) if self.rows is None else [row for row in self.rows if row in rows]
 
     def path(self, *parts):
         return os.path.join(self.root, *parts)
@@ -156,7 +163,7 @@ class Bench:
         self.train([row for row in train_rows() if row.startswith("cross_")])
 
     def train(self, rows):
-        for row in rows:
+        for row in self.selected(rows):
             config, data, overrides, seed = train_rows()[row]
             run = self.path("train", row)
             done = os.path.join(run, "done.json")
@@ -198,7 +205,9 @@ class Bench:
 
     # -- stitching ------------------------------------------------------------
     def stitching(self):
-        for row, (_, data, _, _) in train_rows().items():
+        rows = train_rows()
+        for row in self.selected(rows):
+            data = rows[row][1]
             out = self.path("stitching", f"{row}.json")
             if not data.startswith("franka_cross") or os.path.exists(out):
                 continue
@@ -525,6 +534,7 @@ def main():
     parser.add_argument("--quick", action="store_true", help="every stage at toy size")
     parser.add_argument("--root", help="output folder (runs/franka_bench, quick: runs/franka_bench_quick)")
     parser.add_argument("--only", help=f"comma-separated stages to run ({', '.join(STAGES)})")
+    parser.add_argument("--rows", help="comma-separated training rows to train and evaluate, in this order")
     parser.add_argument("--flowplan", default=os.environ.get("FLOWPLAN", "build/apps/flowplan/flowplan"))
     args = parser.parse_args()
     args.root = args.root or ("runs/franka_bench_quick" if args.quick else "runs/franka_bench")
@@ -532,6 +542,11 @@ def main():
     for stage in stages:
         if stage not in STAGES:
             sys.exit(f"--only: unknown stage {stage!r} (stages: {', '.join(STAGES)})")
+    if args.rows is not None:
+        args.rows = args.rows.split(",")
+        unknown = [row for row in args.rows if row not in train_rows()]
+        if unknown:
+            sys.exit(f"--rows: unknown row {unknown[0]!r} (rows: {', '.join(train_rows())})")
     repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
     args.root = os.path.relpath(os.path.abspath(args.root), repo)
     args.flowplan = os.path.relpath(os.path.abspath(args.flowplan), repo)

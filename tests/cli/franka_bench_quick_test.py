@@ -7,7 +7,8 @@ usage: franka_bench_quick_test.py FLOWPLAN_BINARY SCRATCH_DIR
    all five planners, the guidance-scale sweep, the random scenes) and the
    independent recount agrees with flowplan's counts.
 2. Run again, it redoes nothing but the recount and the tables.
-3. A stitching row evaluated again from its checkpoint gives the same figures.
+3. Stitching rows evaluated again from their checkpoints give the same
+   figures; --rows limits a stage to the rows it names and refuses an unknown one.
 4. A training row stopped after its first checkpoint resumes from it (not from
    scratch) and ends at the full step count.
 5. The recount is not blind: a report with one success flag flipped, or plans
@@ -64,13 +65,23 @@ bench()
 again = log_commands()[before:]
 assert len(again) == 1 and "recount_plans.py" in again[0], again
 
-# 3. Re-evaluated from its checkpoint, a stitching row gives the same figures.
-row = os.path.join(root, "stitching", "cross_fp_s1.json")
-first = json.load(open(row))["test"]
-os.remove(row)
+# 3. Re-evaluated from their checkpoints, stitching rows give the same figures; --rows picks the rows.
+rows = {name: os.path.join(root, "stitching", f"{name}.json") for name in ("cross_fp_s1", "cross_fp_s2")}
+first = {name: json.load(open(path))["test"] for name, path in rows.items()}
+for path in rows.values():
+    os.remove(path)
+before = len(log_commands())
+bench("--only", "stitching", "--rows", "cross_fp_s1")
+again = log_commands()[before:]
+assert len(again) == 1 and "/cross_fp_s1 " in again[0], again
+assert not os.path.exists(rows["cross_fp_s2"])
 bench("--only", "stitching")
-second = json.load(open(row))["test"]
-assert (first["mean"], first["stddev"]) == (second["mean"], second["stddev"]), (first, second)
+for name, path in rows.items():
+    second = json.load(open(path))["test"]
+    assert (first[name]["mean"], first[name]["stddev"]) == (second["mean"], second["stddev"]), (name, first, second)
+unknown = subprocess.run([sys.executable, os.path.join(repo, "scripts", "franka_bench.py"), "--quick", "--root", root, "--rows", "cross_fp_s9"],
+                         capture_output=True, text=True)
+assert unknown.returncode != 0 and "--rows: unknown row 'cross_fp_s9'" in unknown.stderr, unknown.stderr
 
 # 4. A row stopped after its first checkpoint resumes from it.
 run = os.path.join(root, "train", "reach_vae")
