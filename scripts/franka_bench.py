@@ -512,16 +512,27 @@ def problem_table(root, summary):
 
 
 def training_table(root, summary):
-    text = ["### Training runs\n", "| row | steps | seconds |", "|---|---|---|"]
+    """Every row's training (steps, seconds) and, for a franka_cross row, its stitching error on the test pairs
+    beside the error on the training pairs (how well the model reproduces the data it saw)."""
+    text = ["### Training runs\n", "| row | steps | seconds | stitching error, test pairs | training pairs |",
+            "|---|---|---|---|---|"]
     summary["train"] = {}
+    summary["stitching"] = {}
     for row in train_rows():
         path = os.path.join(root, "train", row, "done.json")
-        if os.path.exists(path):
-            done = json.load(open(path))
-            summary["train"][row] = done
-            text.append(f"| {row} | {done['steps']} | {done['train_seconds']:.0f} |")
-        else:
-            text.append(f"| {row} | not run | |")
+        if not os.path.exists(path):
+            text.append(f"| {row} | not run | | | |")
+            continue
+        done = json.load(open(path))
+        summary["train"][row] = done
+        cells = ["", ""]
+        stitching = os.path.join(root, "stitching", f"{row}.json")
+        if os.path.exists(stitching):
+            report = json.load(open(stitching))
+            summary["stitching"][row] = {k: {"mean": report[k]["mean"], "stddev": report[k]["stddev"]}
+                                         for k in ("test", "train")}
+            cells = [f"{report[k]['mean']:.2f} ± {report[k]['stddev']:.2f}" for k in ("test", "train")]
+        text.append(f"| {row} | {done['steps']} | {done['train_seconds']:.0f} | {cells[0]} | {cells[1]} |")
     return "\n".join(text) + "\n"
 
 

@@ -56,6 +56,13 @@ assert summary["recount"]["differ"] == 0 and summary["recount"]["plans"] > 0, su
 # RRT-Connect checks the whole arm itself: at 0.1 m every plan it returns is clear.
 rrt = next(c for c in summary["sweep"] if c["planner"] == "rrt_connect" and c["radius"] == 0.1)
 assert rrt["success_rate_arm"] == 1.0, rrt
+# The training table carries each cross row's test- and training-pair stitching error from its own report.
+cross = [row for row in summary["train"] if row.startswith("cross_")]
+assert len(cross) == 19 and sorted(summary["stitching"]) == sorted(cross), summary["stitching"]
+for row in cross:
+    report = json.load(open(os.path.join(root, "stitching", f"{row}.json")))
+    for pairs in ("test", "train"):
+        assert summary["stitching"][row][pairs]["mean"] == report[pairs]["mean"], (row, pairs)
 for name in ["success_vs_radius.png", "summary.md"] + [f"example_{p}_r0.1.png" for p in planners]:
     assert os.path.getsize(os.path.join(root, "results", name)) > 0, name
 
