@@ -19,6 +19,14 @@ training resumes from its newest checkpoint):
   recount     ROOT/results/recount.json     scripts/recount_plans.py on every saved plan (always redone)
   results     ROOT/results/*.md|json|png    tables and plots (always redone from what exists)
 
+Beside every output the driver records its request: the command that makes it
+(the output folder and the binary written as placeholders), the YAML files that
+command names, and the requests of the outputs it reads (a model's data set, a
+plan's model). An output whose request differs from the driver's is stale: a
+data set, stitching report or plan cell is made again, and a trained row stops
+the driver with a message naming the folder to delete (training takes hours;
+it is never thrown away silently). A rebuilt flowplan binary is not detected.
+
 --rows limits the training and stitching stages to the named rows, trained in the
 order given (e.g. --rows cross_mpd,cross_fp_s0 --only train-cross,stitching).
 --quick runs every stage at toy size (ROOT defaults to runs/franka_bench_quick).
@@ -68,13 +76,13 @@ WAYS = [("success_rate_tcp", "TCP"), ("success_rate_arm", "whole arm"), ("succes
 SCENE = "configs/scenes/franka_sphere.yaml"
 START_TCP, GOAL_TCP = "0.5,-0.3,0.2", "0.5,0.3,0.2"
 
-FULL = {"episodes": None, "train": [], "num_plans": 64, "radii": [round(0.025 * i, 3) for i in range(14)],
+FULL = {"episodes": None, "train": [], "plans_per_pair": 64, "radii": [round(0.025 * i, 3) for i in range(14)],
         "sweep_plans": 64, "scales": [0.5, 1.0, 1.75, 2.5, 3.5, 5.0], "scale_radii": [0.1, 0.15, 0.2, 0.25],
         "problems": 100, "problem_plans": 8, "example_radii": [0.1, 0.2], "example_plans": 8}
 QUICK = {"episodes": 256,
          "train": ["train.steps=20", "train.batch_size=16", "train.eval_every=0", "train.checkpoint_every=10",
                    "train.log_every=10", "train.val_batch_size=16"],
-         "num_plans": 8, "radii": [0.0, 0.1, 0.2, 0.3], "sweep_plans": 4, "scales": [1.0, 2.5],
+         "plans_per_pair": 4, "radii": [0.0, 0.1, 0.2, 0.3], "sweep_plans": 4, "scales": [1.0, 2.5],
          "scale_radii": [0.15], "problems": 2, "problem_plans": 2, "example_radii": [0.1], "example_plans": 2}
 
 
@@ -142,17 +150,48 @@ class Bench:
             sys.exit(f"failed: {' '.join(command)}\n{done.stderr[-3000:]}{done.stdout[-2000:]}")
         return done.returncode == 0, done.stdout + done.stderr
 
+    # -- requests -------------------------------------------------------------
+    def request(self, command, *inputs):
+        """The text that identifies an output: COMMAND with ROOT and the binary as placeholders (so a moved folder
+        stays valid), the YAML files it names (parsed, so that comments do not count), then the requests of the
+        outputs it reads (INPUTS), so that a changed data set makes its models stale, and a changed model its plans."""
+        import yaml
+        text = [shlex.join(command).replace(self.flowplan, "{flowplan}").replace(self.root + os.sep, "{root}/")]
+        for argument in command:
+            value = argument.partition("=")[2] if "=" in argument else argument
+            if value.endswith(".yaml") and os.path.isfile(value) and not value.startswith(self.root + os.sep):
+                text.append(f"--- {value}: " + json.dumps(yaml.safe_load(open(value)), sort_keys=True))
+        return "\n".join(text + list(inputs)) + "\n"
+
+    def data_request(self, name):
+        """The request recorded beside data set NAME (by the data stage)."""
+        marker = self.path("data", f"{name}.h5.request")
+        if not os.path.exists(marker):
+            sys.exit(f"{self.path('data', name + '.h5')}: not made by this driver (no request beside it); "
+                     "run the data stage first")
+        return open(marker).read()
+
+
     # -- data -----------------------------------------------------------------
     def data(self):
         sets = [(name, config) for name, config, _ in CROSS_SETS] + [("franka_reach", REACH_CONFIG)]
         for name, config in sets:
             out = self.path("data", f"{name}.h5")
-            lock = claim(out + ".lock")
-            if lock is None or os.path.exists(out):
-                continue
             episodes = [f"generate.episodes={self.size['episodes']}"] if self.size["episodes"] else []
+            command = [self.flowplan, "generate", "--config", config, f"generate.out={out}", *episodes]
+            request = self.request(command)
+            if os.path.exists(out) and recorded(out + ".request", request):
+                continue
+            lock = claim(out + ".lock")
+            if lock is None:
+                continue
+            if os.path.exists(out) and recorded(out + ".request", request):  # made by another driver since
+                lock.close()
+                continue
+            discard([out])
             print(f"data: {name}", flush=True)
-            self.call([self.flowplan, "generate", "--config", config, f"generate.out={out}", *episodes])
+            write_text(out + ".request", request)
+            self.call(command)
             lock.close()
 
     # -- train ----------------------------------------------------------------
@@ -162,12 +201,28 @@ class Bench:
     def train_cross(self):
         self.train([row for row in train_rows() if row.startswith("cross_")])
 
+    def train_command(self, row):
+        config, data, overrides, seed = train_rows()[row]
+        command = [self.flowplan, "train", "--config", config, f"seed={seed}", f"run_dir={self.path('train', row)}",
+                   f"data.path={self.path('data', data + '.h5')}", *overrides, *self.size["train"]]
+        return command, self.request(command, self.data_request(data))
+
+    def check_training_request(self, row, before, request):
+        """Stops the driver if ROW was trained (or began training) by another request than REQUEST."""
+        if before != request:
+            sys.exit(f"{self.path('train', row)}: trained by another request than the driver's now "
+                     f"(a changed config, override or data set).\n--- recorded:\n{before}--- now:\n{request}"
+                     f"Delete {self.path('train', row)} to train it again, or move it aside to keep it.")
+
     def train(self, rows):
         for row in self.selected(rows):
             config, data, overrides, seed = train_rows()[row]
             run = self.path("train", row)
             done = os.path.join(run, "done.json")
+            marker = os.path.join(run, "request.txt")
+            command, request = self.train_command(row)
             if os.path.exists(done):
+                self.check_training_request(row, json.load(open(done)).get("request"), request)
                 continue
             lock = claim(self.path("train", f"{row}.lock"))
             if lock is None:
@@ -180,12 +235,13 @@ class Bench:
             started = time.time()
             partial = os.path.join(run, "train_seconds.txt")  # seconds of this row's stopped invocations
             try:
-                if glob.glob(os.path.join(run, "checkpoints", "step_*.pt")):
+                if glob.glob(os.path.join(run, "checkpoints", "step_*.pt")) and os.path.exists(marker):
+                    self.check_training_request(row, open(marker).read(), request)
                     self.call([self.flowplan, "train", "--resume", run])
                 else:
                     shutil.rmtree(run, ignore_errors=True)
-                    self.call([self.flowplan, "train", "--config", config, f"seed={seed}", f"run_dir={run}",
-                               f"data.path={self.path('data', data + '.h5')}", *overrides, *self.size["train"]])
+                    write_text(marker, request)
+                    self.call(command)
             finally:  # also when stopped: the next invocation adds its own time
                 earlier = float(open(partial).read()) if os.path.exists(partial) else 0.0
                 if os.path.isdir(run):
@@ -193,57 +249,83 @@ class Bench:
             seconds = float(open(partial).read())
             steps = max(json.loads(line).get("step", 0) for line in open(os.path.join(run, "metrics.jsonl")))
             write_json(done, {"row": row, "config": config, "data": data, "overrides": overrides, "seed": seed,
-                              "steps": steps, "train_seconds": round(seconds, 1)})
+                              "steps": steps, "train_seconds": round(seconds, 1), "request": request})
             lock.close()
 
     def trained(self, row):
-        """The run folder of a row whose training has finished (its done.json)."""
+        """(run folder, training request) of a row whose training has finished (its done.json)."""
         run = self.path("train", row)
         if not os.path.exists(os.path.join(run, "done.json")):
             sys.exit(f"{run}: not trained to the end (no done.json); run the train-reach / train-cross stage first")
-        return run
+        return run, json.load(open(os.path.join(run, "done.json")))["request"]
 
     # -- stitching ------------------------------------------------------------
     def stitching(self):
+        import h5py
         rows = train_rows()
         for row in self.selected(rows):
             data = rows[row][1]
-            out = self.path("stitching", f"{row}.json")
-            if not data.startswith("franka_cross") or os.path.exists(out):
+            if not data.startswith("franka_cross"):
                 continue
+            out = self.path("stitching", f"{row}.json")
             if not os.path.exists(self.path("train", row, "done.json")):
-                print(f"stitching: {row} not trained yet, skipped", flush=True)
+                if not os.path.exists(out):
+                    print(f"stitching: {row} not trained yet, skipped", flush=True)
+                continue
+            run, model = self.trained(row)
+            # plans_per_pair plans for each test pair (plan i targets pair i mod P in `flowplan eval stitching`)
+            with h5py.File(self.path("data", data + ".h5"), "r") as f:
+                pairs = f["eval/test_pairs/start"].shape[0]
+            num_plans = self.size["plans_per_pair"] * pairs
+            command = [self.flowplan, "eval", "stitching", "--ckpt", run, "--out", out + ".tmp",
+                       f"eval.num_plans={num_plans}"]
+            request = self.request(command, model)
+            plans = out + ".plans.h5"  # `flowplan eval stitching --out X.json.tmp` writes its plans to X.json.plans.h5
+            if os.path.exists(out) and recorded(out + ".request", request):
                 continue
             lock = claim(out + ".lock")
-            if lock is None or os.path.exists(out):
+            if lock is None or (os.path.exists(out) and recorded(out + ".request", request)):
                 continue
+            discard([out, plans])
             print(f"stitching: {row}", flush=True)
-            self.call([self.flowplan, "eval", "stitching", "--ckpt", self.trained(row), "--out", out + ".tmp",
-                       f"eval.num_plans={self.size['num_plans']}"])
+            write_text(out + ".request", request)
+            self.call(command)
+            report = json.load(open(out + ".tmp"))
+            if report["test"]["num_plans"] != num_plans:
+                sys.exit(f"{out}.tmp: {report['test']['num_plans']} test plans, expected {num_plans}")
             os.replace(out + ".tmp", out)
             lock.close()
 
     # -- planning around spheres ---------------------------------------------
     def planner_source(self, planner):
+        """(`flowplan plan` arguments choosing PLANNER, the request of the model or robot they read)."""
         _, _, row, overrides = next(p for p in PLANNERS if p[0] == planner)
         if row is None:
-            return ["--rrt-connect", "--config", REACH_CONFIG, f"data.path={self.path('data', 'franka_reach.h5')}"]
-        return ["--ckpt", self.trained(row), *overrides]
+            return (["--rrt-connect", "--config", REACH_CONFIG, f"data.path={self.path('data', 'franka_reach.h5')}"],
+                    self.data_request("franka_reach"))
+        run, model = self.trained(row)
+        return ["--ckpt", run, *overrides], model
 
     def plan_cell(self, prefix, planner, radius, plans, extra=(), plot=False):
         """One `flowplan plan` call on the paper's scene; PREFIX.json (or PREFIX.refused) marks it done,
         and with a figure PREFIX.png too (drawn after the report)."""
-        if (os.path.exists(prefix + ".json") and (not plot or os.path.exists(prefix + ".png"))) or \
-                os.path.exists(prefix + ".refused"):
+        source, model = self.planner_source(planner)
+        scene = ["--scene", SCENE, "--radius", str(radius)] if radius > 0 else ["--scene", self.empty_scene()]
+        command = [self.flowplan, "plan", *source, *extra, "--start-tcp", START_TCP, "--goal-tcp", GOAL_TCP, *scene,
+                   "-n", str(plans), "--seed", "1", "--execute", *([] if plot else ["--no-plot"]),
+                   "--log-level", "warn", "--out", prefix]
+        request = self.request(command, model)
+        outputs = [prefix + ext for ext in (".json", ".h5", ".png")]
+        done = os.path.exists(prefix + ".refused") or (os.path.exists(prefix + ".json") and
+                                                       (not plot or os.path.exists(prefix + ".png")))
+        if done and recorded(prefix + ".request", request):
             return
         lock = claim(prefix + ".lock")
-        if lock is None or os.path.exists(prefix + ".json"):
+        if lock is None:
             return
-        scene = ["--scene", SCENE, "--radius", str(radius)] if radius > 0 else ["--scene", self.empty_scene()]
-        ok, output = self.call([self.flowplan, "plan", *self.planner_source(planner), *extra, "--start-tcp", START_TCP,
-                                "--goal-tcp", GOAL_TCP, *scene, "-n", str(plans), "--seed", "1", "--execute",
-                                *([] if plot else ["--no-plot"]), "--log-level", "warn", "--out", prefix],
-                               accept_refusal=True)
+        discard(outputs + [prefix + ".refused"])
+        write_text(prefix + ".request", request)
+        ok, output = self.call(command, accept_refusal=True)
         if not ok:
             write_text(prefix + ".refused", output)
         lock.close()
@@ -274,14 +356,25 @@ class Bench:
             print("problems: another driver is on them, skipped", flush=True)
             return
         problems = self.path("problems.yaml")
-        if not os.path.exists(problems):
-            self.call([self.flowplan, "problems", "--out", problems, f"problems.count={self.size['problems']}"])
+        command = [self.flowplan, "problems", "--out", problems, f"problems.count={self.size['problems']}"]
+        made = self.request(command)
+        if not (os.path.exists(problems) and recorded(problems + ".request", made)):
+            discard([problems, self.path("problems")])
+            write_text(problems + ".request", made)
+            self.call(command)
+        # One request per planner: a planner whose model or arguments changed plans again, the others are kept.
         summary = self.path("problems", "summary.json")
-        if os.path.exists(summary) and set(json.load(open(summary))["planners"]) == {p for p, *_ in PLANNERS}:
-            return
         specs = []
         for planner, *_ in PLANNERS:
-            specs += ["--planner", f"{planner}={shlex.join(self.planner_source(planner))}"]
+            source, model = self.planner_source(planner)
+            specs += ["--planner", f"{planner}={shlex.join(source)}"]
+            request = self.request(source + ["--samples", str(self.size["problem_plans"])], model, made)
+            marker = self.path("problems", f"{planner}.request")
+            if not recorded(marker, request):
+                discard([summary, self.path("problems", planner)])
+                write_text(marker, request)
+        if os.path.exists(summary):
+            return
         print("problems: every planner on every problem", flush=True)
         self.call([self.python, "scripts/franka_problems.py", problems, "--out", self.path("problems"),
                    "--samples", str(self.size["problem_plans"]), "--flowplan", self.flowplan, *specs])
@@ -333,6 +426,21 @@ def claim(path):
     return lock
 
 
+def recorded(marker, request):
+    """Whether MARKER holds REQUEST (the output beside it was made by this request)."""
+    return os.path.exists(marker) and open(marker).read() == request
+
+
+def discard(paths):
+    """Removes the outputs of another request (files or folders), before the new request is written beside them,
+    so that a new request never sits beside an older output."""
+    present = [p for p in paths if os.path.exists(p)]
+    if present:
+        print(f"stale (made by another request), made again: {', '.join(present)}", flush=True)
+    for path in present:
+        shutil.rmtree(path) if os.path.isdir(path) else os.remove(path)
+
+
 def write_text(path, text):
     os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
     with open(path + ".tmp", "w") as f:
@@ -377,7 +485,8 @@ def stitching_cell(root, rows):
 
 def stitching_tables(root, size, summary):
     text = ["### Stitching, table 1 (franka_cross, per-joint torque noise)\n",
-            f"Stitching error on the two test pairs, {size['num_plans']} plans (mean ± std over the plans; a row of "
+            f"Stitching error on the two test pairs, {size['plans_per_pair']} plans per pair (mean ± std over the plans "
+            "of both pairs; a row of "
             "several seeds: the mean of the seeds' means ± their sample standard deviation, then every seed's "
             "mean ± std over its plans).\n", "| model | ours | paper |", "|---|---|---|"]
     summary["table1"] = {}
@@ -444,10 +553,16 @@ def obstacle_tables(root, size, summary):
             paper = PAPER_RADIUS.get(planner) if key == "success_rate_tcp" else None
             text.append(f"| {label}, {way} | " + " | ".join(rate_text(cells.get((planner, r)), key) for r in radii) +
                         f" | {'–' if contiguous is None else f'{contiguous:g}'} | {'' if paper is None else paper} |")
-    text.append("\nPlanning time per plan (s): the wall time of a `flowplan plan` call's planning (both cores, "
-                "execution excluded) divided by its plans, the median over the radii: " +
-                ", ".join(f"{label} {median_time(cells, planner, radii):.3f}" for planner, label, *_ in PLANNERS
-                          if median_time(cells, planner, radii) is not None) + "\n")
+    text += ["\nPlanning time per plan (s) at each radius: the wall time of the `flowplan plan` call's planning (both "
+             "cores, execution excluded) divided by its plans; the last column is the median over the radii.\n",
+             "| planner | " + " | ".join(f"{r:g}" for r in radii) + " | median |", "|---|" + "---|" * (len(radii) + 1)]
+    for planner, label, *_ in PLANNERS:
+        times = [cells.get((planner, r)) for r in radii]
+        median = median_time(cells, planner, radii)
+        text.append(f"| {label} | " + " | ".join(
+            "" if c is None else "refused" if c["refused"] else f"{c['planning_time_s_per_plan']:.3f}" for c in times) +
+            f" | {'' if median is None else f'{median:.3f}'} |")
+    text.append("")
     plot_sweep(cells, radii, os.path.join(root, "results", "success_vs_radius.png"))
     scale_cells = read_cells(root, [((s, r), os.path.join(root, "scales", f"s{s:g}_r{r:g}"))
                                     for s in size["scales"] for r in size["scale_radii"]])

@@ -6,7 +6,9 @@ usage: franka_bench_quick_test.py FLOWPLAN_BINARY SCRATCH_DIR
 1. The quick run fills every table (both stitching tables, the radius sweep of
    all five planners, the guidance-scale sweep, the random scenes) and the
    independent recount agrees with flowplan's counts.
-2. Run again, it redoes nothing but the recount and the tables.
+2. Run again, it redoes nothing but the recount and the tables; an output made
+   by another request (a changed command, config or model) is made again, and a
+   row trained by another request stops the driver with a message naming it.
 3. Stitching rows evaluated again from their checkpoints give the same
    figures; --rows limits a stage to the rows it names and refuses an unknown one.
 4. A training row stopped after its first checkpoint resumes from it (not from
@@ -63,6 +65,8 @@ for row in cross:
     report = json.load(open(os.path.join(root, "stitching", f"{row}.json")))
     for pairs in ("test", "train"):
         assert summary["stitching"][row][pairs]["mean"] == report[pairs]["mean"], (row, pairs)
+    # 4 plans for each of the two test pairs
+    assert report["test"]["num_plans"] == 8 and len(report["test"]["per_pair"]) == 2, report["test"]
 for name in ["success_vs_radius.png", "summary.md"] + [f"example_{p}_r0.1.png" for p in planners]:
     assert os.path.getsize(os.path.join(root, "results", name)) > 0, name
 
@@ -71,6 +75,25 @@ before = len(log_commands())
 bench()
 again = log_commands()[before:]
 assert len(again) == 1 and "recount_plans.py" in again[0], again
+
+# ... but a cell whose recorded request is not the driver's (another command, scene or model made it) is made again,
+with open(os.path.join(root, "sweep", "mpd_r0.1.request"), "a") as f:
+    f.write("guidance.scale=9\n")
+before = len(log_commands())
+out = bench("--only", "sweep")
+again = log_commands()[before:]
+assert len(again) == 1 and " plan " in again[0] and again[0].rstrip().endswith("/sweep/mpd_r0.1"), again
+assert "stale" in out and "mpd_r0.1.json" in out, out
+# and a row trained by another request stops the driver, naming the folder to delete, and keeps the model.
+done_path = os.path.join(root, "train", "cross_mpd", "done.json")
+done = json.load(open(done_path))
+json.dump(done | {"request": done["request"].replace("objective.name=ddpm", "objective.name=flow_matching")},
+          open(done_path, "w"))
+stopped = subprocess.run([sys.executable, os.path.join(repo, "scripts", "franka_bench.py"), "--quick", "--root", root,
+                          "--flowplan", flowplan, "--only", "train-cross"], capture_output=True, text=True)
+assert stopped.returncode != 0 and "train/cross_mpd: trained by another request" in stopped.stderr, stopped.stderr
+assert "Delete" in stopped.stderr and os.path.exists(os.path.join(root, "train", "cross_mpd", "checkpoints"))
+json.dump(done, open(done_path, "w"))
 
 # 3. Re-evaluated from their checkpoints, stitching rows give the same figures; --rows picks the rows.
 rows = {name: os.path.join(root, "stitching", f"{name}.json") for name in ("cross_fp_s1", "cross_fp_s2")}
