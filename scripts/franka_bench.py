@@ -3,9 +3,9 @@
 
 usage: scripts/franka_bench.py [--quick] [--root DIR] [--only STAGE,...] [--rows ROW,...] [--flowplan BIN]
 
-Stages, in order; each writes its output atomically and is skipped when the
-output exists, so a stopped run continues where it stopped (a stopped
-training resumes from its newest checkpoint):
+Stages, in order; each writes its output atomically and skips an output that
+exists and was made by the current request (below), so a stopped run continues
+where it stopped (a stopped training resumes from its newest checkpoint):
 
   data        ROOT/data/<set>.h5            `flowplan generate` of every data set
   train-reach ROOT/train/reach_*/done.json  `flowplan train` of FP, MPD and the VAE on franka_reach
@@ -19,13 +19,19 @@ training resumes from its newest checkpoint):
   recount     ROOT/results/recount.json     scripts/recount_plans.py on every saved plan (always redone)
   results     ROOT/results/*.md|json|png    tables and plots (always redone from what exists)
 
-Beside every output the driver records its request: the command that makes it
-(the output folder and the binary written as placeholders), the YAML files that
-command names, and the requests of the outputs it reads (a model's data set, a
-plan's model). An output whose request differs from the driver's is stale: a
-data set, stitching report or plan cell is made again, and a trained row stops
-the driver with a message naming the folder to delete (training takes hours;
-it is never thrown away silently). A rebuilt flowplan binary is not detected.
+Beside every output the driver records its request, written once the output
+is finished (before, for a training's or a planner's folder of partial work):
+the command that makes it (the output folder and the binary written as
+placeholders), the YAML files that command names (parsed; a data set counts
+only the generate section and the seed), and the requests of the outputs it
+reads, so that a changed data set makes its models stale, and a changed model
+its plans. An output of another request is made again: a data set, the random
+problems, a planner's plans on them, a stitching report, a plan cell. A model
+of another request (or of none) stops the driver with a message naming the
+folder to delete: training takes hours and is never thrown away silently. The
+results stage leaves out, and lists, every output of another request. Not
+detected: a rebuilt flowplan binary and edited scripts (franka_problems.py,
+plot.py); delete the outputs to redo them.
 
 --rows limits the training and stitching stages to the named rows, trained in the
 order given (e.g. --rows cross_mpd,cross_fp_s0 --only train-cross,stitching).
@@ -51,6 +57,8 @@ CROSS_SETS = [("franka_cross", "configs/franka_cross.yaml", "per-joint noise"),
               ("franka_cross_no_noise", "configs/franka_cross_no_noise.yaml", "no noise"),
               ("franka_cross_random_pos", "configs/franka_cross_random_pos.yaml", "random positions"),
               ("franka_cross_random_forces", "configs/franka_cross_random_forces.yaml", "random forces")]
+# Every data set: name, config.
+DATA_SETS = [(name, config) for name, config, _ in CROSS_SETS] + [("franka_reach", REACH_CONFIG)]
 SEEDS = [0, 1, 2]
 # Table 1 on franka_cross: label, row name prefix, overrides, seeds.
 TABLE1 = [("FP", "cross_fp", [], SEEDS),
@@ -112,6 +120,10 @@ def table2_rows():
     return out
 
 
+class Unavailable(Exception):
+    """An input of an output is missing, or was made by another request; the message names it and what to do."""
+
+
 class Bench:
     def __init__(self, args):
         self.root = args.root
@@ -150,48 +162,120 @@ class Bench:
             sys.exit(f"failed: {' '.join(command)}\n{done.stderr[-3000:]}{done.stdout[-2000:]}")
         return done.returncode == 0, done.stdout + done.stderr
 
-    # -- requests -------------------------------------------------------------
-    def request(self, command, *inputs):
+    # -- requests: what makes each output ---------------------------------------
+    def request(self, command, *inputs, sections=None):
         """The text that identifies an output: COMMAND with ROOT and the binary as placeholders (so a moved folder
-        stays valid), the YAML files it names (parsed, so that comments do not count), then the requests of the
-        outputs it reads (INPUTS), so that a changed data set makes its models stale, and a changed model its plans."""
+        stays valid), the YAML files it names (parsed, so that comments do not count; only the top-level SECTIONS
+        if given), then the requests of the outputs it reads (INPUTS), so that a changed data set makes its models
+        stale, and a changed model its plans."""
         import yaml
         text = [shlex.join(command).replace(self.flowplan, "{flowplan}").replace(self.root + os.sep, "{root}/")]
         for argument in command:
             value = argument.partition("=")[2] if "=" in argument else argument
             if value.endswith(".yaml") and os.path.isfile(value) and not value.startswith(self.root + os.sep):
-                text.append(f"--- {value}: " + json.dumps(yaml.safe_load(open(value)), sort_keys=True))
+                content = yaml.safe_load(open(value))
+                if sections is not None:
+                    content = {k: v for k, v in content.items() if k in sections}
+                text.append(f"--- {value}: " + json.dumps(content, sort_keys=True))
         return "\n".join(text + list(inputs)) + "\n"
 
-    def data_request(self, name):
-        """The request recorded beside data set NAME (by the data stage)."""
-        marker = self.path("data", f"{name}.h5.request")
-        if not os.path.exists(marker):
-            sys.exit(f"{self.path('data', name + '.h5')}: not made by this driver (no request beside it); "
-                     "run the data stage first")
-        return open(marker).read()
+    def data_command(self, name):
+        """(output, command, request) of data set NAME."""
+        config = next(c for n, c in DATA_SETS if n == name)
+        out = self.path("data", f"{name}.h5")
+        episodes = [f"generate.episodes={self.size['episodes']}"] if self.size["episodes"] else []
+        command = [self.flowplan, "generate", "--config", config, f"generate.out={out}", *episodes]
+        return out, command, self.request(command, sections=("generate", "seed"))  # all that generation reads
 
+    def data_request(self, name):
+        """The request of data set NAME, which must have been made by it."""
+        out, _, request = self.data_command(name)
+        if not (os.path.exists(out) and recorded(out + ".request", request)):
+            raise Unavailable(f"{out}: not made by the current request; run the data stage first")
+        return request
+
+    def train_command(self, row):
+        """(command, request) that trains ROW from scratch."""
+        config, data, overrides, seed = train_rows()[row]
+        command = [self.flowplan, "train", "--config", config, f"seed={seed}", f"run_dir={self.path('train', row)}",
+                   f"data.path={self.path('data', data + '.h5')}", *overrides, *self.size["train"]]
+        # The whole config counts: the checkpoint carries it, and `flowplan plan --ckpt` plans with its guidance.
+        return command, self.request(command, self.data_request(data))
+
+    def check_training_request(self, row, before, request):
+        """Raises Unavailable if ROW was trained (or began training) by another request than REQUEST."""
+        if before != request:
+            run = self.path("train", row)
+            raise Unavailable(
+                f"{run}: trained by another request than the driver's now (a changed config, override or data set, "
+                f"or none recorded).\n--- recorded:\n{before}\n--- now:\n{request}"
+                f"Delete {run} to train it again, or move it aside to keep it.")
+
+    def model_request(self, row):
+        """The training request of ROW, whose training must have finished (done.json) by the current request."""
+        run = self.path("train", row)
+        done = os.path.join(run, "done.json")
+        if not os.path.exists(done):
+            raise Unavailable(f"{run}: not trained to the end (no done.json); run the train-reach / train-cross "
+                              "stage first")
+        _, request = self.train_command(row)
+        self.check_training_request(row, json.load(open(done)).get("request"), request)
+        return request
+
+    def stitching_command(self, row):
+        """(output, command, request, plans) of ROW's stitching report."""
+        import h5py
+        data = train_rows()[row][1]
+        model = self.model_request(row)
+        out = self.path("stitching", f"{row}.json")
+        # plans_per_pair plans for each test pair (plan i targets pair i mod P in `flowplan eval stitching`)
+        with h5py.File(self.path("data", data + ".h5"), "r") as f:
+            pairs = f["eval/test_pairs/start"].shape[0]
+        plans = self.size["plans_per_pair"] * pairs
+        command = [self.flowplan, "eval", "stitching", "--ckpt", self.path("train", row), "--out", out + ".tmp",
+                   f"data.path={self.path('data', data + '.h5')}", f"eval.num_plans={plans}"]
+        return out, command, self.request(command, model), plans
+
+    def planner_source(self, planner):
+        """(`flowplan plan` arguments choosing PLANNER, the request of the model or robot they read)."""
+        _, _, row, overrides = next(p for p in PLANNERS if p[0] == planner)
+        if row is None:
+            return (["--rrt-connect", "--config", REACH_CONFIG, f"data.path={self.path('data', 'franka_reach.h5')}"],
+                    self.data_request("franka_reach"))
+        return ["--ckpt", self.path("train", row), *overrides], self.model_request(row)
+
+    def plan_command(self, prefix, planner, radius, plans, extra=(), plot=False):
+        """(command, request) of one `flowplan plan` call on the paper's scene, writing PREFIX.*."""
+        source, model = self.planner_source(planner)
+        scene = ["--scene", SCENE, "--radius", str(radius)] if radius > 0 else ["--scene", self.empty_scene()]
+        command = [self.flowplan, "plan", *source, *extra, "--start-tcp", START_TCP, "--goal-tcp", GOAL_TCP, *scene,
+                   "-n", str(plans), "--seed", "1", "--execute", *([] if plot else ["--no-plot"]),
+                   "--log-level", "warn", "--out", prefix]
+        return command, self.request(command, model)
+
+    def problems_command(self):
+        out = self.path("problems.yaml")
+        command = [self.flowplan, "problems", "--out", out, f"problems.count={self.size['problems']}"]
+        return out, command, self.request(command)
+
+    def problem_planner_request(self, planner, problems_request):
+        source, model = self.planner_source(planner)
+        return source, self.request(source + ["--samples", str(self.size["problem_plans"])], model, problems_request)
 
     # -- data -----------------------------------------------------------------
     def data(self):
-        sets = [(name, config) for name, config, _ in CROSS_SETS] + [("franka_reach", REACH_CONFIG)]
-        for name, config in sets:
-            out = self.path("data", f"{name}.h5")
-            episodes = [f"generate.episodes={self.size['episodes']}"] if self.size["episodes"] else []
-            command = [self.flowplan, "generate", "--config", config, f"generate.out={out}", *episodes]
-            request = self.request(command)
+        for name, _ in DATA_SETS:
+            out, command, request = self.data_command(name)
             if os.path.exists(out) and recorded(out + ".request", request):
                 continue
             lock = claim(out + ".lock")
             if lock is None:
                 continue
-            if os.path.exists(out) and recorded(out + ".request", request):  # made by another driver since
-                lock.close()
-                continue
-            discard([out])
-            print(f"data: {name}", flush=True)
-            write_text(out + ".request", request)
-            self.call(command)
+            if not (os.path.exists(out) and recorded(out + ".request", request)):  # not made by another driver since
+                discard([out, out + ".request"])
+                print(f"data: {name}", flush=True)
+                self.call(command)
+                write_text(out + ".request", request)  # last: a request marks a finished output
             lock.close()
 
     # -- train ----------------------------------------------------------------
@@ -201,25 +285,12 @@ class Bench:
     def train_cross(self):
         self.train([row for row in train_rows() if row.startswith("cross_")])
 
-    def train_command(self, row):
-        config, data, overrides, seed = train_rows()[row]
-        command = [self.flowplan, "train", "--config", config, f"seed={seed}", f"run_dir={self.path('train', row)}",
-                   f"data.path={self.path('data', data + '.h5')}", *overrides, *self.size["train"]]
-        return command, self.request(command, self.data_request(data))
-
-    def check_training_request(self, row, before, request):
-        """Stops the driver if ROW was trained (or began training) by another request than REQUEST."""
-        if before != request:
-            sys.exit(f"{self.path('train', row)}: trained by another request than the driver's now "
-                     f"(a changed config, override or data set).\n--- recorded:\n{before}--- now:\n{request}"
-                     f"Delete {self.path('train', row)} to train it again, or move it aside to keep it.")
-
     def train(self, rows):
         for row in self.selected(rows):
             config, data, overrides, seed = train_rows()[row]
             run = self.path("train", row)
             done = os.path.join(run, "done.json")
-            marker = os.path.join(run, "request.txt")
+            marker = os.path.join(run, "request.txt")  # written first: the checkpoints beside it are its
             command, request = self.train_command(row)
             if os.path.exists(done):
                 self.check_training_request(row, json.load(open(done)).get("request"), request)
@@ -235,11 +306,11 @@ class Bench:
             started = time.time()
             partial = os.path.join(run, "train_seconds.txt")  # seconds of this row's stopped invocations
             try:
-                if glob.glob(os.path.join(run, "checkpoints", "step_*.pt")) and os.path.exists(marker):
-                    self.check_training_request(row, open(marker).read(), request)
+                if glob.glob(os.path.join(run, "checkpoints", "step_*.pt")):
+                    self.check_training_request(row, open(marker).read() if os.path.exists(marker) else None, request)
                     self.call([self.flowplan, "train", "--resume", run])
                 else:
-                    shutil.rmtree(run, ignore_errors=True)
+                    shutil.rmtree(run, ignore_errors=True)  # nothing worth keeping: no checkpoint
                     write_text(marker, request)
                     self.call(command)
             finally:  # also when stopped: the next invocation adds its own time
@@ -252,84 +323,49 @@ class Bench:
                               "steps": steps, "train_seconds": round(seconds, 1), "request": request})
             lock.close()
 
-    def trained(self, row):
-        """(run folder, training request) of a row whose training has finished (its done.json)."""
-        run = self.path("train", row)
-        if not os.path.exists(os.path.join(run, "done.json")):
-            sys.exit(f"{run}: not trained to the end (no done.json); run the train-reach / train-cross stage first")
-        return run, json.load(open(os.path.join(run, "done.json")))["request"]
-
     # -- stitching ------------------------------------------------------------
     def stitching(self):
-        import h5py
-        rows = train_rows()
-        for row in self.selected(rows):
-            data = rows[row][1]
-            if not data.startswith("franka_cross"):
+        for row in self.selected(train_rows()):
+            if not train_rows()[row][1].startswith("franka_cross"):
                 continue
-            out = self.path("stitching", f"{row}.json")
             if not os.path.exists(self.path("train", row, "done.json")):
-                if not os.path.exists(out):
-                    print(f"stitching: {row} not trained yet, skipped", flush=True)
+                print(f"stitching: {row} not trained yet, skipped", flush=True)
                 continue
-            run, model = self.trained(row)
-            # plans_per_pair plans for each test pair (plan i targets pair i mod P in `flowplan eval stitching`)
-            with h5py.File(self.path("data", data + ".h5"), "r") as f:
-                pairs = f["eval/test_pairs/start"].shape[0]
-            num_plans = self.size["plans_per_pair"] * pairs
-            command = [self.flowplan, "eval", "stitching", "--ckpt", run, "--out", out + ".tmp",
-                       f"eval.num_plans={num_plans}"]
-            request = self.request(command, model)
-            plans = out + ".plans.h5"  # `flowplan eval stitching --out X.json.tmp` writes its plans to X.json.plans.h5
+            out, command, request, plans = self.stitching_command(row)
             if os.path.exists(out) and recorded(out + ".request", request):
                 continue
             lock = claim(out + ".lock")
-            if lock is None or (os.path.exists(out) and recorded(out + ".request", request)):
+            if lock is None:
                 continue
-            discard([out, plans])
-            print(f"stitching: {row}", flush=True)
-            write_text(out + ".request", request)
-            self.call(command)
-            report = json.load(open(out + ".tmp"))
-            if report["test"]["num_plans"] != num_plans:
-                sys.exit(f"{out}.tmp: {report['test']['num_plans']} test plans, expected {num_plans}")
-            os.replace(out + ".tmp", out)
+            if not (os.path.exists(out) and recorded(out + ".request", request)):
+                # `flowplan eval stitching --out X.json.tmp` writes its plans to X.json.plans.h5
+                discard([out, out + ".plans.h5", out + ".request"])
+                print(f"stitching: {row}", flush=True)
+                self.call(command)
+                report = json.load(open(out + ".tmp"))
+                if report["test"]["num_plans"] != plans:
+                    sys.exit(f"{out}.tmp: {report['test']['num_plans']} test plans, expected {plans}")
+                os.replace(out + ".tmp", out)
+                write_text(out + ".request", request)
             lock.close()
 
     # -- planning around spheres ---------------------------------------------
-    def planner_source(self, planner):
-        """(`flowplan plan` arguments choosing PLANNER, the request of the model or robot they read)."""
-        _, _, row, overrides = next(p for p in PLANNERS if p[0] == planner)
-        if row is None:
-            return (["--rrt-connect", "--config", REACH_CONFIG, f"data.path={self.path('data', 'franka_reach.h5')}"],
-                    self.data_request("franka_reach"))
-        run, model = self.trained(row)
-        return ["--ckpt", run, *overrides], model
-
     def plan_cell(self, prefix, planner, radius, plans, extra=(), plot=False):
-        """One `flowplan plan` call on the paper's scene; PREFIX.json (or PREFIX.refused) marks it done,
-        and with a figure PREFIX.png too (drawn after the report)."""
-        source, model = self.planner_source(planner)
-        scene = ["--scene", SCENE, "--radius", str(radius)] if radius > 0 else ["--scene", self.empty_scene()]
-        command = [self.flowplan, "plan", *source, *extra, "--start-tcp", START_TCP, "--goal-tcp", GOAL_TCP, *scene,
-                   "-n", str(plans), "--seed", "1", "--execute", *([] if plot else ["--no-plot"]),
-                   "--log-level", "warn", "--out", prefix]
-        request = self.request(command, model)
-        outputs = [prefix + ext for ext in (".json", ".h5", ".png")]
-        done = os.path.exists(prefix + ".refused") or (os.path.exists(prefix + ".json") and
-                                                       (not plot or os.path.exists(prefix + ".png")))
-        if done and recorded(prefix + ".request", request):
+        """One `flowplan plan` call on the paper's scene. Its request, written last, marks PREFIX.json (or
+        PREFIX.refused: the start or goal lies inside the sphere) and PREFIX.png, if drawn, as finished."""
+        command, request = self.plan_command(prefix, planner, radius, plans, extra, plot)
+        if recorded(prefix + ".request", request):
             return
         lock = claim(prefix + ".lock")
         if lock is None:
             return
-        discard(outputs + [prefix + ".refused"])
-        write_text(prefix + ".request", request)
-        ok, output = self.call(command, accept_refusal=True)
-        if not ok:
-            write_text(prefix + ".refused", output)
+        if not recorded(prefix + ".request", request):  # not made by another driver since
+            discard([prefix + ext for ext in (".json", ".h5", ".png", ".refused", ".request")])
+            ok, output = self.call(command, accept_refusal=True)
+            if not ok:
+                write_text(prefix + ".refused", output)
+            write_text(prefix + ".request", request)
         lock.close()
-        os.remove(prefix + ".lock")
 
     def empty_scene(self):
         path = self.path("scenes", "empty.yaml")
@@ -355,23 +391,21 @@ class Bench:
         if lock is None:
             print("problems: another driver is on them, skipped", flush=True)
             return
-        problems = self.path("problems.yaml")
-        command = [self.flowplan, "problems", "--out", problems, f"problems.count={self.size['problems']}"]
-        made = self.request(command)
+        problems, command, made = self.problems_command()
         if not (os.path.exists(problems) and recorded(problems + ".request", made)):
-            discard([problems, self.path("problems")])
-            write_text(problems + ".request", made)
+            discard([problems, problems + ".request", self.path("problems")])
             self.call(command)
-        # One request per planner: a planner whose model or arguments changed plans again, the others are kept.
+            write_text(problems + ".request", made)
+        # One request per planner, written before its first plan: franka_problems.py resumes per problem, and the
+        # reports in problems/<planner>/ are that request's. A planner whose model or arguments changed plans again.
         summary = self.path("problems", "summary.json")
         specs = []
         for planner, *_ in PLANNERS:
-            source, model = self.planner_source(planner)
+            source, request = self.problem_planner_request(planner, made)
             specs += ["--planner", f"{planner}={shlex.join(source)}"]
-            request = self.request(source + ["--samples", str(self.size["problem_plans"])], model, made)
             marker = self.path("problems", f"{planner}.request")
             if not recorded(marker, request):
-                discard([summary, self.path("problems", planner)])
+                discard([summary, self.path("problems", planner), marker])
                 write_text(marker, request)
         if os.path.exists(summary):
             return
@@ -393,20 +427,79 @@ class Bench:
         if not ok:
             print("recount: some files differ (ROOT/results/recount.json, ROOT/bench.log)", flush=True)
 
+    # -- results: only outputs of the current requests --------------------------
+    def current(self, make_request, marker):
+        """Whether the output whose request MARKER holds is that of the current request (make_request() ->
+        request); an output whose inputs are missing or stale is not current. Others are counted in self.left_out."""
+        if not os.path.exists(marker):
+            return False
+        try:
+            request = make_request()
+        except Unavailable:
+            request = None
+        if recorded(marker, request or ""):
+            return True
+        self.left_out.append(marker[:-len(".request")])
+        return False
+
+    def stitching_report(self, row):
+        """ROW's stitching report, if made by the current request."""
+        out = self.path("stitching", f"{row}.json")
+        return json.load(open(out)) if self.current(lambda: self.stitching_command(row)[2], out + ".request") else None
+
+    def plan_report(self, prefix, *cell):
+        """{'refused': True}, PREFIX.json's report, or None (not made by the current request)."""
+        if not self.current(lambda: self.plan_command(prefix, *cell)[1], prefix + ".request"):
+            return None
+        return {"refused": True} if os.path.exists(prefix + ".refused") else json.load(open(prefix + ".json")) | {
+            "refused": False}
+
+    def problem_summary(self):
+        """problems/summary.json, if every planner's reports are those of the current requests."""
+        summary = self.path("problems", "summary.json")
+        if not os.path.exists(summary):
+            return None
+        _, _, made = self.problems_command()
+        if not self.current(lambda: made, self.path("problems.yaml.request")):
+            return None
+        for planner, *_ in PLANNERS:
+            if not self.current(lambda: self.problem_planner_request(planner, made)[1],
+                                self.path("problems", f"{planner}.request")):
+                return None
+        return json.load(open(summary))
+
+    def trained_row(self, row):
+        """ROW's done.json, if trained by the current request."""
+        done = self.path("train", row, "done.json")
+        if not os.path.exists(done):
+            return None
+        try:
+            self.model_request(row)
+        except Unavailable:
+            self.left_out.append(done)
+            return None
+        return json.load(open(done))
+
     def results(self):
         os.makedirs(self.path("results"), exist_ok=True)
+        self.left_out = []
         summary = {"root": self.root, "quick": self.quick, "sizes": self.size}
         text = [f"Made by `scripts/franka_bench.py{' --quick' if self.quick else ''} --root {self.root}`.\n"]
-        text += stitching_tables(self.root, self.size, summary)
-        text += obstacle_tables(self.root, self.size, summary)
-        text += problem_table(self.root, summary)
+        text += stitching_tables(self, summary)
+        text += obstacle_tables(self, summary)
+        text += problem_table(self, summary)
         recount = self.path("results", "recount.json")
         if os.path.exists(recount):
             r = json.load(open(recount))
             summary["recount"] = {k: r[k] for k in ("files", "plans", "differ")}
             text.append(f"Independent recount (scripts/recount_plans.py, its own kinematics) of {r['plans']} saved plans "
                         f"in {r['files']} files: {r['differ']} files with a different TCP or whole-arm count.\n")
-        text.append(training_table(self.root, summary))
+        text.append(training_table(self, summary))
+        summary["left_out"] = sorted(set(self.left_out))
+        if self.left_out:
+            text.append("Left out, made by another request than the driver's now (run their stages again): " +
+                        ", ".join(summary["left_out"]) + "\n")
+            print(f"results: {len(summary['left_out'])} outputs of another request left out", flush=True)
         write_text(self.path("results", "summary.md"), "\n".join(text))
         write_json(self.path("results", "summary.json"), summary)
         print("\n".join(text))
@@ -459,15 +552,10 @@ def mean_and_sample_std(values):
     return mean, (sum((v - mean) ** 2 for v in values) / (n - 1)) ** 0.5 if n > 1 else None
 
 
-def stitching_of(root, row):
-    path = os.path.join(root, "stitching", f"{row}.json")
-    return json.load(open(path))["test"] if os.path.exists(path) else None
-
-
-def stitching_cell(root, rows):
+def stitching_cell(bench, rows):
     """(text, json) of one table cell: one row, or several seeds."""
-    found = [(row, stitching_of(root, row)) for row in rows]
-    found = [(row, r) for row, r in found if r is not None]
+    found = [(row, bench.stitching_report(row)) for row in rows]
+    found = [(row, r["test"]) for row, r in found if r is not None]
     if not found:
         return "not run", None
     if len(rows) == 1:
@@ -483,7 +571,8 @@ def stitching_cell(root, rows):
              "seeds": {row: {"mean": r["mean"], "stddev": r["stddev"]} for row, r in found}})
 
 
-def stitching_tables(root, size, summary):
+def stitching_tables(bench, summary):
+    size = bench.size
     text = ["### Stitching, table 1 (franka_cross, per-joint torque noise)\n",
             f"Stitching error on the two test pairs, {size['plans_per_pair']} plans per pair (mean ± std over the plans "
             "of both pairs; a row of "
@@ -492,27 +581,30 @@ def stitching_tables(root, size, summary):
     summary["table1"] = {}
     for label, prefix, _, seeds in TABLE1:
         rows = [f"{prefix}_s{s}" for s in seeds] if len(seeds) > 1 else [prefix]
-        cell, value = stitching_cell(root, rows)
+        cell, value = stitching_cell(bench, rows)
         summary["table1"][label] = value
         text.append(f"| {label} | {cell} | {PAPER_TABLE1[label]} |")
     text += ["", "### Stitching, table 2 (FP trained on each augmentation scheme)\n",
              "| augmentation | ours | paper |", "|---|---|---|"]
     summary["table2"] = {}
     for label, rows in table2_rows().items():
-        cell, value = stitching_cell(root, rows)
+        cell, value = stitching_cell(bench, rows)
         summary["table2"][label] = value
         text.append(f"| {label} | {cell} | {PAPER_TABLE2[label]} |")
     return text + [""]
 
 
-def read_cells(folder, pattern_keys):
-    """{key: report summary or {'refused': True}} of the plan cells in a folder."""
+def read_cells(bench, cells_to_read):
+    """{key: report summary or {'refused': True}} of the plan cells (key, prefix, planner, radius, plans, extra)
+    made by the current request."""
     cells = {}
-    for key, prefix in pattern_keys:
-        if os.path.exists(prefix + ".refused"):
+    for key, prefix, *cell in cells_to_read:
+        report = bench.plan_report(prefix, *cell)
+        if report is None:
+            continue
+        if report["refused"]:
             cells[key] = {"refused": True}
-        elif os.path.exists(prefix + ".json"):
-            report = json.load(open(prefix + ".json"))
+        else:
             cells[key] = {k: report.get(k) for k, _ in WAYS} | {
                 "refused": False, "num_samples": report["num_samples"],
                 "wall_time_s": report["wall_time_s"], "planning_time_s_per_plan": report["wall_time_s"] /
@@ -528,9 +620,10 @@ def rate_text(cell, key):
     return "–" if cell[key] is None else f"{cell[key]:.0%}"
 
 
-def obstacle_tables(root, size, summary):
-    radii = size["radii"]
-    cells = read_cells(root, [((p, r), os.path.join(root, "sweep", f"{p}_r{r:g}")) for p, *_ in PLANNERS for r in radii])
+def obstacle_tables(bench, summary):
+    size, radii = bench.size, bench.size["radii"]
+    cells = read_cells(bench, [((p, r), bench.path("sweep", f"{p}_r{r:g}"), p, r, size["sweep_plans"])
+                               for p, *_ in PLANNERS for r in radii])
     summary["sweep"] = [{"planner": p, "radius": r, **c} for (p, r), c in sorted(cells.items())]
     summary["largest_radius_90"] = {}
     text = ["### Obstacle avoidance (franka_reach models, the paper's scene)\n",
@@ -563,9 +656,9 @@ def obstacle_tables(root, size, summary):
             "" if c is None else "refused" if c["refused"] else f"{c['planning_time_s_per_plan']:.3f}" for c in times) +
             f" | {'' if median is None else f'{median:.3f}'} |")
     text.append("")
-    plot_sweep(cells, radii, os.path.join(root, "results", "success_vs_radius.png"))
-    scale_cells = read_cells(root, [((s, r), os.path.join(root, "scales", f"s{s:g}_r{r:g}"))
-                                    for s in size["scales"] for r in size["scale_radii"]])
+    plot_sweep(cells, radii, bench.path("results", "success_vs_radius.png"))
+    scale_cells = read_cells(bench, [((s, r), bench.path("scales", f"s{s:g}_r{r:g}"), "fp_split", r, size["sweep_plans"],
+                                      [f"guidance.scale={s}"]) for s in size["scales"] for r in size["scale_radii"]])
     summary["scales"] = [{"scale": s, "radius": r, **c} for (s, r), c in sorted(scale_cells.items())]
     text += ["### Guidance scale, FP + split\n", "| scale | " + " | ".join(
         f"r {r:g}: TCP / arm / executed" for r in size["scale_radii"]) + " |",
@@ -583,7 +676,10 @@ def median_time(cells, planner, radii):
         c = cells.get((planner, r))
         if c and not c["refused"]:
             times.append(c["planning_time_s_per_plan"])
-    return sorted(times)[len(times) // 2] if times else None
+    if not times:
+        return None
+    times.sort()
+    return (times[(len(times) - 1) // 2] + times[len(times) // 2]) / 2
 
 
 def plot_sweep(cells, radii, path):
@@ -609,11 +705,10 @@ def plot_sweep(cells, radii, path):
     plt.close(figure)
 
 
-def problem_table(root, summary):
-    path = os.path.join(root, "problems", "summary.json")
-    if not os.path.exists(path):
+def problem_table(bench, summary):
+    problems = bench.problem_summary()
+    if problems is None:
         return ["### Random blocked scenes: not run\n"]
-    problems = json.load(open(path))
     summary["problems"] = problems
     text = [f"### Random blocked scenes ({problems['problems']} problems of `flowplan problems`, 1–8 spheres)\n",
             "| planner | TCP | whole arm | executed | problems solved (arm) | planning time per plan (s) |",
@@ -626,7 +721,7 @@ def problem_table(root, summary):
     return text + [""]
 
 
-def training_table(root, summary):
+def training_table(bench, summary):
     """Every row's training (steps, seconds) and, for a franka_cross row, its stitching error on the test pairs
     beside the error on the training pairs (how well the model reproduces the data it saw)."""
     text = ["### Training runs\n", "| row | steps | seconds | stitching error, test pairs | training pairs |",
@@ -634,16 +729,14 @@ def training_table(root, summary):
     summary["train"] = {}
     summary["stitching"] = {}
     for row in train_rows():
-        path = os.path.join(root, "train", row, "done.json")
-        if not os.path.exists(path):
+        done = bench.trained_row(row)
+        if done is None:
             text.append(f"| {row} | not run | | | |")
             continue
-        done = json.load(open(path))
-        summary["train"][row] = done
+        summary["train"][row] = {k: v for k, v in done.items() if k != "request"}
         cells = ["", ""]
-        stitching = os.path.join(root, "stitching", f"{row}.json")
-        if os.path.exists(stitching):
-            report = json.load(open(stitching))
+        report = bench.stitching_report(row) if row.startswith("cross_") else None
+        if report is not None:
             summary["stitching"][row] = {k: {"mean": report[k]["mean"], "stddev": report[k]["stddev"]}
                                          for k in ("test", "train")}
             cells = [f"{report[k]['mean']:.2f} ± {report[k]['stddev']:.2f}" for k in ("test", "train")]
@@ -695,6 +788,8 @@ def main():
             print(f"== {stage}: {time.time() - started:.0f} s", flush=True)
     except KeyboardInterrupt:
         sys.exit(f"stopped during {stage}; run the same command again to continue")
+    except Unavailable as missing:
+        sys.exit(f"{stage}: {missing}")
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@
 Needs Debian's python3-h5py and python3-matplotlib (run with /usr/bin/python3).
 """
 import argparse
+import os
 import sys
 
 import h5py
@@ -21,6 +22,14 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+
+def save(fig, out, dpi):
+    """Writes the figure to a temporary name and renames it into place: never a half-written OUT."""
+    root, extension = os.path.splitext(out)
+    temporary = f"{root}.tmp-{os.getpid()}{extension}"  # the extension tells matplotlib the format
+    fig.savefig(temporary, dpi=dpi)
+    os.replace(temporary, out)
 
 
 def paths_2d(f):
@@ -54,7 +63,7 @@ def command_dataset(args):
         title = draw_dataset(ax, f, args.episodes)
         ax.set_title(f"{title} ({min(args.episodes, f['states'].shape[0])} of {f['states'].shape[0]} episodes)")
     fig.tight_layout()
-    fig.savefig(args.out, dpi=args.dpi)
+    save(fig, args.out, args.dpi)
     print(f"wrote {args.out}")
 
 
@@ -80,7 +89,7 @@ def command_plans(args):
         ax.legend(loc="upper center", fontsize=8)
         ax.set_title(args.title or "stitching: plans between pairs no training episode connects", fontsize=10)
     fig.tight_layout()
-    fig.savefig(args.out, dpi=args.dpi)
+    save(fig, args.out, args.dpi)
     print(f"wrote {args.out}")
 
 
@@ -142,7 +151,7 @@ def command_scene(args):
         what = "TCP paths" if env == "franka" else "paths"
         fig.suptitle(args.title or f"{env}: {len(tcp)} {what} around {len(obstacles)} obstacle(s)", fontsize=11)
     fig.tight_layout()
-    fig.savefig(args.out, dpi=args.dpi)
+    save(fig, args.out, args.dpi)
     print(f"wrote {args.out}")
 
 

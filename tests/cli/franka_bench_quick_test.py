@@ -6,9 +6,11 @@ usage: franka_bench_quick_test.py FLOWPLAN_BINARY SCRATCH_DIR
 1. The quick run fills every table (both stitching tables, the radius sweep of
    all five planners, the guidance-scale sweep, the random scenes) and the
    independent recount agrees with flowplan's counts.
-2. Run again, it redoes nothing but the recount and the tables; an output made
-   by another request (a changed command, config or model) is made again, and a
-   row trained by another request stops the driver with a message naming it.
+2. Run again, it redoes nothing but the recount and the tables, also with the
+   output folder moved; an output made by another request (a changed command,
+   config or model) is made again; a row trained by another request stops every
+   stage that trains or uses it with a message naming it, and the tables leave
+   out what it made. A request counts what a YAML file says, not its comments.
 3. Stitching rows evaluated again from their checkpoints give the same
    figures; --rows limits a stage to the rows it names and refuses an unknown one.
 4. A training row stopped after its first checkpoint resumes from it (not from
@@ -16,6 +18,7 @@ usage: franka_bench_quick_test.py FLOWPLAN_BINARY SCRATCH_DIR
 5. The recount is not blind: a report with one success flag flipped, or plans
    changed under their report, are caught.
 """
+import argparse
 import json
 import os
 import shutil
@@ -66,7 +69,11 @@ for row in cross:
     for pairs in ("test", "train"):
         assert summary["stitching"][row][pairs]["mean"] == report[pairs]["mean"], (row, pairs)
     # 4 plans for each of the two test pairs
-    assert report["test"]["num_plans"] == 8 and len(report["test"]["per_pair"]) == 2, report["test"]
+    with h5py.File(os.path.join(root, "stitching", f"{row}.json.plans.h5"), "r") as f:
+        assert sorted(f["test/pair_index"][...].tolist()) == [0] * 4 + [1] * 4, row
+summary_md = open(os.path.join(root, "results", "summary.md")).read()
+times = next(line for line in summary_md.split("\n") if line.startswith("| FP + split | "))
+assert len([t for t in times.split("|")[2:-1] if float(t) > 0]) == 5, times  # 4 radii and their median
 for name in ["success_vs_radius.png", "summary.md"] + [f"example_{p}_r0.1.png" for p in planners]:
     assert os.path.getsize(os.path.join(root, "results", name)) > 0, name
 
@@ -75,6 +82,31 @@ before = len(log_commands())
 bench()
 again = log_commands()[before:]
 assert len(again) == 1 and "recount_plans.py" in again[0], again
+# ... as when the output folder has moved (requests name it by a placeholder).
+moved = root + "_moved"
+os.rename(root, moved)
+try:
+    out = subprocess.run([sys.executable, os.path.join(repo, "scripts", "franka_bench.py"), "--quick", "--root", moved,
+                          "--flowplan", flowplan], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-3000:]
+    with open(os.path.join(moved, "bench.log")) as f:
+        again = [line for line in f if line.startswith("$ ")][before + 1:]
+    assert len(again) == 1 and "recount_plans.py" in again[0], again
+finally:
+    os.rename(moved, root)
+
+# A request is what the YAML files say, not how: a comment does not count, a value does.
+sys.path.insert(0, os.path.join(repo, "scripts"))
+import franka_bench  # noqa: E402
+
+maker = franka_bench.Bench(argparse.Namespace(root="some/root", quick=True, flowplan="bin/flowplan", rows=None))
+config = os.path.join(scratch, "request.yaml")
+requests = []
+for text in ("train:\n  steps: 20\n", "# sized for the test\ntrain: {steps: 20}  # steps\n", "train:\n  steps: 21\n"):
+    open(config, "w").write(text)
+    requests.append(maker.request(["bin/flowplan", "train", "--config", config, "run_dir=some/root/train/x"]))
+assert requests[0] == requests[1] != requests[2], requests
+assert requests[0].startswith("{flowplan} train --config ") and "run_dir={root}/train/x" in requests[0], requests[0]
 
 # ... but a cell whose recorded request is not the driver's (another command, scene or model made it) is made again,
 with open(os.path.join(root, "sweep", "mpd_r0.1.request"), "a") as f:
@@ -87,13 +119,25 @@ assert "stale" in out and "mpd_r0.1.json" in out, out
 # and a row trained by another request stops the driver, naming the folder to delete, and keeps the model.
 done_path = os.path.join(root, "train", "cross_mpd", "done.json")
 done = json.load(open(done_path))
+checkpoints_of_mpd = sorted(os.listdir(os.path.join(root, "train", "cross_mpd", "checkpoints")))
 json.dump(done | {"request": done["request"].replace("objective.name=ddpm", "objective.name=flow_matching")},
           open(done_path, "w"))
 stopped = subprocess.run([sys.executable, os.path.join(repo, "scripts", "franka_bench.py"), "--quick", "--root", root,
                           "--flowplan", flowplan, "--only", "train-cross"], capture_output=True, text=True)
 assert stopped.returncode != 0 and "train/cross_mpd: trained by another request" in stopped.stderr, stopped.stderr
-assert "Delete" in stopped.stderr and os.path.exists(os.path.join(root, "train", "cross_mpd", "checkpoints"))
+assert "Delete" in stopped.stderr, stopped.stderr
+assert sorted(os.listdir(os.path.join(root, "train", "cross_mpd", "checkpoints"))) == checkpoints_of_mpd
+# The stage that evaluates it stops too, and the tables leave out (and list) what it made.
+stopped = subprocess.run([sys.executable, os.path.join(repo, "scripts", "franka_bench.py"), "--quick", "--root", root,
+                          "--flowplan", flowplan, "--only", "stitching"], capture_output=True, text=True)
+assert stopped.returncode != 0 and "train/cross_mpd: trained by another request" in stopped.stderr, stopped.stderr
+bench("--only", "results")
+summary = json.load(open(os.path.join(root, "results", "summary.json")))
+assert summary["table1"]["MPD"] is None and "cross_mpd" not in summary["train"], summary["table1"]
+assert any(path.endswith("stitching/cross_mpd.json") for path in summary["left_out"]), summary["left_out"]
 json.dump(done, open(done_path, "w"))
+bench("--only", "results")
+assert json.load(open(os.path.join(root, "results", "summary.json")))["left_out"] == []
 
 # 3. Re-evaluated from their checkpoints, stitching rows give the same figures; --rows picks the rows.
 rows = {name: os.path.join(root, "stitching", f"{name}.json") for name in ("cross_fp_s1", "cross_fp_s2")}
@@ -120,6 +164,15 @@ checkpoints = sorted(os.listdir(os.path.join(run, "checkpoints")))
 assert len(checkpoints) >= 2, checkpoints
 for name in checkpoints[1:]:
     os.remove(os.path.join(run, "checkpoints", name))
+# Checkpoints begun by another request stop the driver rather than being resumed or thrown away,
+marker = os.path.join(run, "request.txt")
+request = open(marker).read()
+open(marker, "w").write(request.replace("train.steps=20", "train.steps=30"))
+stopped = subprocess.run([sys.executable, os.path.join(repo, "scripts", "franka_bench.py"), "--quick", "--root", root,
+                          "--flowplan", flowplan, "--only", "train-reach"], capture_output=True, text=True)
+assert stopped.returncode != 0 and "train/reach_vae: trained by another request" in stopped.stderr, stopped.stderr
+assert sorted(os.listdir(os.path.join(run, "checkpoints"))) == checkpoints[:1]
+open(marker, "w").write(request)  # those of this request resume
 before = len(log_commands())
 bench("--only", "train-reach")
 again = log_commands()[before:]
