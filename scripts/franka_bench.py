@@ -12,6 +12,7 @@ where it stopped (a stopped training resumes from its newest checkpoint):
   sweep       ROOT/sweep/<planner>_r<R>.*   the paper's scene, one sphere of radius R, every
                                             planner, plans executed in MuJoCo
   scales      ROOT/scales/s<S>_r<R>.*       FP + split at several guidance scales
+  budget      ROOT/budget/<name>_r<R>.*     MPD at FP's guidance budget, every radius
   problems    ROOT/problems/...             random blocked scenes (`flowplan problems`), every planner
   examples    ROOT/results/example_*.png    a few plans of every planner, drawn
   train-cross ROOT/train/cross_*/done.json  `flowplan train` of every franka_cross row
@@ -79,6 +80,10 @@ PLANNERS = [("mpd", "MPD", "reach_mpd", []),
             ("fp", "FP", "reach_fp", []),
             ("fp_split", "FP + split", "reach_fp", ["sampler.splitting=midpoint"]),
             ("rrt_connect", "RRT-Connect", None, [])]
+# MPD at FP's guidance budget. MPD guides the last 7 of its 25 denoising steps and 5 noise-free steps after them,
+# 5 gradient steps each: 60 gradient steps per plan. FP takes one per Euler step: 10. Name, label, overrides.
+MPD_BUDGETS = [("mpd_g10", "MPD, 10 gradient steps (1 per guided step, 3 noise-free steps)",
+                ["sampler.ddpm.guide_iterations=1", "sampler.ddpm.extra_steps=3"])]
 PAPER_RADIUS = {"mpd": 0.03, "vae": 0.05, "fp": 0.15, "fp_split": 0.20}
 WAYS = [("success_rate_tcp", "TCP"), ("success_rate_arm", "whole arm"), ("success_rate_executed", "executed")]
 SCENE = "configs/scenes/franka_sphere.yaml"
@@ -386,6 +391,13 @@ class Bench:
                                self.size["sweep_plans"], extra=[f"guidance.scale={scale}"])
             print(f"scales: radius {radius:g} done", flush=True)
 
+    def budget(self):
+        for radius in self.size["radii"]:
+            for name, _, overrides in MPD_BUDGETS:
+                self.plan_cell(self.path("budget", f"{name}_r{radius:g}"), "mpd", radius, self.size["sweep_plans"],
+                               extra=overrides)
+            print(f"budget: radius {radius:g} done", flush=True)
+
     def problems(self):
         lock = claim(self.path("problems.lock"))
         if lock is None:
@@ -420,7 +432,7 @@ class Bench:
                                self.size["example_plans"], plot=True)
 
     def recount(self):
-        plans = [self.path(d) for d in ("sweep", "scales") if os.path.isdir(self.path(d))]
+        plans = [self.path(d) for d in ("sweep", "scales", "budget") if os.path.isdir(self.path(d))]
         plans += [self.path("problems", p) for p, *_ in PLANNERS if os.path.isdir(self.path("problems", p))]
         ok, _ = self.call([self.python, "scripts/recount_plans.py", "--out", self.path("results", "recount.json"), *plans],
                           accept_failure=True)
@@ -635,13 +647,7 @@ def obstacle_tables(bench, summary):
             "|---|" + "---|" * (len(radii) + 2)]
     for planner, label, *_ in PLANNERS:
         for key, way in WAYS:
-            # "Largest radius": the largest r with every radius from 0 up to r at >= 90 %.
-            contiguous = None
-            for r in radii:
-                c = cells.get((planner, r))
-                if not c or c["refused"] or c[key] is None or c[key] < 0.9:
-                    break
-                contiguous = r
+            contiguous = largest_radius(cells, planner, key, radii)
             summary["largest_radius_90"][f"{planner}/{way}"] = contiguous
             paper = PAPER_RADIUS.get(planner) if key == "success_rate_tcp" else None
             text.append(f"| {label}, {way} | " + " | ".join(rate_text(cells.get((planner, r)), key) for r in radii) +
@@ -666,6 +672,38 @@ def obstacle_tables(bench, summary):
     for s in size["scales"]:
         text.append(f"| {s:g} | " + " | ".join(
             " / ".join(rate_text(scale_cells.get((s, r)), k) for k, _ in WAYS) for r in size["scale_radii"]) + " |")
+    return text + [""] + budget_table(bench, summary, cells)
+
+
+def largest_radius(cells, planner, key, radii):
+    """The largest r with every radius from 0 up to r at >= 90 % success counted by KEY (None: not even 0)."""
+    contiguous = None
+    for r in radii:
+        c = cells.get((planner, r))
+        if not c or c["refused"] or c[key] is None or c[key] < 0.9:
+            break
+        contiguous = r
+    return contiguous
+
+
+def budget_table(bench, summary, sweep_cells):
+    """MPD at its own guidance budget (the sweep's cells) beside MPD at FP's."""
+    size, radii = bench.size, bench.size["radii"]
+    cells = {("mpd", r): c for (p, r), c in sweep_cells.items() if p == "mpd"}
+    cells |= read_cells(bench, [((name, r), bench.path("budget", f"{name}_r{r:g}"), "mpd", r, size["sweep_plans"],
+                                 overrides) for name, _, overrides in MPD_BUDGETS for r in radii])
+    summary["budget"] = [{"planner": p, "radius": r, **c} for (p, r), c in sorted(cells.items()) if p != "mpd"]
+    text = ["### MPD's guidance budget\n",
+            f"The paper's scene, {size['sweep_plans']} plans per radius; MPD as in the sweep (60 gradient steps per "
+            "plan) and at FP's budget.\n",
+            "| planner, counted by | " + " | ".join(f"{r:g}" for r in radii) + " | largest radius ≥ 90 % |",
+            "|---|" + "---|" * (len(radii) + 1)]
+    for name, label in [("mpd", "MPD, 60 gradient steps")] + [(n, l) for n, l, _ in MPD_BUDGETS]:
+        for key, way in WAYS:
+            contiguous = largest_radius(cells, name, key, radii)
+            summary.setdefault("budget_largest_radius_90", {})[f"{name}/{way}"] = contiguous
+            text.append(f"| {label}, {way} | " + " | ".join(rate_text(cells.get((name, r)), key) for r in radii) +
+                        f" | {'–' if contiguous is None else f'{contiguous:g}'} |")
     return text + [""]
 
 
@@ -744,7 +782,7 @@ def training_table(bench, summary):
     return "\n".join(text) + "\n"
 
 
-STAGES = ["data", "train-reach", "sweep", "scales", "problems", "examples", "train-cross", "stitching", "recount",
+STAGES = ["data", "train-reach", "sweep", "scales", "budget", "problems", "examples", "train-cross", "stitching", "recount",
           "results"]
 
 

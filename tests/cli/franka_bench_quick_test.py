@@ -56,6 +56,7 @@ planners = ["mpd", "vae", "fp", "fp_split", "rrt_connect"]
 cells = {(c["planner"], c["radius"]) for c in summary["sweep"]}
 assert cells == {(p, r) for p in planners for r in (0.0, 0.1, 0.2, 0.3)}, sorted(cells)
 assert len(summary["scales"]) == 2, summary["scales"]
+assert {(c["planner"], c["radius"]) for c in summary["budget"]} == {("mpd_g10", r) for r in (0.0, 0.1, 0.2, 0.3)}
 assert sorted(summary["problems"]["planners"]) == sorted(planners), summary["problems"]
 assert summary["recount"]["differ"] == 0 and summary["recount"]["plans"] > 0, summary["recount"]
 # RRT-Connect checks the whole arm itself: at 0.1 m every plan it returns is clear.
