@@ -90,7 +90,8 @@ SCENE = "configs/scenes/franka_sphere.yaml"
 START_TCP, GOAL_TCP = "0.5,-0.3,0.2", "0.5,0.3,0.2"
 
 FULL = {"episodes": None, "train": [], "plans_per_pair": 64, "radii": [round(0.025 * i, 3) for i in range(14)],
-        "sweep_plans": 64, "scales": [0.5, 1.0, 1.75, 2.5, 3.5, 5.0], "scale_radii": [0.1, 0.15, 0.2, 0.25],
+        "sweep_plans": 64, "scales": [0.5, 1.0, 1.75, 2.5, 3.5, 5.0],
+        "scale_radii": [0.1, 0.125, 0.15, 0.175, 0.2, 0.225, 0.25],
         "problems": 100, "problem_plans": 8, "example_radii": [0.1, 0.2], "example_plans": 8}
 QUICK = {"episodes": 256,
          "train": ["train.steps=20", "train.batch_size=16", "train.eval_every=0", "train.checkpoint_every=10",
