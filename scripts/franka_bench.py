@@ -12,7 +12,7 @@ where it stopped (a stopped training resumes from its newest checkpoint):
   sweep       ROOT/sweep/<planner>_r<R>.*   the paper's scene, one sphere of radius R, every
                                             planner, plans executed in MuJoCo
   scales      ROOT/scales/s<S>_r<R>.*       FP + split at several guidance scales
-  budget      ROOT/budget/<name>_r<R>.*     MPD at FP's guidance budget, every radius
+  budget      ROOT/budget/<name>_r<R>.*     MPD at other guidance settings, every radius
   problems    ROOT/problems/...             random blocked scenes (`flowplan problems`), every planner
   examples    ROOT/results/example_*.png    a few plans of every planner, drawn
   train-cross ROOT/train/cross_*/done.json  `flowplan train` of every franka_cross row
@@ -80,12 +80,17 @@ PLANNERS = [("mpd", "MPD", "reach_mpd", []),
             ("fp", "FP", "reach_fp", []),
             ("fp_split", "FP + split", "reach_fp", ["sampler.splitting=midpoint"]),
             ("rrt_connect", "RRT-Connect", None, [])]
-# MPD at FP's guidance budget. MPD guides the last 7 of its 25 denoising steps and 5 noise-free steps after them,
-# 5 gradient steps each: 60 gradient steps per plan. FP takes one per Euler step: 10. Name, label, overrides.
+# MPD with other guidance settings than the sweep's (FP's cost weights, 60 gradient steps: MPD guides the last 7
+# of its 25 denoising steps and 5 noise-free steps after them, 5 gradient steps each): FP's budget of gradient
+# steps (one per Euler step: 10), and MPD's published cost weights. Name, label, overrides.
 MPD_BUDGETS = [("mpd_g10", "MPD, 10 gradient steps (1 per guided step, 3 noise-free steps)",
-                ["sampler.ddpm.guide_iterations=1", "sampler.ddpm.extra_steps=3"])]
+                ["sampler.ddpm.guide_iterations=1", "sampler.ddpm.extra_steps=3"]),
+               ("mpd_paper_weights", "MPD, MPD's cost weights (collision 1e-2, GP prior 1e-7)",
+                ["guidance.collision_weight=0.01", "guidance.smoothness_weight=1e-7"])]
 PAPER_RADIUS = {"mpd": 0.03, "vae": 0.05, "fp": 0.15, "fp_split": 0.20}
 WAYS = [("success_rate_tcp", "TCP"), ("success_rate_arm", "whole arm"), ("success_rate_executed", "executed")]
+# The paper's count: the TCP clear of the sphere and the last TCP at the goal, whatever the joint speeds.
+ANY_SPEED = ("success_rate_tcp_any_speed", "TCP, any speed")
 SCENE = "configs/scenes/franka_sphere.yaml"
 START_TCP, GOAL_TCP = "0.5,-0.3,0.2", "0.5,0.3,0.2"
 
@@ -619,10 +624,19 @@ def read_cells(bench, cells_to_read):
             cells[key] = {"refused": True}
         else:
             cells[key] = {k: report.get(k) for k, _ in WAYS} | {
-                "refused": False, "num_samples": report["num_samples"],
+                "refused": False, "num_samples": report["num_samples"], ANY_SPEED[0]: tcp_any_speed(report),
                 "wall_time_s": report["wall_time_s"], "planning_time_s_per_plan": report["wall_time_s"] /
                 report["num_samples"]}
     return cells
+
+
+def tcp_any_speed(report):
+    """The fraction of a plan report's plans whose TCP stays clear and ends within the goal tolerance, without the
+    joint-speed limit of its success counts (None for a report without plans)."""
+    samples = report.get("samples") or []
+    if not samples:
+        return None
+    return sum(not s["tcp_collision"] and s["goal_distance"] <= report["goal_tolerance"] for s in samples) / len(samples)
 
 
 def rate_text(cell, key):
@@ -641,16 +655,17 @@ def obstacle_tables(bench, summary):
     summary["largest_radius_90"] = {}
     text = ["### Obstacle avoidance (franka_reach models, the paper's scene)\n",
             f"Success over {size['sweep_plans']} plans per radius, counted three ways (each also needs the last TCP "
-            "within 3 cm of the goal and joint speeds within 1.5 times the limits); radius 0 is the empty scene; "
+            "within 3 cm of the goal and joint speeds within 1.5 times the limits) and, as the paper counts, by the "
+            "TCP at any joint speed; radius 0 is the empty scene; "
             "\"refused\": the start or goal TCP lies inside the sphere (counted as no success); \"largest radius\": the "
             "largest r such that every radius from 0 to r reaches 90 %.\n",
             "| planner, counted by | " + " | ".join(f"{r:g}" for r in radii) + " | largest radius ≥ 90 % | paper |",
             "|---|" + "---|" * (len(radii) + 2)]
     for planner, label, *_ in PLANNERS:
-        for key, way in WAYS:
+        for key, way in WAYS + [ANY_SPEED]:
             contiguous = largest_radius(cells, planner, key, radii)
             summary["largest_radius_90"][f"{planner}/{way}"] = contiguous
-            paper = PAPER_RADIUS.get(planner) if key == "success_rate_tcp" else None
+            paper = PAPER_RADIUS.get(planner) if key == ANY_SPEED[0] else None
             text.append(f"| {label}, {way} | " + " | ".join(rate_text(cells.get((planner, r)), key) for r in radii) +
                         f" | {'–' if contiguous is None else f'{contiguous:g}'} | {'' if paper is None else paper} |")
     text += ["\nPlanning time per plan (s) at each radius: the wall time of the `flowplan plan` call's planning (both "
@@ -688,19 +703,19 @@ def largest_radius(cells, planner, key, radii):
 
 
 def budget_table(bench, summary, sweep_cells):
-    """MPD at its own guidance budget (the sweep's cells) beside MPD at FP's."""
+    """MPD as in the sweep (FP's costs, 60 gradient steps) beside MPD with each of MPD_BUDGETS' settings."""
     size, radii = bench.size, bench.size["radii"]
     cells = {("mpd", r): c for (p, r), c in sweep_cells.items() if p == "mpd"}
     cells |= read_cells(bench, [((name, r), bench.path("budget", f"{name}_r{r:g}"), "mpd", r, size["sweep_plans"],
                                  overrides) for name, _, overrides in MPD_BUDGETS for r in radii])
     summary["budget"] = [{"planner": p, "radius": r, **c} for (p, r), c in sorted(cells.items()) if p != "mpd"]
-    text = ["### MPD's guidance budget\n",
-            f"The paper's scene, {size['sweep_plans']} plans per radius; MPD as in the sweep (60 gradient steps per "
-            "plan) and at FP's budget.\n",
+    text = ["### MPD's guidance settings\n",
+            f"The paper's scene, {size['sweep_plans']} plans per radius; MPD as in the sweep (FP's cost weights, 60 "
+            "gradient steps per plan), at FP's budget of gradient steps, and with MPD's published cost weights.\n",
             "| planner, counted by | " + " | ".join(f"{r:g}" for r in radii) + " | largest radius ≥ 90 % |",
             "|---|" + "---|" * (len(radii) + 1)]
     for name, label in [("mpd", "MPD, 60 gradient steps")] + [(n, l) for n, l, _ in MPD_BUDGETS]:
-        for key, way in WAYS:
+        for key, way in WAYS + [ANY_SPEED]:
             contiguous = largest_radius(cells, name, key, radii)
             summary.setdefault("budget_largest_radius_90", {})[f"{name}/{way}"] = contiguous
             text.append(f"| {label}, {way} | " + " | ".join(rate_text(cells.get((name, r)), key) for r in radii) +

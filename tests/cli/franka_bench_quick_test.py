@@ -56,7 +56,21 @@ planners = ["mpd", "vae", "fp", "fp_split", "rrt_connect"]
 cells = {(c["planner"], c["radius"]) for c in summary["sweep"]}
 assert cells == {(p, r) for p in planners for r in (0.0, 0.1, 0.2, 0.3)}, sorted(cells)
 assert len(summary["scales"]) == 2, summary["scales"]
-assert {(c["planner"], c["radius"]) for c in summary["budget"]} == {("mpd_g10", r) for r in (0.0, 0.1, 0.2, 0.3)}
+assert {(c["planner"], c["radius"]) for c in summary["budget"]} == {
+    (name, r) for name in ("mpd_g10", "mpd_paper_weights") for r in (0.0, 0.1, 0.2, 0.3)}, summary["budget"]
+# The paper's count (TCP clear and at the goal, any joint speed) from the per-plan flags of each report: never
+# below the TCP count with the speed limit, and equal to it where no plan breaks the limit.
+for c in summary["sweep"]:
+    if c["refused"]:
+        continue
+    report = json.load(open(os.path.join(root, "sweep", f"{c['planner']}_r{c['radius']:g}.json")))
+    plans = report["samples"]
+    clear = [not p["tcp_collision"] and p["goal_distance"] <= report["goal_tolerance"] for p in plans]
+    assert c["success_rate_tcp_any_speed"] == sum(clear) / len(plans), c
+    assert c["success_rate_tcp_any_speed"] >= c["success_rate_tcp"], c
+    if all(p["feasible"] for p in plans):
+        assert c["success_rate_tcp_any_speed"] == c["success_rate_tcp"], c
+assert all(f"{p}/TCP, any speed" in summary["largest_radius_90"] for p in planners), summary["largest_radius_90"]
 assert sorted(summary["problems"]["planners"]) == sorted(planners), summary["problems"]
 assert summary["recount"]["differ"] == 0 and summary["recount"]["plans"] > 0, summary["recount"]
 # RRT-Connect checks the whole arm itself: at 0.1 m every plan it returns is clear.
