@@ -40,6 +40,7 @@ order given (e.g. --rows cross_mpd,cross_fp_s0 --only train-cross,stitching).
 The sizes of the full run and how they were chosen: docs/results.md.
 """
 import argparse
+import contextlib
 import fcntl
 import glob
 import json
@@ -277,17 +278,12 @@ class Bench:
     def data(self):
         for name, _ in DATA_SETS:
             out, command, request = self.data_command(name)
-            if os.path.exists(out) and recorded(out + ".request", request):
-                continue
-            lock = claim(out + ".lock")
-            if lock is None:
-                continue
-            if not (os.path.exists(out) and recorded(out + ".request", request)):  # not made by another driver since
-                discard([out, out + ".request"])
-                print(f"data: {name}", flush=True)
-                self.call(command)
-                write_text(out + ".request", request)  # last: a request marks a finished output
-            lock.close()
+            with stale(lambda: os.path.exists(out) and recorded(out + ".request", request), out + ".lock",
+                       [out, out + ".request"]) as ours:
+                if ours:
+                    print(f"data: {name}", flush=True)
+                    self.call(command)
+                    write_text(out + ".request", request)  # last: a request marks a finished output
 
     # -- train ----------------------------------------------------------------
     def train_reach(self):
@@ -343,40 +339,30 @@ class Bench:
                 print(f"stitching: {row} not trained yet, skipped", flush=True)
                 continue
             out, command, request, plans = self.stitching_command(row)
-            if os.path.exists(out) and recorded(out + ".request", request):
-                continue
-            lock = claim(out + ".lock")
-            if lock is None:
-                continue
-            if not (os.path.exists(out) and recorded(out + ".request", request)):
-                # `flowplan eval stitching --out X.json.tmp` writes its plans to X.json.plans.h5
-                discard([out, out + ".plans.h5", out + ".request"])
-                print(f"stitching: {row}", flush=True)
-                self.call(command)
-                report = json.load(open(out + ".tmp"))
-                if report["test"]["num_plans"] != plans:
-                    sys.exit(f"{out}.tmp: {report['test']['num_plans']} test plans, expected {plans}")
-                os.replace(out + ".tmp", out)
-                write_text(out + ".request", request)
-            lock.close()
+            # `flowplan eval stitching --out X.json.tmp` writes its plans to X.json.plans.h5
+            with stale(lambda: os.path.exists(out) and recorded(out + ".request", request), out + ".lock",
+                       [out, out + ".plans.h5", out + ".request"]) as ours:
+                if ours:
+                    print(f"stitching: {row}", flush=True)
+                    self.call(command)
+                    report = json.load(open(out + ".tmp"))
+                    if report["test"]["num_plans"] != plans:
+                        sys.exit(f"{out}.tmp: {report['test']['num_plans']} test plans, expected {plans}")
+                    os.replace(out + ".tmp", out)
+                    write_text(out + ".request", request)
 
     # -- planning around spheres ---------------------------------------------
     def plan_cell(self, prefix, planner, radius, plans, extra=(), plot=False):
         """One `flowplan plan` call on the paper's scene. Its request, written last, marks PREFIX.json (or
         PREFIX.refused: the start or goal lies inside the sphere) and PREFIX.png, if drawn, as finished."""
         command, request = self.plan_command(prefix, planner, radius, plans, extra, plot)
-        if recorded(prefix + ".request", request):
-            return
-        lock = claim(prefix + ".lock")
-        if lock is None:
-            return
-        if not recorded(prefix + ".request", request):  # not made by another driver since
-            discard([prefix + ext for ext in (".json", ".h5", ".png", ".refused", ".request")])
-            ok, output = self.call(command, accept_refusal=True)
-            if not ok:
-                write_text(prefix + ".refused", output)
-            write_text(prefix + ".request", request)
-        lock.close()
+        with stale(lambda: recorded(prefix + ".request", request), prefix + ".lock",
+                   [prefix + ext for ext in (".json", ".h5", ".png", ".refused", ".request")]) as ours:
+            if ours:
+                ok, output = self.call(command, accept_refusal=True)
+                if not ok:
+                    write_text(prefix + ".refused", output)
+                write_text(prefix + ".request", request)
 
     def empty_scene(self):
         path = self.path("scenes", "empty.yaml")
@@ -535,6 +521,27 @@ def claim(path):
         lock.close()
         return None
     return lock
+
+
+@contextlib.contextmanager
+def stale(is_current, lock_path, outputs):
+    """Yields True to the one driver that is to make an output: is_current() is false, before and after it locks
+    LOCK_PATH (another driver may have made it meanwhile); the OUTPUTS of another request are removed first.
+    Yields False when the output is current or another driver holds the lock."""
+    if is_current():
+        yield False
+        return
+    lock = claim(lock_path)
+    if lock is None:
+        yield False
+        return
+    try:
+        ours = not is_current()
+        if ours:
+            discard(outputs)
+        yield ours
+    finally:
+        lock.close()
 
 
 def recorded(marker, request):
