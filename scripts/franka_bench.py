@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """The Franka benchmarks (SPEC section 4 and beyond), one resumable run.
 
-usage: scripts/franka_bench.py [--quick] [--root DIR] [--only STAGE,...] [--rows ROW,...] [--flowplan BIN]
+usage: /usr/bin/python3 scripts/franka_bench.py [--quick] [--root DIR] [--only STAGE,...] [--rows ROW,...]
+                                                [--flowplan BIN]
+(Debian's python3-h5py and python3-yaml; build flowplan first: make build)
 
 Stages, in order; each writes its output atomically and skips an output that
 exists and was made by the current request (below), so a stopped run continues
@@ -747,8 +749,9 @@ def plot_sweep(cells, radii, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    figure, axes = plt.subplots(1, 3, figsize=(13, 3.8), sharey=True)
-    for axis, (key, way) in zip(axes, WAYS):
+    ways = WAYS + [ANY_SPEED]  # the last panel counts as the paper does
+    figure, axes = plt.subplots(1, len(ways), figsize=(4.3 * len(ways), 3.8), sharey=True)
+    for axis, (key, way) in zip(axes, ways):
         for planner, label, *_ in PLANNERS:
             xs = [r for r in radii if (planner, r) in cells and
                   (cells[(planner, r)]["refused"] or cells[(planner, r)][key] is not None)]
@@ -812,12 +815,17 @@ STAGES = ["data", "train-reach", "sweep", "scales", "budget", "problems", "examp
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="every stage at toy size")
-    parser.add_argument("--root", help="output folder (runs/franka_bench, quick: runs/franka_bench_quick)")
+    parser.add_argument("--root", help="output folder (default, in the repository: runs/franka_bench, quick: "
+                        "runs/franka_bench_quick)")
     parser.add_argument("--only", help=f"comma-separated stages to run ({', '.join(STAGES)})")
     parser.add_argument("--rows", help="comma-separated training rows to train and evaluate, in this order")
-    parser.add_argument("--flowplan", default=os.environ.get("FLOWPLAN", "build/apps/flowplan/flowplan"))
+    parser.add_argument("--flowplan", default=os.environ.get("FLOWPLAN"),
+                        help="the flowplan binary (default: $FLOWPLAN, else the repository's build/apps/flowplan/flowplan)")
     args = parser.parse_args()
-    args.root = args.root or ("runs/franka_bench_quick" if args.quick else "runs/franka_bench")
+    repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    # Defaults are in the repository, from whatever folder the driver runs; given paths are from that folder.
+    args.root = args.root or os.path.join(repo, "runs", "franka_bench_quick" if args.quick else "franka_bench")
+    args.flowplan = args.flowplan or os.path.join(repo, "build", "apps", "flowplan", "flowplan")
     stages = STAGES if not args.only else args.only.split(",")
     for stage in stages:
         if stage not in STAGES:
@@ -827,12 +835,11 @@ def main():
         unknown = [row for row in args.rows if row not in train_rows()]
         if unknown:
             sys.exit(f"--rows: unknown row {unknown[0]!r} (rows: {', '.join(train_rows())})")
-    repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    if not os.access(args.flowplan, os.X_OK):
+        sys.exit(f"--flowplan: {os.path.abspath(args.flowplan)} is not an executable (build first: make build)")
     args.root = os.path.relpath(os.path.abspath(args.root), repo)
     args.flowplan = os.path.relpath(os.path.abspath(args.flowplan), repo)
     os.chdir(repo)
-    if not os.access(args.flowplan, os.X_OK):
-        sys.exit(f"--flowplan: {args.flowplan} is not an executable (build first: make build)")
     os.makedirs(args.root, exist_ok=True)
     bench = Bench(args)
 
