@@ -22,6 +22,7 @@ import argparse
 import json
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 
@@ -71,6 +72,20 @@ for c in summary["sweep"]:
     if all(p["feasible"] for p in plans):
         assert c["success_rate_tcp_any_speed"] == c["success_rate_tcp"], c
 assert all(f"{p}/TCP, any speed" in summary["largest_radius_90"] for p in planners), summary["largest_radius_90"]
+# The tables' aggregates, recomputed here: a seeded row is the mean of its seeds' report means ± their sample
+# standard deviation; the largest radius is the last of the radii from 0 up that all reach 90 %.
+for label, value in list(summary["table1"].items()) + list(summary["table2"].items()):
+    if "seeds" not in value:
+        continue
+    means = [json.load(open(os.path.join(root, "stitching", f"{row}.json")))["test"]["mean"] for row in value["seeds"]]
+    assert abs(value["mean_of_seeds"] - statistics.mean(means)) < 1e-9, (label, value, means)
+    assert abs(value["std_of_seed_means"] - statistics.stdev(means)) < 1e-9, (label, value, means)
+for p in planners:
+    for key, way in [("success_rate_tcp", "TCP"), ("success_rate_arm", "whole arm"),
+                     ("success_rate_executed", "executed"), ("success_rate_tcp_any_speed", "TCP, any speed")]:
+        rates = {c["radius"]: (0.0 if c["refused"] else c[key]) for c in summary["sweep"] if c["planner"] == p}
+        reached = [r for r in sorted(rates) if all(rates[q] >= 0.9 for q in sorted(rates) if q <= r)]
+        assert summary["largest_radius_90"][f"{p}/{way}"] == (reached[-1] if reached else None), (p, way, rates)
 assert sorted(summary["problems"]["planners"]) == sorted(planners), summary["problems"]
 assert summary["recount"]["differ"] == 0 and summary["recount"]["plans"] > 0, summary["recount"]
 # RRT-Connect checks the whole arm itself: at 0.1 m every plan it returns is clear.
