@@ -23,10 +23,11 @@ Checks (max abs differences, written to the JSON under "checks"):
   unguided_split_plan  the same with midpoint splitting
   guided_plan          guided around one sphere, without splitting
   guided_split_plan    guided around one sphere, with splitting
+  guided_shapes_split_plan  guided around a box, a cylinder and a capsule, with splitting
 The export computes a plan with the splitting it was exported with
 (`splitting` attribute); the other variant is composed from the export's
-normalize / integrate / denormalize / inpaint methods as its plan() composes
-them. The script exits with status 1 if `network`, `unguided_plan` or
+normalize / denormalize methods and its sampler's integrate() as its plan()
+composes them. The script exits with status 1 if `network`, `unguided_plan` or
 `unguided_split_plan` exceeds 1e-4. Guided plans take the cost gradient by
 autograd here and by written-out formulas in the export, so they agree to
 rounding, amplified by the sampler.
@@ -287,22 +288,74 @@ class ArmKinematics(nn.Module):
 # Guidance costs (values; their gradients come from autograd)
 # ----------------------------------------------------------------------------
 
+def quaternion_rotation(quaternion):
+    """(K, 4) quaternions (w, x, y, z), any norm -> (K, 3, 3): R = (w^2 - |v|^2) I + 2 v v^T + 2 w [v]x."""
+    q = quaternion / torch.linalg.vector_norm(quaternion, dim=-1, keepdim=True)
+    w, v = q[:, 0], q[:, 1:]
+    cross = torch.zeros(len(q), 3, 3, dtype=q.dtype)
+    cross[:, 0, 1], cross[:, 0, 2], cross[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    cross = cross - cross.transpose(1, 2)
+    eye = torch.eye(3, dtype=q.dtype).expand(len(q), 3, 3)
+    return ((w * w - (v * v).sum(-1)).view(-1, 1, 1) * eye + 2.0 * v.unsqueeze(2) * v.unsqueeze(1)
+            + 2.0 * w.view(-1, 1, 1) * cross)
+
+
+def in_frame(points, centres, rotations):
+    """points (N, 3) in the frames of K shapes: (N, K, 3) = R_k^T (p - c_k)."""
+    return torch.einsum("kji,nkj->nki", rotations, points.unsqueeze(1) - centres.unsqueeze(0))
+
+
+def rectangle_distance(p, half):
+    """Signed distance of points p (..., n) to the axis-aligned box [-half, half] (..., n):
+    to the closest point outside; minus the distance to the nearest face inside."""
+    closest = torch.maximum(torch.minimum(p, half), -half)
+    outside = torch.linalg.vector_norm(p - closest, dim=-1)
+    inside = (half - p.abs()).min(-1).values
+    return torch.where(outside > 0, outside, -inside)
+
+
+def scene_distance(points, scene):
+    """Signed distance (N, K) of points (N, 3) to every obstacle of a scene {kind: rows}."""
+    columns = []
+    for kind, rows in scene.items():
+        rows = rows.to(points.dtype)
+        if kind == "spheres":
+            columns.append(torch.cdist(points, rows[:, 0:3]) - rows[:, 3])
+        elif kind == "boxes":
+            local = in_frame(points, rows[:, 0:3], quaternion_rotation(rows[:, 6:10]))
+            columns.append(rectangle_distance(local, 0.5 * rows[:, 3:6].unsqueeze(0)))
+        elif kind == "cylinders":
+            local = in_frame(points, rows[:, 0:3], quaternion_rotation(rows[:, 5:9]))
+            side = torch.stack([torch.linalg.vector_norm(local[..., 0:2], dim=-1), local[..., 2]], -1)
+            half = torch.stack([rows[:, 3], 0.5 * rows[:, 4]], -1).unsqueeze(0)
+            columns.append(rectangle_distance(side, half))
+        elif kind == "capsules":
+            a, b = rows[:, 0:3], rows[:, 3:6]
+            ab = b - a
+            t = (((points.unsqueeze(1) - a) * ab).sum(-1) / (ab * ab).sum(-1).clamp_min(1e-300)).clamp(0, 1)
+            nearest = a + t.unsqueeze(-1) * ab
+            columns.append(torch.linalg.vector_norm(points.unsqueeze(1) - nearest, dim=-1) - rows[:, 6])
+        else:
+            raise ValueError(f"unknown obstacle kind {kind}")
+    return torch.cat(columns, 1) if columns else torch.zeros(len(points), 0, dtype=points.dtype)
+
+
 class CollisionCost:
-    """Sum over states, spheres and obstacles of relu(margin + r_s + r_k - |c_s - o_k|).
-    x (B, T, D) raw, obstacles (K, 4) -> (B,)."""
+    """Sum over states, spheres s and obstacles k of relu(margin + r_s - d_k(c_s)),
+    d_k the signed distance to obstacle k. x (B, T, D) raw, scene {kind: rows} -> (B,)."""
 
     def __init__(self, kinematics, margin):
         self.kinematics = kinematics
         self.margin = margin
 
-    def __call__(self, x, obstacles):
+    def __call__(self, x, scene):
         B, T = x.shape[:2]
         J = self.kinematics.num_joints
         q = x[:, :, 0:J].reshape(B * T, J)                                    # (N, J), N = B T
         centres = self.kinematics.sphere_centres(q)                           # (N, S, 3)
-        diff = centres.unsqueeze(2) - obstacles[:, 0:3].view(1, 1, -1, 3)     # (N, S, K, 3)
-        reach = self.margin + self.kinematics.sphere_radii.view(1, -1, 1) + obstacles[:, 3].view(1, 1, -1)  # (1, S, K)
-        penetration = torch.relu(reach - torch.linalg.vector_norm(diff, dim=-1))  # (N, S, K)
+        N, S = centres.shape[:2]
+        distance = scene_distance(centres.reshape(N * S, 3), scene).view(N, S, -1)  # (N, S, K)
+        penetration = torch.relu(self.margin + self.kinematics.sphere_radii.view(1, -1, 1) - distance)
         return penetration.sum([1, 2]).view(B, T).sum(1)
 
 
@@ -316,7 +369,7 @@ class SmoothnessCost:
         self.J, self.dt = num_joints, dt
         self.a, self.b, self.c = 12.0 / (dt * dt * dt * s2), -6.0 / (dt * dt * s2), 4.0 / (dt * s2)
 
-    def __call__(self, x, obstacles):
+    def __call__(self, x, scene):
         J = self.J
         q, v = x[:, :, 0:J], x[:, :, J:2 * J]                     # (B, T, J) each
         e_q = q[:, 1:] - q[:, :-1] - self.dt * v[:, :-1]           # (B, T-1, J)
@@ -344,7 +397,7 @@ class Guide:
                       (float(settings["smoothness_weight"]),
                        SmoothnessCost(kinematics.num_joints, dt, float(settings["smoothness_sigma"])))]
 
-    def gradient(self, x_n, obstacles):
+    def gradient(self, x_n, scene):
         """(B, T, D) normalized -> (B, T, D), the weighted clipped gradient in normalized units."""
         with torch.enable_grad():
             raw = self.normalizer.denormalize_unclamped(x_n.detach()).requires_grad_(True)  # (B, T, D)
@@ -352,14 +405,14 @@ class Guide:
             for weight, cost in self.terms:
                 if weight == 0.0:
                     continue
-                part, = torch.autograd.grad(cost(raw, obstacles).sum(), raw)  # (B, T, D) raw units
+                part, = torch.autograd.grad(cost(raw, scene).sum(), raw)  # (B, T, D) raw units
                 if self.clip > 0.0:
                     part = part / (torch.linalg.vector_norm(part, dim=-1, keepdim=True).clamp_min(self.clip) / self.clip)
                 gradient = gradient + weight * part
         return gradient * (0.5 * (self.normalizer.hi - self.normalizer.lo))
 
-    def step(self, x_n, t, obstacles, scale):
-        return x_n - (scale * self.schedule(t)) * self.gradient(x_n, obstacles)
+    def step(self, x_n, t, scene, scale):
+        return x_n - (scale * self.schedule(t)) * self.gradient(x_n, scene)
 
 
 # ----------------------------------------------------------------------------
@@ -375,9 +428,9 @@ class FlowPlanner:
         self.split_steps = max(1, steps // 2)
         self.guide = guide
 
-    def integrate(self, x, s, g, t0, steps, obstacles, scale):
+    def integrate(self, x, s, g, t0, steps, scene, scale):
         """Euler from flow time t0 to 1: x (B, T', D) normalized, boundaries s, g (B, D);
-        guided after every step when obstacles (K, 4) is given."""
+        guided after every step when a scene {kind: rows} is given."""
         cond = None if self.inpaint else torch.cat([s, g], -1)  # (B, 2D) under direct conditioning
         if self.inpaint:
             x = inpaint(x, s, g)
@@ -385,16 +438,17 @@ class FlowPlanner:
         for i in range(steps):
             t = torch.full([x.size(0)], t0 + i * h, dtype=x.dtype)
             x = x + h * self.net(inpaint(x, s, g) if self.inpaint else x, t, cond)
-            if obstacles is not None:
-                x = self.guide.step(x, t0 + (i + 1) * h, obstacles, scale)
+            if scene is not None:
+                x = self.guide.step(x, t0 + (i + 1) * h, scene, scale)
             if self.inpaint:
                 x = inpaint(x, s, g)
         return x
 
-    def plan(self, start, goal, noise, renoise=None, obstacles=None, scale=0.0, split=False):
-        """start, goal (B, D) raw; noise, renoise (B, T, D) standard normal; obstacles (K, 4)
-        -> (B, T, D) raw plans. Unguided when obstacles is None or scale is 0."""
-        guided = obstacles.float() if obstacles is not None and obstacles.size(0) > 0 and scale != 0.0 else None
+    def plan(self, start, goal, noise, renoise=None, scene=None, scale=0.0, split=False):
+        """start, goal (B, D) raw; noise, renoise (B, T, D) standard normal; scene {kind: (K, columns)}
+        -> (B, T, D) raw plans. Unguided without obstacles or at scale 0."""
+        guided = ({kind: rows.float() for kind, rows in scene.items()}
+                  if scene and scale != 0.0 and sum(len(r) for r in scene.values()) > 0 else None)
         start, goal = start.float(), goal.float()
         s, g = self.normalizer.normalize(start), self.normalizer.normalize(goal)
         x = self.integrate(noise.float(), s, g, 0.0, self.steps, guided, scale)
@@ -471,28 +525,34 @@ def median_ms(body, repeats, warmup=3):
 
 class ExportReference:
     """Plans of the exported planner: its own plan() for the splitting it was
-    exported with, otherwise its integrate() composed as plan() composes it."""
+    exported with, otherwise its sampler's integrate() composed as its plan()
+    composes it."""
 
     def __init__(self, module):
         self.m = module
         self.splits = module.splitting == "midpoint"
 
-    def plan(self, start, goal, noise, renoise, obstacles, scale, split):
+    def plan(self, start, goal, noise, renoise, scene, scale, split):
         m = self.m
+        scene = dict(scene or {})
         if split == self.splits:
-            return m.plan(start, goal, noise, renoise if split else None, obstacles, scale), "export.plan"
-        guided = obstacles if obstacles is not None and scale != 0.0 else None
+            return m.plan(start, goal, noise, renoise if split else None, scale=scale, **scene), "export.plan"
+        sampler = m.sampler
+        opts = dict(m.settings)
+        opts["guidance.scale"] = scale
+        guided = sampler.guide.active(scene, opts)
         s, g = m.normalize(start), m.normalize(goal)
-        x = m.integrate(noise, s, g, 0.0, m.steps, guided, scale)
+        steps = int(opts["sampler.steps"])
+        x = sampler.integrate(noise, s, g, 0.0, steps, scene, opts, m.schedule, guided)
         if split:
             B, half = x.size(0), m.horizon // 2
             before_mid, after_mid = x[:, half - 1], x[:, half]
             x = 0.5 * renoise + 0.5 * x
             halves = torch.cat([x[:, 0:half], x[:, half:m.horizon]], 0)
-            refined = m.integrate(halves, torch.cat([s, after_mid], 0), torch.cat([before_mid, g], 0), 0.5,
-                                  max(1, m.steps // 2), guided, scale)
+            refined = sampler.integrate(halves, torch.cat([s, after_mid], 0), torch.cat([before_mid, g], 0), 0.5,
+                                        max(1, steps // 2), scene, opts, m.schedule, guided)
             x = torch.cat([refined[0:B], refined[B:2 * B]], 1)
-        return m.inpaint(m.denormalize(x), start, goal), "export.integrate"
+        return inpaint(m.denormalize(x), start, goal), "export.sampler.integrate"
 
 
 def main():
@@ -531,7 +591,8 @@ def main():
 
     export = torch.jit.load(args.export, map_location="cpu")
     reference = ExportReference(export)
-    compiled = yaml.safe_load(export.guidance)
+    compiled = {key[len("guidance."):]: value for key, value in export.settings.items() if key.startswith("guidance.")}
+    compiled["schedule"] = export.schedule
     mismatched = sorted(k for k in compiled if k in settings and compiled[k] != settings[k])
     if mismatched:
         print(f"warning: the export's compiled guidance differs from the checkpoint's in {mismatched}; "
@@ -544,19 +605,23 @@ def main():
     t = torch.tensor([0.3, 0.8])                               # (2,)
     cond = torch.randn(2, C) if C > 0 else None
     with torch.inference_mode():
-        checks["network"] = (net(x, t, cond) - export.velocity(x, t, cond)).abs().max().item()
+        checks["network"] = (net(x, t, cond) - export.sampler.network.forward(x, t, cond)).abs().max().item()
 
     start_q = export.ik(torch.tensor([[0.5, -0.3, 0.2], [0.5, 0.3, 0.2]], dtype=torch.float64)).float()  # (2, J)
     start = torch.cat([start_q[0:1], torch.zeros(1, D - start_q.size(1))], 1)   # (1, D): q, then q_dot at rest
     goal = torch.cat([start_q[1:2], torch.zeros(1, D - start_q.size(1))], 1)
     noise, renoise = torch.randn(1, T, D), torch.randn(1, T, D)                  # (1, T, D)
-    sphere = torch.tensor([[0.5, 0.0, 0.2, 0.1]])                               # (K = 1, 4)
+    sphere = {"spheres": torch.tensor([[0.5, 0.0, 0.2, 0.1]])}                  # (K = 1, 4)
+    shapes = {"boxes": torch.tensor([[0.5, 0.0, 0.1, 0.1, 0.2, 0.2, 0.97, 0.0, 0.0, 0.24]]),   # (1, 10)
+              "cylinders": torch.tensor([[0.45, 0.05, 0.3, 0.04, 0.2, 0.7, 0.7, 0.0, 0.0]]),   # (1, 9)
+              "capsules": torch.tensor([[0.55, -0.1, 0.25, 0.55, 0.1, 0.25, 0.03]])}         # (1, 7)
     cases = [("unguided_plan", None, 0.0, False), ("unguided_split_plan", None, 0.0, True),
-             ("guided_plan", sphere, scale, False), ("guided_split_plan", sphere, scale, True)]
-    for name, obstacles, s, split in cases:
+             ("guided_plan", sphere, scale, False), ("guided_split_plan", sphere, scale, True),
+             ("guided_shapes_split_plan", shapes, scale, True)]
+    for name, scene, s, split in cases:
         with torch.no_grad():
-            ours = planner.plan(start, goal, noise, renoise, obstacles, s, split)
-            theirs, references[name] = reference.plan(start, goal, noise, renoise, obstacles, s, split)
+            ours = planner.plan(start, goal, noise, renoise, scene, s, split)
+            theirs, references[name] = reference.plan(start, goal, noise, renoise, scene, s, split)
         checks[name] = (ours - theirs).abs().max().item()
     failed = [k for k in ("network", "unguided_plan", "unguided_split_plan") if not checks[k] <= TOLERANCE]
 

@@ -12,31 +12,38 @@
 
 #include <filesystem>
 
-#include "kinematics/robot.h"
+#include <unistd.h>
+
 #include "models/model_config.h"
-#include "planning/export.h"
-#include "planning/flow_planner.h"
+#include "planning/assemble.h"
 #include "sim/franka_model.h"
 
 namespace flowplan {
 namespace {
 
-planning::FlowPlanner MakePlanner(bool split) {
+std::unique_ptr<planning::LearnedPlanner> MakePlanner(bool split) {
   torch::manual_seed(0);
   models::ModelConfig model;
   model.unet.down_dims = {32, 64, 128};
-  auto net = models::MakeTrajectoryNet(model, 14, 0);
-  net->eval();
-  static const auto robot = kinematics::MakeRobot(sim::LoadFrankaModel().description());
-  const auto& d = robot->description();
+  planning::PlannerParts parts;
+  parts.net = models::MakeTrajectoryNet(model, 14, 0);
+  parts.net->eval();
+  parts.trajectory.env = "franka";
+  parts.trajectory.dt = 1.0 / 15.0;
+  parts.trajectory.horizon = 64;
+  for (int j = 1; j <= 7; ++j) parts.trajectory.state_labels.push_back("q" + std::to_string(j));
+  for (int j = 1; j <= 7; ++j) parts.trajectory.state_labels.push_back("dq" + std::to_string(j));
+  parts.trajectory.robot = sim::LoadFrankaModel().description();
+  const auto& d = parts.trajectory.robot;
   torch::Tensor lo = torch::full({14}, -2.0f), hi = torch::full({14}, 2.0f);
   for (int j = 0; j < 7; ++j) {
     lo[j] = static_cast<float>(d.joint_lower[j]);
     hi[j] = static_cast<float>(d.joint_upper[j]);
   }
-  return planning::FlowPlanner(net, models::MinMaxNormalizer(lo, hi), models::Conditioning::kInpaint, 64,
-                               planning::SamplerConfig{10, split ? planning::Splitting::kMidpoint : planning::Splitting::kNone},
-                               planning::GuidanceSetup{robot, 1.0 / 15.0, {}});
+  parts.normalizer = models::MinMaxNormalizer(lo, hi);
+  parts.sampler.steps = 10;
+  parts.sampler.splitting = split ? planning::Splitting::kMidpoint : planning::Splitting::kNone;
+  return planning::AssemblePlanner(parts);
 }
 
 torch::Tensor Obstacles(int count) {
@@ -67,21 +74,23 @@ void BM_Plan(benchmark::State& state) {
   const Case c = Read(state);
   at::set_num_threads(c.threads);
   at::globalContext().setFlushDenormal(true);
-  const planning::FlowPlanner planner = MakePlanner(c.split);
+  const auto planner = MakePlanner(c.split);
   torch::manual_seed(1);
-  const torch::Tensor lo = planner.normalizer().lo(), hi = planner.normalizer().hi();
+  const torch::Tensor lo = planner->module().attr("normalizer").toModule().attr("lo").toTensor();
+  const torch::Tensor hi = planner->module().attr("normalizer").toModule().attr("hi").toTensor();
   const torch::Tensor start = (lo + (hi - lo) * 0.4).expand({c.B, 14}).contiguous();
   const torch::Tensor goal = (lo + (hi - lo) * 0.6).expand({c.B, 14}).contiguous();
   const torch::Tensor noise = torch::randn({c.B, 64, 14}), renoise = torch::randn({c.B, 64, 14});
   const torch::Tensor obstacles = c.spheres > 0 ? Obstacles(c.spheres) : torch::Tensor();
   if (!c.exported) {
     for (auto _ : state) {
-      benchmark::DoNotOptimize(planner.PlanWithNoise(start, goal, noise, c.split ? renoise : torch::Tensor(), obstacles));
+      benchmark::DoNotOptimize(planner->PlanWithNoise(start, goal, noise, c.split ? renoise : torch::Tensor(),
+                                                      geometry::SphereRows(obstacles)));
     }
   } else {
     const std::string path =
         (std::filesystem::temp_directory_path() / ("flowplan_plan_bench_" + std::to_string(::getpid()) + ".pt")).string();
-    planning::ExportPlanner(planner, planning::ExportMetadata{"franka", 1.0 / 15.0, {}, ""}, path);
+    planner->Save(path);
     torch::jit::Module module = torch::jit::load(path);
     std::filesystem::remove(path);
     const torch::jit::IValue re = c.split ? torch::jit::IValue(renoise) : torch::jit::IValue();

@@ -86,7 +86,7 @@ void BM_GenerateFranka(benchmark::State& state) {
   const sim::FrankaLimits& limits = task.model().limits();
   const auto& tcp = dataset.extras.at("tcp").values;
   const auto& torques = dataset.extras.at("torques").values;
-  const int64_t T = dataset.horizon, D = dataset.state_dim;
+  const int64_t T = dataset.info.horizon, D = dataset.info.state_dim();
   int64_t within = 0, arrived = 0;
   double arrival_time = 0.0;
   double torque_ratio = 0.0, speed_ratio = 0.0;
@@ -101,7 +101,7 @@ void BM_GenerateFranka(benchmark::State& state) {
     for (int64_t t = 0; t < T; ++t) {
       const size_t at = static_cast<size_t>((i * T + t) * 3);
       if ((Eigen::Vector3d(tcp[at], tcp[at + 1], tcp[at + 2]) - goal).norm() < 0.02) {
-        arrival_time += static_cast<double>(t) * dataset.dt;
+        arrival_time += static_cast<double>(t) * dataset.info.dt;
         ++arrived;
         break;
       }

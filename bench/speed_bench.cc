@@ -29,12 +29,11 @@
 
 #include "checkpoints/checkpoint.h"
 #include "core/error.h"
-#include "experiment/commands.h"
 #include "experiment/experiment_config.h"
+#include "experiment/trained_planner.h"
+#include "geometry/scene_rows.h"
 #include "models/model_config.h"
 #include "objectives/objective.h"
-#include "planning/export.h"
-#include "planning/flow_planner.h"
 #include "sim/franka_model.h"
 #include "trainer/sharded_gradient.h"
 
@@ -78,25 +77,15 @@ std::string WriteFreshCheckpoint(const std::string& dir) {
   header.config_yaml = experiment::ToYaml(config);
   header.normalizer = models::MinMaxNormalizer(lo, hi);
   header.rng_states = {at::detail::getDefaultCPUGenerator().get_state()};
-  header.env = "franka";
-  header.dt = 1.0 / 15.0;
-  for (int j = 1; j <= 7; ++j) header.state_labels.push_back("q" + std::to_string(j));
-  for (int j = 1; j <= 7; ++j) header.state_labels.push_back("dq" + std::to_string(j));
-  header.horizon = T;
-  header.robot = robot;
+  header.trajectory.env = "franka";
+  header.trajectory.dt = 1.0 / 15.0;
+  for (int j = 1; j <= 7; ++j) header.trajectory.state_labels.push_back("q" + std::to_string(j));
+  for (int j = 1; j <= 7; ++j) header.trajectory.state_labels.push_back("dq" + std::to_string(j));
+  header.trajectory.horizon = T;
+  header.trajectory.robot = robot;
   header.data_fingerprint = "none";
   const std::string path = dir + "/fresh_franka.pt";
   checkpoints::SaveCheckpoint(path, header, {net.get(), ema.get(), nullptr});
-  return path;
-}
-
-std::string Export(const experiment::LoadedPlanner& loaded, const std::string& path) {
-  planning::ExportMetadata metadata;
-  metadata.env = loaded.env;
-  metadata.dt = loaded.dt;
-  metadata.state_labels = loaded.state_labels;
-  metadata.config_yaml = experiment::ToYaml(loaded.config);
-  planning::ExportPlanner(*loaded.planner, metadata, path);
   return path;
 }
 
@@ -144,14 +133,15 @@ int Main(int argc, char** argv) {
   if (checkpoint.empty()) checkpoint = WriteFreshCheckpoint(out);
   spdlog::info("checkpoint {}, {} threads, median of {} repeats", checkpoint, threads, repeats);
 
-  const experiment::LoadedPlanner plain = experiment::LoadPlanner(checkpoint, "", {"sampler.splitting=none"});
-  const experiment::LoadedPlanner split = experiment::LoadPlanner(checkpoint, "", {"sampler.splitting=midpoint"});
+  const experiment::TrainedPlanner plain = experiment::LoadTrainedPlanner(checkpoint, "", {"sampler.splitting=none"});
+  const experiment::TrainedPlanner split = experiment::LoadTrainedPlanner(checkpoint, "", {"sampler.splitting=midpoint"});
   const auto& config = plain.config;
   const int64_t T = plain.planner->horizon(), D = plain.planner->state_dim();
   FLOWPLAN_DEMAND(config.sampler.steps == 10);
-  const auto* flow = dynamic_cast<const planning::FlowPlanner*>(plain.planner.get());
-  const auto* flow_split = dynamic_cast<const planning::FlowPlanner*>(split.planner.get());
-  if (flow == nullptr || flow_split == nullptr) throw Error(checkpoint + ": not a flow-matching planner");
+  if (plain.planner->kind() != "flow_matching") throw Error(checkpoint + ": not a flow-matching planner");
+  const planning::LearnedPlanner* flow = plain.planner.get();
+  const planning::LearnedPlanner* flow_split = split.planner.get();
+  const models::MinMaxNormalizer normalizer = checkpoints::ReadCheckpointHeader(plain.checkpoint).normalizer;
 
   std::map<std::string, double> ms;
   // The network alone, as the planner calls it.
@@ -189,21 +179,22 @@ int Main(int argc, char** argv) {
     at::set_num_threads(threads);
   }
   // Plans at B = 1 between two fixed states (40 % and 60 % of the normalizer range), around the 0.10 m sphere.
-  const torch::Tensor start = flow->normalizer().lo() * 0.6 + flow->normalizer().hi() * 0.4;
-  const torch::Tensor goal = flow->normalizer().lo() * 0.4 + flow->normalizer().hi() * 0.6;
+  const torch::Tensor start = normalizer.lo() * 0.6 + normalizer.hi() * 0.4;
+  const torch::Tensor goal = normalizer.lo() * 0.4 + normalizer.hi() * 0.6;
   torch::manual_seed(1);
   const torch::Tensor s = start.unsqueeze(0).clone(), g = goal.unsqueeze(0).clone();
   const torch::Tensor noise = torch::randn({1, T, D}), renoise = torch::randn({1, T, D});
   const torch::Tensor obstacles = torch::tensor({{0.5f, 0.0f, 0.2f, 0.1f}});
+  const geometry::SceneRows sphere = geometry::SphereRows(obstacles);
   {
     c10::InferenceMode inference;
     ms["plan_b1"] = MedianMs(repeats, [&] { flow->PlanWithNoise(s, g, noise); });
   }
-  ms["plan_guided_split_b1"] =
-      MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, obstacles); });
+  ms["plan_guided_split_b1"] = MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, sphere); });
 
-  const std::string plain_file = Export(plain, out + "/planner.pt");
-  const std::string split_file = Export(split, out + "/planner_split.pt");
+  const std::string plain_file = out + "/planner.pt", split_file = out + "/planner_split.pt";
+  plain.planner->Save(plain_file);
+  split.planner->Save(split_file);
   {
     torch::jit::Module module = torch::jit::load(plain_file);
     c10::InferenceMode inference;
@@ -211,7 +202,7 @@ int Main(int argc, char** argv) {
   }
   {
     torch::jit::Module module = torch::jit::load(split_file);
-    c10::InferenceMode inference;
+    torch::NoGradGuard no_grad;
     ms["plan_guided_split_b1_exported"] =
         MedianMs(repeats, [&] { module.run_method("plan", s, g, noise, renoise, obstacles); });
   }

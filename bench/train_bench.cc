@@ -10,7 +10,8 @@
 
 #include "eval/stitching.h"
 #include "models/model_config.h"
-#include "planning/flow_planner.h"
+#include "planning/assemble.h"
+#include "sim/franka_model.h"
 #include "objectives/flow_matching.h"
 #include "trainer/sharded_gradient.h"
 
@@ -53,11 +54,20 @@ void BM_Plan(benchmark::State& state) {
   const int64_t D = state.range(2);
   at::set_num_threads(1);
   auto net = models::MakeTrajectoryNet(Unet(levels), D, 0);
-  const planning::FlowPlanner planner(net, models::MinMaxNormalizer(-torch::ones({D}), torch::ones({D})),
-                                      models::Conditioning::kInpaint, 64, planning::SamplerConfig{});
-  const torch::Tensor start = torch::zeros({64, D}), goal = torch::full({64, D}, 0.5);
-  const planning::PlanRequest request{start, goal, torch::Tensor(), 0, std::nullopt};
-  for (auto _ : state) benchmark::DoNotOptimize(planning::PlanInChunks(planner, request, threads));
+  planning::PlannerParts parts;
+  parts.net = net;
+  parts.normalizer = models::MinMaxNormalizer(-torch::ones({D}), torch::ones({D}));
+  parts.trajectory.env = "bench";
+  parts.trajectory.dt = 0.05;
+  parts.trajectory.horizon = 64;
+  for (int64_t i = 0; i < D; ++i) parts.trajectory.state_labels.push_back((i < D / 2 ? "q" : "dq") + std::to_string(i % (D / 2)));
+  parts.trajectory.robot = D == 14 ? sim::LoadFrankaModel().description()
+                                   : kinematics::PointRobot("disc", 2, 0.05, -1.0, 1.0);
+  const auto planner = planning::AssemblePlanner(parts);
+  planning::PlanRequest request;
+  request.start = torch::zeros({64, D});
+  request.goal = torch::full({64, D}, 0.5);
+  for (auto _ : state) benchmark::DoNotOptimize(planning::PlanInChunks(*planner, request, threads));
   state.counters["plans/s"] = benchmark::Counter(64.0 * static_cast<double>(state.iterations()),
                                                  benchmark::Counter::kIsRate);
 }

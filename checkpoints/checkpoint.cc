@@ -56,13 +56,13 @@ void SaveCheckpoint(const std::string& path, const CheckpointHeader& header, con
   archive.write("format_version", c10::IValue(kCheckpointFormatVersion));
   archive.write("step", c10::IValue(header.step));
   archive.write("config", c10::IValue(header.config_yaml));
-  archive.write("env", c10::IValue(header.env));
-  archive.write("dt", c10::IValue(header.dt));
-  archive.write("horizon", c10::IValue(header.horizon));
-  archive.write("robot", c10::IValue(kinematics::RobotToYaml(header.robot)));
+  archive.write("env", c10::IValue(header.trajectory.env));
+  archive.write("dt", c10::IValue(header.trajectory.dt));
+  archive.write("horizon", c10::IValue(header.trajectory.horizon));
+  archive.write("robot", c10::IValue(kinematics::RobotToYaml(header.trajectory.robot)));
   archive.write("data_fingerprint", c10::IValue(header.data_fingerprint));
   c10::List<std::string> labels;
-  for (const auto& label : header.state_labels) labels.push_back(label);
+  for (const auto& label : header.trajectory.state_labels) labels.push_back(label);
   archive.write("state_labels", c10::IValue(labels));
   archive.write("normalizer_lo", header.normalizer.lo());
   archive.write("normalizer_hi", header.normalizer.hi());
@@ -98,13 +98,13 @@ CheckpointHeader ReadCheckpointHeader(const std::string& path) {
   try {
     header.step = Read(archive, path, "step").toInt();
     header.config_yaml = Read(archive, path, "config").toStringRef();
-    header.env = Read(archive, path, "env").toStringRef();
-    header.dt = Read(archive, path, "dt").toDouble();
-    header.horizon = Read(archive, path, "horizon").toInt();
-    header.robot = kinematics::RobotFromYaml(Read(archive, path, "robot").toStringRef(), path + ": entry \"robot\"");
+    header.trajectory.env = Read(archive, path, "env").toStringRef();
+    header.trajectory.dt = Read(archive, path, "dt").toDouble();
+    header.trajectory.horizon = Read(archive, path, "horizon").toInt();
+    header.trajectory.robot = kinematics::RobotFromYaml(Read(archive, path, "robot").toStringRef(), path + ": entry \"robot\"");
     header.data_fingerprint = Read(archive, path, "data_fingerprint").toStringRef();
     for (const auto& label : Read(archive, path, "state_labels").toListRef()) {
-      header.state_labels.push_back(label.toStringRef());
+      header.trajectory.state_labels.push_back(label.toStringRef());
     }
     header.normalizer = models::MinMaxNormalizer(ReadTensor(archive, path, "normalizer_lo"),
                                                  ReadTensor(archive, path, "normalizer_hi"));

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "kinematics/robot_description.h"
+#include "kinematics/trajectory_info.h"
 #include "models/normalizer.h"
 
 namespace flowplan::checkpoints {
@@ -20,11 +20,7 @@ struct CheckpointHeader {
   std::string config_yaml;                // the run's resolved config
   models::MinMaxNormalizer normalizer;    // fitted on the training split
   std::vector<torch::Tensor> rng_states;  // (S,) uint8 state of each data part's torch::Generator, part 0 first
-  std::string env;                        // dataset env ("particle", "franka")
-  double dt = 0.0;                        // s between states
-  std::vector<std::string> state_labels;  // (D,)
-  int64_t horizon = 0;                    // T the network is trained for
-  kinematics::RobotDescription robot;     // the dataset's robot, for guidance and clearances
+  kinematics::TrajectoryInfo trajectory;  // the data's: env, dt, T the network is trained for, labels, robot
   std::string data_fingerprint;           // datasets::DatasetFingerprint() of the training data
 };
 

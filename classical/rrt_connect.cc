@@ -16,7 +16,6 @@
 
 #include "core/error.h"
 #include "core/random.h"
-#include "guidance/scene.h"
 
 namespace flowplan::classical {
 namespace {
@@ -144,10 +143,12 @@ void QuietOmpl() {
 
 }  // namespace
 
-RrtConnectPlanner::RrtConnectPlanner(std::shared_ptr<const kinematics::Robot> robot, int64_t horizon,
-                                     int64_t state_dim, double dt, RrtConnectConfig config)
-    : robot_(std::move(robot)), horizon_(horizon), state_dim_(state_dim), dt_(dt), config_(config) {
-  if (!robot_) throw Error("rrt_connect: expected a robot description");
+RrtConnectPlanner::RrtConnectPlanner(const kinematics::TrajectoryInfo& trajectory, RrtConnectConfig config)
+    : robot_(kinematics::MakeRobot(trajectory.robot, "rrt_connect: robot")),
+      horizon_(trajectory.horizon),
+      state_dim_(trajectory.state_dim()),
+      dt_(trajectory.dt),
+      config_(config) {
   const int64_t J = robot_->num_joints();
   if (state_dim_ != J && state_dim_ != 2 * J) {
     throw Error("rrt_connect: states of " + std::to_string(state_dim_) + " dimensions; expected J = " +
@@ -165,30 +166,25 @@ RrtConnectPlanner::RrtConnectPlanner(std::shared_ptr<const kinematics::Robot> ro
   QuietOmpl();
 }
 
-torch::Tensor RrtConnectPlanner::Valid(const torch::Tensor& q, const torch::Tensor& obstacles) const {
-  const int64_t N = q.size(0), W = robot_->workspace_dim();
-  if (!obstacles.defined() || obstacles.size(0) == 0) return torch::ones({N}, torch::kBool);
-  const torch::Tensor centres = robot_->Spheres(q.to(torch::kFloat64)).centres;  // (N, S, W)
-  const torch::Tensor obs = obstacles.to(torch::kFloat64);
-  const torch::Tensor distance = (centres.unsqueeze(2) - obs.slice(1, 0, W).view({1, 1, -1, W})).norm(2, -1);
-  const torch::Tensor needed = robot_->SphereRadii().view({1, -1, 1}) + obs.select(1, W).view({1, 1, -1}) + config_.margin;
-  return (distance >= needed).flatten(1).all(1);
+torch::Tensor RrtConnectPlanner::Valid(const torch::Tensor& q, const geometry::SceneRows& scene) const {
+  const int64_t N = q.size(0);
+  if (geometry::CountObstacles(scene) == 0) return torch::ones({N}, torch::kBool);
+  return (robot_->Clearance(q, scene) >= config_.margin).all(1);
 }
 
 planning::PlanResult RrtConnectPlanner::Plan(const planning::PlanRequest& request) const {
   planning::CheckEnds(request.start, request.goal, state_dim_, "plan");
   const int64_t B = request.start.size(0), J = robot_->num_joints(), T = horizon_;
-  torch::Tensor obstacles;
-  if (request.obstacles.defined() && request.obstacles.numel() > 0) {
-    guidance::CheckObstacles(request.obstacles, static_cast<int>(robot_->workspace_dim()), "plan: obstacles");
-    obstacles = request.obstacles.to(torch::kFloat64);
-  }
+  geometry::CheckRows(request.scene, static_cast<int>(robot_->workspace_dim()), "plan");
+  geometry::SceneRows scene;
+  for (const auto& entry : request.scene) scene.insert(entry.key(), entry.value().to(torch::kFloat64));
   torch::NoGradGuard no_grad;
   const auto& d = robot_->description();
   planning::PlanResult result;
   result.plans = torch::empty({B, T, state_dim_}, torch::kFloat32);
   result.found = torch::zeros({B}, torch::kBool);
-  result.seconds.assign(static_cast<size_t>(B), 0.0);
+  result.call_seconds.assign(static_cast<size_t>(B), 0.0);
+  result.call_plans.assign(static_cast<size_t>(B), 1);
   // Ends exactly at a limit can round to just outside it in float32: clamp them onto the limits.
   const torch::Tensor lower = torch::tensor(d.joint_lower, torch::kFloat64).slice(0, 0, J);
   const torch::Tensor upper = torch::tensor(d.joint_upper, torch::kFloat64).slice(0, 0, J);
@@ -207,7 +203,7 @@ planning::PlanResult RrtConnectPlanner::Plan(const planning::PlanRequest& reques
     space->setStateSamplerAllocator(
         [seed](const ob::StateSpace* s) { return std::make_shared<SeededSampler>(s, StreamSeed(seed, 1)); });
     auto si = std::make_shared<ob::SpaceInformation>(space);
-    auto valid = [this, obstacles](const torch::Tensor& q) { return Valid(q, obstacles); };
+    auto valid = [this, scene](const torch::Tensor& q) { return Valid(q, scene); };
     si->setStateValidityChecker([&](const ob::State* s) {
       return space->satisfiesBounds(s) && valid(ToTensor(s, J).unsqueeze(0))[0].item<bool>();
     });
@@ -248,7 +244,7 @@ planning::PlanResult RrtConnectPlanner::Plan(const planning::PlanRequest& reques
     }
     auto [q, v] = TimeParametrize(points, T, dt_);
     result.plans[b] = (state_dim_ == J ? q : torch::cat({q, v}, 1)).to(torch::kFloat32);
-    result.seconds[static_cast<size_t>(b)] =
+    result.call_seconds[static_cast<size_t>(b)] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   }
   return result;

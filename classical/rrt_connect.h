@@ -10,7 +10,9 @@
 #include <memory>
 
 #include "core/config.h"
+#include "geometry/scene_rows.h"
 #include "kinematics/robot.h"
+#include "kinematics/trajectory_info.h"
 #include "planning/planner.h"
 
 namespace flowplan::classical {
@@ -47,15 +49,16 @@ struct RrtConnectConfig {
 /// are the straight joint-space line, with found = false.
 class RrtConnectPlanner : public planning::Planner {
  public:
-  /// The robot's joint limits must be finite; state_dim is J or 2J.
+  /// Plans trajectories like `trajectory`'s (T states dt apart, D = J or 2J)
+  /// for its robot, whose joint limits must be finite.
   /// @throws flowplan::Error naming what does not fit.
-  RrtConnectPlanner(std::shared_ptr<const kinematics::Robot> robot, int64_t horizon, int64_t state_dim, double dt,
-                    RrtConnectConfig config);
+  RrtConnectPlanner(const kinematics::TrajectoryInfo& trajectory, RrtConnectConfig config);
 
   planning::PlanResult Plan(const planning::PlanRequest& request) const override;
 
-  /// Whether configurations q (N, J) keep every sphere `margin` away from every obstacle (K, W+1).
-  torch::Tensor Valid(const torch::Tensor& q, const torch::Tensor& obstacles) const;
+  /// Whether configurations q (N, J) keep every sphere `margin` away from every obstacle of `scene`:
+  /// the robot's clearance (kinematics::Robot::Clearance), (N,) bool.
+  torch::Tensor Valid(const torch::Tensor& q, const geometry::SceneRows& scene) const;
 
   int64_t horizon() const override { return horizon_; }
   int64_t state_dim() const override { return state_dim_; }

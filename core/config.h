@@ -274,6 +274,29 @@ class KeyLister {
   std::vector<KeyInfo> keys_;
 };
 
+/// Collects every numeric leaf (int, int64_t, double; not bool) with its value.
+class NumberLister {
+ public:
+  explicit NumberLister(std::string prefix = "") : prefix_(std::move(prefix)) {}
+
+  template <class T>
+  void Field(const char* name, const T& value, const char* /*help*/, Bounds /*bounds*/ = {}) {
+    const std::string key = prefix_.empty() ? name : prefix_ + "." + name;
+    if constexpr (internal::IsConfigStruct<T>::value) {
+      NumberLister child(key);
+      const_cast<T&>(value).Visit(child);
+      for (auto& entry : child.numbers_) numbers_.push_back(std::move(entry));
+    } else if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+      numbers_.emplace_back(key, static_cast<double>(value));
+    }
+  }
+  const std::vector<std::pair<std::string, double>>& numbers() const { return numbers_; }
+
+ private:
+  std::string prefix_;
+  std::vector<std::pair<std::string, double>> numbers_;
+};
+
 namespace internal {
 
 template <class T>
@@ -367,6 +390,14 @@ std::vector<KeyInfo> ListKeys(const T& config) {
   KeyLister lister;
   const_cast<T&>(config).Visit(lister);
   return lister.keys();
+}
+
+/// Every numeric leaf of `config` (a section) as (prefix.key, value), in field order.
+template <class T>
+std::vector<std::pair<std::string, double>> ListNumbers(const T& config, const std::string& prefix) {
+  NumberLister lister(prefix);
+  const_cast<T&>(config).Visit(lister);
+  return lister.numbers();
 }
 
 /// Formats ListKeys() as aligned text lines.

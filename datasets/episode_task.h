@@ -10,20 +10,15 @@
 #include <string>
 #include <vector>
 
-#include "kinematics/robot_description.h"
+#include "kinematics/trajectory_info.h"
 
 namespace flowplan::datasets {
 
 /// What a task records, identical for every episode.
 struct EpisodeLayout {
-  std::string env;                         // written to the file's "env" attribute
-  double dt = 0.0;                         // s between recorded states
-  int64_t horizon = 0;                     // T
-  std::vector<std::string> state_labels;   // (D,)
+  kinematics::TrajectoryInfo info;         // env (the file's "env" attribute), dt, T, state labels, robot
   int64_t point_dim = 0;                   // P: size of a commanded start/goal point
   std::map<std::string, int64_t> extras;   // name -> k for per-episode (T, k) arrays
-  kinematics::RobotDescription robot;      // what moves: its positions are the first J state entries
-  int64_t state_dim() const { return static_cast<int64_t>(state_labels.size()); }
 };
 
 /// A commanded start/goal pair that a family of training episodes shares.

@@ -188,13 +188,13 @@ FrankaTask::FrankaTask(FrankaGoals goals, const FrankaTaskConfig& config, const 
 
 EpisodeLayout FrankaTask::Layout() const {
   EpisodeLayout layout;
-  layout.env = "franka";
-  layout.dt = config_.rollout.record_dt();
-  layout.horizon = config_.rollout.horizon;
-  for (int j = 1; j <= sim::kFrankaJoints; ++j) layout.state_labels.push_back("q" + std::to_string(j));
-  for (int j = 1; j <= sim::kFrankaJoints; ++j) layout.state_labels.push_back("dq" + std::to_string(j));
+  layout.info.env = "franka";
+  layout.info.dt = config_.rollout.record_dt();
+  layout.info.horizon = config_.rollout.horizon;
+  for (int j = 1; j <= sim::kFrankaJoints; ++j) layout.info.state_labels.push_back("q" + std::to_string(j));
+  for (int j = 1; j <= sim::kFrankaJoints; ++j) layout.info.state_labels.push_back("dq" + std::to_string(j));
   layout.point_dim = 3;
-  layout.robot = model_->description();
+  layout.info.robot = model_->description();
   layout.extras["tcp"] = 3;
   layout.extras["torques"] = sim::kFrankaJoints;
   if (config_.rollout.augmentation.scheme == Augmentation::kRandomForce) layout.extras["external_force"] = 3;

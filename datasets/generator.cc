@@ -15,13 +15,13 @@ namespace flowplan::datasets {
 namespace {
 
 void CheckRecord(const EpisodeRecord& record, const EpisodeLayout& layout) {
-  FLOWPLAN_DEMAND(static_cast<int64_t>(record.states.size()) == layout.horizon * layout.state_dim());
+  FLOWPLAN_DEMAND(static_cast<int64_t>(record.states.size()) == layout.info.horizon * layout.info.state_dim());
   FLOWPLAN_DEMAND(static_cast<int64_t>(record.commanded_start.size()) == layout.point_dim);
   FLOWPLAN_DEMAND(static_cast<int64_t>(record.commanded_goal.size()) == layout.point_dim);
   for (const auto& [name, k] : layout.extras) {
     auto it = record.extras.find(name);
     FLOWPLAN_DEMAND(it != record.extras.end());
-    FLOWPLAN_DEMAND(static_cast<int64_t>(it->second.size()) == layout.horizon * k);
+    FLOWPLAN_DEMAND(static_cast<int64_t>(it->second.size()) == layout.info.horizon * k);
   }
 }
 
@@ -40,14 +40,14 @@ TrajectoryDataset GenerateDataset(const EpisodeTask& task, const GenerateOptions
   const int64_t begin = options.episodes * options.shard_index / options.shard_count;
   const int64_t end = options.episodes * (options.shard_index + 1) / options.shard_count;
   const int64_t count = end - begin;
-  const int64_t T = layout.horizon, D = layout.state_dim();
+  const int64_t T = layout.info.horizon, D = layout.info.state_dim();
 
   std::vector<EpisodeRecord> records(static_cast<size_t>(count));
   const int threads = std::max(1, options.threads);
   std::vector<std::unique_ptr<EpisodeWorker>> workers;
   for (int w = 0; w < threads; ++w) workers.push_back(task.MakeWorker());
 
-  ProgressMeter progress("generate " + layout.env, count, "episodes");
+  ProgressMeter progress("generate " + layout.info.env, count, "episodes");
   std::atomic<int64_t> done{0};
   std::mutex progress_mutex;
   progress.Update(0);
@@ -64,12 +64,7 @@ TrajectoryDataset GenerateDataset(const EpisodeTask& task, const GenerateOptions
   });
 
   TrajectoryDataset dataset;
-  dataset.env = layout.env;
-  dataset.dt = layout.dt;
-  dataset.state_labels = layout.state_labels;
-  dataset.robot = layout.robot;
-  dataset.horizon = T;
-  dataset.state_dim = D;
+  dataset.info = layout.info;
   dataset.point_dim = layout.point_dim;
   dataset.config_yaml = options.config_yaml;
   dataset.seed = options.seed;
@@ -97,11 +92,11 @@ TrajectoryDataset GenerateDataset(const EpisodeTask& task, const GenerateOptions
     }
   }
   if (count > 0 && dataset.num_episodes == 0) {
-    throw Error("generate " + layout.env + ": all " + std::to_string(count) +
+    throw Error("generate " + layout.info.env + ": all " + std::to_string(count) +
                 " episodes were rejected (first reason: " + records.front().reject_reason + ")");
   }
   if (dataset.rejected_episodes > 0) {
-    spdlog::warn("generate {}: rejected {} of {} episodes (unstable or failed rollouts)", layout.env,
+    spdlog::warn("generate {}: rejected {} of {} episodes (unstable or failed rollouts)", layout.info.env,
                  dataset.rejected_episodes, count);
   }
 
@@ -111,7 +106,7 @@ TrajectoryDataset GenerateDataset(const EpisodeTask& task, const GenerateOptions
   for (size_t f = 0; f < families.size(); ++f) {
     nominal.push_back(workers[0]->RunNominal(static_cast<int>(f)));
     if (nominal.back().rejected) {  // its states would be a stopped rollout, not the family's start and goal
-      throw Error("generate " + layout.env + ": the noise-free rollout of family " + families[f].name +
+      throw Error("generate " + layout.info.env + ": the noise-free rollout of family " + families[f].name +
                   ", which gives the evaluation pairs, was rejected: " + nominal.back().reject_reason);
     }
   }

@@ -41,12 +41,12 @@ class ParticleWorker : public EpisodeWorker {
 
 EpisodeLayout ParticleCrossTask::Layout() const {
   EpisodeLayout layout;
-  layout.env = "particle";
-  layout.dt = config_.dt;
-  layout.horizon = config_.horizon;
-  layout.state_labels = {"x", "y", "vx", "vy"};
+  layout.info.env = "particle";
+  layout.info.dt = config_.dt;
+  layout.info.horizon = config_.horizon;
+  layout.info.state_labels = {"x", "y", "vx", "vy"};
   layout.point_dim = 2;
-  layout.robot = kinematics::PointRobot("particle_disc", 2, config_.radius, 0.0, 1.0);
+  layout.info.robot = kinematics::PointRobot("particle_disc", 2, config_.radius, 0.0, 1.0);
   return layout;
 }
 

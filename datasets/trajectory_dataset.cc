@@ -64,8 +64,9 @@ void TrajectoryDataset::CheckConsistent(const std::string& where) const {
                   std::to_string(got));
     }
   };
+  const int64_t horizon = info.horizon, state_dim = info.state_dim();
+  const kinematics::RobotDescription& robot = info.robot;
   expect("states", states.size(), num_episodes * horizon * state_dim);
-  expect("state_labels", state_labels.size(), state_dim);
   robot.Validate(where);
   if (robot.num_joints > state_dim) {
     throw Error(where + ": robot \"" + robot.name + "\" has " + std::to_string(robot.num_joints) +
@@ -95,10 +96,10 @@ void WriteDataset(const std::string& path, const TrajectoryDataset& dataset) {
     h5::File file = h5::File::Create(target.temp_path());
     file.SetAttribute("/", "format", std::string(kDatasetFormatName));
     file.SetAttribute("/", "format_version", static_cast<int64_t>(kDatasetFormatVersion));
-    file.SetAttribute("/", "env", dataset.env);
-    file.SetAttribute("/", "dt", dataset.dt);
-    file.SetAttribute("/", "state_labels", Join(dataset.state_labels, ","));
-    file.SetAttribute("/", "robot", kinematics::RobotToYaml(dataset.robot));
+    file.SetAttribute("/", "env", dataset.info.env);
+    file.SetAttribute("/", "dt", dataset.info.dt);
+    file.SetAttribute("/", "state_labels", Join(dataset.info.state_labels, ","));
+    file.SetAttribute("/", "robot", kinematics::RobotToYaml(dataset.info.robot));
     file.SetAttribute("/", "config", dataset.config_yaml);
     file.SetAttribute("/", "seed", static_cast<int64_t>(dataset.seed));
     file.SetAttribute("/", "first_episode", dataset.first_episode);
@@ -108,7 +109,7 @@ void WriteDataset(const std::string& path, const TrajectoryDataset& dataset) {
     file.SetAttribute("/", "simulator_warnings", dataset.simulator_warnings);
 
     const int64_t n = dataset.num_episodes;
-    file.WriteFloat32("/states", {n, dataset.horizon, dataset.state_dim}, dataset.states.data());
+    file.WriteFloat32("/states", {n, dataset.info.horizon, dataset.info.state_dim()}, dataset.states.data());
     file.WriteFloat64("/commanded_start", {n, dataset.point_dim}, dataset.commanded_start.data());
     file.WriteFloat64("/commanded_goal", {n, dataset.point_dim}, dataset.commanded_goal.data());
     file.WriteInt32("/family", {n}, dataset.family.data());
@@ -119,8 +120,8 @@ void WriteDataset(const std::string& path, const TrajectoryDataset& dataset) {
       }
     }
     file.CreateGroup("/eval");
-    WritePairs(file, "/eval/train_pairs", dataset.train_pairs, dataset.state_dim);
-    WritePairs(file, "/eval/test_pairs", dataset.test_pairs, dataset.state_dim);
+    WritePairs(file, "/eval/train_pairs", dataset.train_pairs, dataset.info.state_dim());
+    WritePairs(file, "/eval/test_pairs", dataset.test_pairs, dataset.info.state_dim());
     file.Close();
   }
   target.Commit();
@@ -141,10 +142,10 @@ TrajectoryDataset ReadSome(const std::string& path, const std::vector<int64_t>* 
                 std::to_string(kDatasetFormatVersion) + ")");
   }
   TrajectoryDataset dataset;
-  dataset.env = file.GetStringAttribute("/", "env");
-  dataset.dt = file.GetDoubleAttribute("/", "dt");
-  dataset.state_labels = Split(file.GetStringAttribute("/", "state_labels"), ',');
-  dataset.robot = kinematics::RobotFromYaml(file.GetStringAttribute("/", "robot"), path + ": attribute robot");
+  dataset.info.env = file.GetStringAttribute("/", "env");
+  dataset.info.dt = file.GetDoubleAttribute("/", "dt");
+  dataset.info.state_labels = Split(file.GetStringAttribute("/", "state_labels"), ',');
+  dataset.info.robot = kinematics::RobotFromYaml(file.GetStringAttribute("/", "robot"), path + ": attribute robot");
   dataset.config_yaml = file.GetStringAttribute("/", "config");
   dataset.seed = static_cast<uint64_t>(file.GetIntAttribute("/", "seed"));
   dataset.first_episode = file.GetIntAttribute("/", "first_episode");
@@ -169,25 +170,24 @@ TrajectoryDataset ReadSome(const std::string& path, const std::vector<int64_t>* 
                                        : file.ReadFloat32Rows("/states", *episodes, &shape);
   if (episodes != nullptr) shape[0] = static_cast<int64_t>(episodes->size());
   dataset.num_episodes = shape[0];
-  dataset.horizon = shape[1];
-  dataset.state_dim = shape[2];
+  dataset.info.horizon = shape[1];
   const int64_t n = dataset.num_episodes;
-  if (static_cast<int64_t>(dataset.state_labels.size()) != dataset.state_dim) {
-    throw Error(path + ": attribute state_labels names " + std::to_string(dataset.state_labels.size()) +
-                " dimensions, /states has " + std::to_string(dataset.state_dim));
+  if (static_cast<int64_t>(dataset.info.state_labels.size()) != shape[2]) {
+    throw Error(path + ": attribute state_labels names " + std::to_string(dataset.info.state_labels.size()) +
+                " dimensions, /states has " + std::to_string(shape[2]));
   }
   const auto bad = std::find_if(dataset.states.begin(), dataset.states.end(), [](float v) { return !std::isfinite(v); });
   if (bad != dataset.states.end()) {
-    const int64_t at = bad - dataset.states.begin(), d = at % dataset.state_dim;
-    const int64_t row = at / (dataset.horizon * dataset.state_dim);
+    const int64_t at = bad - dataset.states.begin(), d = at % dataset.info.state_dim();
+    const int64_t row = at / (dataset.info.horizon * dataset.info.state_dim());
     throw Error(path + ": /states: " + std::to_string(*bad) + " at episode " +
                 std::to_string(episodes == nullptr ? row : (*episodes)[static_cast<size_t>(row)]) + ", step " +
-                std::to_string(at / dataset.state_dim % dataset.horizon) + ", dimension " + std::to_string(d) + " (" +
-                dataset.state_labels[static_cast<size_t>(d)] + "); states must be finite");
+                std::to_string(at / dataset.info.state_dim() % dataset.info.horizon) + ", dimension " + std::to_string(d) + " (" +
+                dataset.info.state_labels[static_cast<size_t>(d)] + "); states must be finite");
   }
   if (episodes != nullptr) {
-    dataset.train_pairs = ReadPairs(file, "/eval/train_pairs", dataset.state_dim);
-    dataset.test_pairs = ReadPairs(file, "/eval/test_pairs", dataset.state_dim);
+    dataset.train_pairs = ReadPairs(file, "/eval/train_pairs", dataset.info.state_dim());
+    dataset.test_pairs = ReadPairs(file, "/eval/test_pairs", dataset.info.state_dim());
     return dataset;
   }
   dataset.commanded_start = file.ReadFloat64("/commanded_start", &shape);
@@ -208,8 +208,8 @@ TrajectoryDataset ReadSome(const std::string& path, const std::vector<int64_t>* 
     array.values = file.ReadFloat32(object, &array.shape);
     dataset.extras[name] = std::move(array);
   }
-  dataset.train_pairs = ReadPairs(file, "/eval/train_pairs", dataset.state_dim);
-  dataset.test_pairs = ReadPairs(file, "/eval/test_pairs", dataset.state_dim);
+  dataset.train_pairs = ReadPairs(file, "/eval/train_pairs", dataset.info.state_dim());
+  dataset.test_pairs = ReadPairs(file, "/eval/test_pairs", dataset.info.state_dim());
   dataset.CheckConsistent(path);
   return dataset;
 }
@@ -251,11 +251,11 @@ class Fnv1a {
 
 std::string DatasetFingerprint(const TrajectoryDataset& dataset) {
   Fnv1a fnv;
-  fnv.Text(dataset.env);
-  fnv.Bytes(&dataset.dt, sizeof(dataset.dt));
-  fnv.Text(Join(dataset.state_labels, ","));
-  fnv.Text(kinematics::RobotToYaml(dataset.robot));
-  const int64_t shape[3] = {dataset.num_episodes, dataset.horizon, dataset.state_dim};
+  fnv.Text(dataset.info.env);
+  fnv.Bytes(&dataset.info.dt, sizeof(dataset.info.dt));
+  fnv.Text(Join(dataset.info.state_labels, ","));
+  fnv.Text(kinematics::RobotToYaml(dataset.info.robot));
+  const int64_t shape[3] = {dataset.num_episodes, dataset.info.horizon, dataset.info.state_dim()};
   fnv.Bytes(shape, sizeof(shape));
   fnv.Array(dataset.states);
   for (const EvalPairs* pairs : {&dataset.train_pairs, &dataset.test_pairs}) {
@@ -289,11 +289,11 @@ TrajectoryDataset MergeDatasets(const std::vector<TrajectoryDataset>& shards,
     auto require = [&](bool same, const char* what) {
       if (!same) throw Error(where + ": " + what + " differs from " + names.front() + "; not a shard of the same dataset");
     };
-    require(shard.env == merged.env, "env");
-    require(shard.dt == merged.dt, "dt");
-    require(shard.state_labels == merged.state_labels, "state_labels");
-    require(kinematics::RobotToYaml(shard.robot) == kinematics::RobotToYaml(merged.robot), "robot");
-    require(shard.horizon == merged.horizon && shard.state_dim == merged.state_dim, "/states shape");
+    require(shard.info.env == merged.info.env, "env");
+    require(shard.info.dt == merged.info.dt, "dt");
+    require(shard.info.state_labels == merged.info.state_labels, "state_labels");
+    require(kinematics::RobotToYaml(shard.info.robot) == kinematics::RobotToYaml(merged.info.robot), "robot");
+    require(shard.info.horizon == merged.info.horizon && shard.info.state_dim() == merged.info.state_dim(), "/states shape");
     require(shard.point_dim == merged.point_dim, "/commanded_start shape");
     require(shard.config_yaml == merged.config_yaml, "config");
     require(shard.seed == merged.seed, "seed");

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "kinematics/robot_description.h"
+#include "kinematics/trajectory_info.h"
 
 namespace flowplan::datasets {
 
@@ -33,13 +33,8 @@ struct EvalPairs {
 
 /// Episodes of one environment: N episodes of T states of dimension D.
 struct TrajectoryDataset {
-  std::string env;                       // "particle", "franka"
-  double dt = 0.0;                       // s between recorded states
-  std::vector<std::string> state_labels;  // (D,) e.g. "x", "y", "vx", "vy"
-  kinematics::RobotDescription robot;     // what moves: kinematics, TCP, collision spheres
+  kinematics::TrajectoryInfo info;        // env, dt, T, state labels (D), robot
   int64_t num_episodes = 0;               // N
-  int64_t horizon = 0;                    // T
-  int64_t state_dim = 0;                  // D
   std::vector<float> states;              // (N, T, D)
   int64_t point_dim = 0;                  // P: size of a commanded start/goal point
   std::vector<double> commanded_start;    // (N, P)

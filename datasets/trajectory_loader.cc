@@ -40,14 +40,9 @@ std::vector<int64_t> SplitOrder(int64_t n, uint64_t seed) {
 
 /// What the splits carry of the dataset besides its episodes.
 void CopyDescription(const TrajectoryDataset& dataset, TrajectorySplits& splits) {
-  splits.train_pairs = ToTensors(dataset.train_pairs, dataset.state_dim);
-  splits.test_pairs = ToTensors(dataset.test_pairs, dataset.state_dim);
-  splits.env = dataset.env;
-  splits.dt = dataset.dt;
-  splits.state_labels = dataset.state_labels;
-  splits.robot = dataset.robot;
-  splits.T = dataset.horizon;
-  splits.D = dataset.state_dim;
+  splits.train_pairs = ToTensors(dataset.train_pairs, dataset.info.state_dim());
+  splits.test_pairs = ToTensors(dataset.test_pairs, dataset.info.state_dim());
+  splits.info = dataset.info;
 }
 
 int64_t ValidationCount(int64_t n, double val_fraction, const std::string& where) {
@@ -67,7 +62,7 @@ TrajectorySplits SplitTrajectories(const TrajectoryDataset& dataset, double val_
   const std::vector<int64_t> order = SplitOrder(n, seed);
   const torch::Tensor all =
       torch::from_blob(const_cast<float*>(dataset.states.data()),
-                       {n, dataset.horizon, dataset.state_dim}, torch::kFloat32);
+                       {n, dataset.info.horizon, dataset.info.state_dim()}, torch::kFloat32);
   const torch::Tensor index = torch::tensor(order, torch::kInt64);
   TrajectorySplits splits;
   // Validation episodes first in the permutation; sorted so the split is easy to audit.
@@ -122,7 +117,7 @@ TrajectorySplits LoadTrajectorySplits(const DataConfig& config, uint64_t seed, c
   }
   const TrajectoryDataset dataset = ReadDatasetEpisodes(config.path, rows);
   const torch::Tensor kept = torch::from_blob(const_cast<float*>(dataset.states.data()),
-                                              {dataset.num_episodes, dataset.horizon, dataset.state_dim},
+                                              {dataset.num_episodes, dataset.info.horizon, dataset.info.state_dim()},
                                               torch::kFloat32);
   // rows are ascending in split order, so part p's episodes are every k-th row of `kept`, from p's first.
   const int64_t K = static_cast<int64_t>(parts.mine.size());
@@ -130,7 +125,7 @@ TrajectorySplits LoadTrajectorySplits(const DataConfig& config, uint64_t seed, c
     splits.parts.push_back(parts.mine[static_cast<size_t>(k)]);
     splits.train_parts.push_back(kept.slice(0, k, kept.size(0), K).clone());
   }
-  splits.val = torch::empty({0, dataset.horizon, dataset.state_dim});
+  splits.val = torch::empty({0, dataset.info.horizon, dataset.info.state_dim()});
   CopyDescription(dataset, splits);
   return splits;
 }

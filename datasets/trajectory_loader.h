@@ -38,17 +38,13 @@ struct TrajectorySplits {
   torch::Tensor val;    // (N_val, T, D), possibly empty
   EvalPairTensors train_pairs;
   EvalPairTensors test_pairs;
-  std::string env;
-  double dt = 0.0;
-  std::vector<std::string> state_labels;  // (D,)
-  kinematics::RobotDescription robot;
+  kinematics::TrajectoryInfo info;        // env, dt, T, state labels (D), robot
   std::string fingerprint;                // DatasetFingerprint() of the file; empty when loaded by parts
   int64_t num_train = 0;                  // N_train of the whole split
-  int64_t T = 0, D = 0;
   std::vector<int> parts;                 // the data parts train_parts holds (ascending); empty: none split off
   std::vector<torch::Tensor> train_parts;  // (N_p, T, D) per part: training episodes p, p + P, ... in split order
-  int64_t horizon() const { return T; }
-  int64_t state_dim() const { return D; }
+  int64_t horizon() const { return info.horizon; }        // T
+  int64_t state_dim() const { return info.state_dim(); }  // D
 };
 
 /// Which training episodes a process of a data-parallel job keeps.

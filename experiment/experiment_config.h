@@ -10,12 +10,12 @@
 #include "datasets/trajectory_loader.h"
 #include "distributed/distributed_config.h"
 #include "eval/stitching.h"
-#include "guidance/blocked_problems.h"
+#include "geometry/scene.h"
 #include "guidance/guide.h"
-#include "guidance/scene.h"
 #include "models/model_config.h"
 #include "objectives/objective.h"
-#include "planning/flow_planner.h"
+#include "planning/sampler_config.h"
+#include "problems/blocked_problems.h"
 #include "sim/franka_execution.h"
 #include "trainer/trainer_config.h"
 
@@ -35,11 +35,11 @@ struct ExperimentConfig {
   planning::SamplerConfig sampler;
   eval::EvalConfig eval;
   guidance::GuidanceConfig guidance;
-  guidance::Scene scene;
+  geometry::Scene scene;
   sim::ExecutionConfig execute;
   classical::RrtConnectConfig rrt_connect;
   distributed::DistributedConfig distributed;
-  guidance::BlockedProblemsConfig problems;
+  problems::BlockedProblemsConfig problems;
 
   template <class V>
   void Visit(V& v) {
@@ -58,9 +58,10 @@ struct ExperimentConfig {
     v.Field("sampler", sampler, "sampling");
     v.Field("eval", eval, "evaluation");
     v.Field("guidance", guidance, "guidance around obstacles (planning)");
-    v.Field("scene", scene, "obstacles of `flowplan plan` when no --scene is given");
+    v.Field("scene", scene, "obstacles of `flowplan plan` when no --scene is given (geometry/scene.h)");
     v.Field("execute", execute, "tracking of plans in MuJoCo (`flowplan plan --execute`)");
-    v.Field("rrt_connect", rrt_connect, "the classical reference planner (`flowplan plan --rrt-connect`)");
+    v.Field("rrt_connect", rrt_connect,
+            "the classical reference planner (`flowplan plan --rrt-connect`, for the robot and trajectories of generate.*)");
     v.Field("problems", problems, "random planning problems with blocked straight paths (`flowplan problems`)");
     v.Field("distributed", distributed,
             "data-parallel training when launched as several processes (torchrun or Slurm environment)");

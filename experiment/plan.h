@@ -1,42 +1,109 @@
 #pragma once
 
 // `flowplan plan`: plans between a start and a goal around a scene's obstacles
-// with a trained planner (a run folder, a checkpoint or an exported file),
-// scores the plans (clearances, goal distance, collisions), optionally executes
-// them in MuJoCo, and writes the plans (HDF5), a report (JSON) and a figure (PNG).
+// with a trained planner (a run folder, a checkpoint or an exported file) or
+// RRT-Connect, scores the plans (clearance to every obstacle, goal distance,
+// joint speeds), optionally executes them in MuJoCo, and writes the plans
+// (HDF5), a report (JSON) and a figure (PNG). The steps live in plan_*.cc.
 
-#include <cstdint>
+#include <torch/torch.h>
+
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "experiment/experiment_config.h"
+#include "geometry/scene_rows.h"
+#include "kinematics/robot.h"
+#include "kinematics/trajectory_info.h"
+#include "planning/planner.h"
+#include "sim/franka_execution.h"
+
 namespace flowplan::experiment {
 
-struct PlanCommand {
-  std::string ckpt;                   // --ckpt: a run folder or checkpoint file
-  std::string planner_file;           // --planner: an exported planner file (instead of --ckpt)
-  bool rrt_connect = false;           // --rrt-connect: OMPL's RRT-Connect on the robot of --config's dataset
-  std::string overlay_path;           // --config: YAML applied over the planner's config
+struct PlanArgs {
+  std::string ckpt;                    // --ckpt: a run folder or checkpoint file
+  std::string planner_file;            // --planner: an exported planner file (instead of --ckpt)
+  bool rrt_connect = false;            // --rrt-connect: OMPL's RRT-Connect for the robot of generate.*
+  std::string overlay_path;            // --config: YAML applied over the planner's config
   std::vector<std::string> overrides;  // key=value, e.g. guidance.scale=2
-  std::string start, goal;            // --start/--goal: J positions (at rest) or D state values
-  std::string start_tcp, goal_tcp;    // --start-tcp/--goal-tcp: TCP points, by IK with the gripper down
-  std::string scene;                  // --scene: a scene file (default: the config's scene section)
-  std::vector<std::string> spheres;   // --sphere x,y,z,r (added to the scene)
-  std::vector<std::string> radii;     // --radius R (every sphere) or K=R (sphere K)
-  int num_samples = 64;               // -n
-  int64_t seed = 0;                   // --seed
-  std::string out;                    // --out: output prefix (default: RUN_DIR/plan)
-  bool execute = false;               // --execute: track the plans in MuJoCo
-  bool plot = true;                   // --no-plot clears it
-  double goal_tolerance = 0.03;       // --goal-tolerance: success radius around the goal TCP (world units)
-  double max_speed_ratio = 1.5;       // --max-speed-ratio: a feasible plan's joint speeds stay within this × the limits
+  std::string start, goal;             // --start/--goal: J positions (at rest) or D state values
+  std::string start_tcp, goal_tcp;     // --start-tcp/--goal-tcp: TCP points, by the robot's IK
+  std::string scene;                   // --scene: a scene file (default: the config's scene section)
+  std::vector<std::string> spheres;    // --sphere x,y,z,r (added to the scene)
+  std::vector<std::string> boxes;      // --box cx,cy,cz,lx,ly,lz[,qw,qx,qy,qz]
+  std::vector<std::string> cylinders;  // --cylinder cx,cy,cz,r,h[,qw,qx,qy,qz]
+  std::vector<std::string> capsules;   // --capsule ax,ay,az,bx,by,bz,r
+  std::vector<std::string> radii;      // --radius R (every sphere) or K=R (sphere K)
+  int num_samples = 64;                // -n
+  int64_t seed = 0;                    // --seed
+  std::string out;                     // --out: output prefix (default: RUN_DIR/plan)
+  bool execute = false;                // --execute: track the plans in MuJoCo
+  bool plot = true;                    // --no-plot clears it
+  double goal_tolerance = 0.03;        // --goal-tolerance: success radius around the goal TCP (world units)
+  double max_speed_ratio = 1.5;        // --max-speed-ratio: a feasible plan's joint speeds stay within this × the limits
 };
 
-/// @throws flowplan::Error for a bad planner file, scene, start or goal (unreachable,
-///   outside the joint limits, inside an obstacle) or a scene of the wrong dimension.
-void RunPlan(const PlanCommand& command);
+/// The planner a plan command runs, with what scoring and execution need.
+struct PlanSubject {
+  std::unique_ptr<planning::Planner> planner;
+  ExperimentConfig config;                // resolved: the planner's, then --config, then overrides
+  kinematics::TrajectoryInfo trajectory;  // what it plans
+  std::shared_ptr<const kinematics::Robot> robot;
+  planning::PlanSettings settings;        // the call's settings (a learned planner's)
+  std::string source;                     // what was loaded, for the report
+  std::string run_folder;                 // default output folder
+};
 
-/// Comma-separated finite numbers; `option` names them in errors.
-/// @throws flowplan::Error naming the field that is empty or not a finite number.
-std::vector<double> ParseNumbers(const std::string& text, const std::string& option);
+/// What was planned, and where.
+struct PlanInputs {
+  geometry::Scene scene;
+  geometry::SceneRows rows;   // the scene as the planner takes it
+  std::string scene_source;   // the file, or "scene (config)"
+  torch::Tensor start, goal;  // (D,) raw, float32
+  torch::Tensor goal_tcp;     // (W,) float64: --goal-tcp, or the goal's TCP
+};
+
+/// The scores of N plans against K obstacles.
+struct PlanScores {
+  torch::Tensor tcp;            // (N, T, W) float64
+  torch::Tensor tcp_clearance;  // (N, K): smallest signed distance of the TCP path to each obstacle
+  torch::Tensor arm_clearance;  // (N, K): the same for the robot's collision spheres
+  torch::Tensor goal_distance;  // (N,)
+  torch::Tensor speed_ratio;    // (N,): largest joint speed the positions imply, over its limit
+};
+
+/// plan_subject.cc: the planner of --ckpt, --planner or --rrt-connect.
+/// @throws flowplan::Error for a bad file, or an override an exported file cannot take.
+PlanSubject LoadPlanSubject(const PlanArgs& args);
+
+/// plan_inputs.cc: the scene, start and goal of the command line.
+/// @throws flowplan::Error for a bad scene or obstacle option, or a start or goal
+///   that is unreachable, outside the joint limits or inside an obstacle.
+PlanInputs ResolvePlanInputs(const PlanArgs& args, const PlanSubject& subject);
+
+/// plan_report.cc: scores plans (N, T, D).
+PlanScores ScorePlans(const torch::Tensor& plans, const PlanSubject& subject, const PlanInputs& inputs);
+
+/// plan_execute.cc: tracks every plan in MuJoCo, on `threads` workers.
+/// @throws flowplan::Error unless the robot is the built-in Franka.
+std::vector<sim::ExecutionResult> ExecutePlans(const torch::Tensor& plans, const PlanSubject& subject,
+                                               const PlanInputs& inputs, int threads);
+
+/// How many plans succeeded, counted three ways.
+struct PlanCounts {
+  int64_t tcp = 0, arm = 0, executed = 0;
+};
+
+/// plan_report.cc: the plans and executions as PREFIX.h5 (into `h5_temp`, the
+/// temporary name of PREFIX.h5), the report as PREFIX.json; returns the successes.
+PlanCounts WritePlanFiles(const std::string& h5_temp, const std::string& prefix, const PlanArgs& args,
+                    const PlanSubject& subject, const PlanInputs& inputs, const planning::PlanResult& result,
+                    const PlanScores& scores, const std::vector<sim::ExecutionResult>& executed, double wall_seconds,
+                    int threads);
+
+/// plan_report.cc: draws PREFIX.png from PREFIX.h5 with scripts/plot.py; returns
+/// the figure's path, or why it was not drawn.
+std::string DrawPlanFigure(const std::string& prefix);
 
 }  // namespace flowplan::experiment

@@ -1,93 +1,87 @@
 #include "guidance/guide.h"
 
-#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
 
 #include "core/error.h"
-#include "guidance/collision_cost.h"
-#include "guidance/smoothness_cost.h"
+#include "jit/library.h"
 
 namespace flowplan::guidance {
+namespace {
 
-double GuidanceFactor(GuidanceSchedule schedule, double t) {
-  switch (schedule) {
-    case GuidanceSchedule::kOneMinusT:
-      return 1.0 - t;
-    case GuidanceSchedule::kRatio:
-      return (1.0 - t) / std::max(t, kMinRatioTime);
-    case GuidanceSchedule::kRising:
-      return t;
+/// What a cost term's module may be given.
+struct CostContext {
+  const kinematics::Robot& robot;
+  double dt;
+};
+
+/// A built-in cost term: its class, its file, the setting that weighs it.
+struct CostTerm {
+  const char* class_name;
+  const char* path;
+  const char* weight_key;
+};
+
+// The built-in cost terms, one line each; every guided planner sees them all.
+const std::vector<CostTerm> kCostTerms = {
+    {"CollisionCost", "guidance/collision.py", "guidance.collision_weight"},
+    {"SmoothnessCost", "guidance/smoothness.py", "guidance.smoothness_weight"},
+    {"JointLimitCost", "guidance/joint_limit.py", "guidance.joint_limit_weight"},
+};
+
+/// Every term gets the robot, dt and its weight key; a class uses what it needs.
+jit::ModuleBuilder TermBuilder(const char* class_name, const char* weight_key, const CostContext& context) {
+  jit::ModuleBuilder builder(class_name);
+  builder.Submodule("robot", context.robot.module())
+      .Attribute("dt", context.dt)
+      .Attribute("weight_key", std::string(weight_key));
+  return builder;
+}
+
+std::string ReadUserCost(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) throw Error("guidance.user_cost: " + path + ": no such file");
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  if (!in) throw Error("guidance.user_cost: " + path + ": cannot be read");
+  const std::string source = text.str();
+  if (source.find("def cost(self") == std::string::npos) {
+    throw Error("guidance.user_cost: " + path +
+                ": expected a method `def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor`");
   }
-  return 1.0 - t;
+  return source;
 }
 
-std::shared_ptr<const WeightedSumCost> MakeGuidanceCost(const GuidanceConfig& config,
-                                                        std::shared_ptr<const kinematics::Robot> robot, double dt) {
-  FLOWPLAN_DEMAND(robot != nullptr);
-  const int64_t J = robot->num_joints();
-  std::vector<WeightedSumCost::Term> terms;
-  terms.push_back({"collision", config.collision_weight, std::make_shared<CollisionCost>(robot, config.margin)});
-  terms.push_back(
-      {"smoothness", config.smoothness_weight, std::make_shared<SmoothnessCost>(J, dt, config.smoothness_sigma)});
-  return std::make_shared<WeightedSumCost>(std::move(terms));
-}
+}  // namespace
 
-Guide::Guide(std::shared_ptr<const WeightedSumCost> cost, models::MinMaxNormalizer normalizer, GuidanceConfig config)
-    : cost_(std::move(cost)), normalizer_(std::move(normalizer)), config_(config) {
-  FLOWPLAN_DEMAND(cost_ != nullptr && normalizer_.fitted());
-}
-
-torch::Tensor Guide::Gradient(const torch::Tensor& x_n, const torch::Tensor& obstacles) const {
-  // Costs see raw states; x = (x_n + 1)/2 (hi − lo) + lo, so ∂/∂x_n = ∂/∂x · (hi − lo)/2.
-  const torch::Tensor x = normalizer_.DenormalizeUnclamped(x_n);
-  torch::Tensor gradient = torch::zeros_like(x);
-  for (const WeightedSumCost::Term& term : cost_->terms()) {
-    if (term.weight == 0.0) continue;
-    torch::Tensor part = term.cost->ValueAndGradient(x, obstacles).gradient;
-    if (config_.clip > 0.0) {
-      // Written as the script writes it (tensor / float, then tensor / tensor), so that both round alike.
-      part = part / (part.norm(2, -1, /*keepdim=*/true).clamp_min(config_.clip) / config_.clip);
-    }
-    gradient = gradient + term.weight * part;
+torch::jit::Module BuildGuide(const GuidanceConfig& config, const kinematics::Robot& robot,
+                              const torch::jit::Module& normalizer, double dt) {
+  const CostContext context{robot, dt};
+  std::vector<torch::jit::Module> terms;
+  for (const CostTerm& term : kCostTerms) {
+    terms.push_back(TermBuilder(term.class_name, term.weight_key, context).Methods(term.path).Build());
   }
-  return gradient * (0.5 * (normalizer_.hi() - normalizer_.lo()));
-}
-
-torch::Tensor Guide::Step(const torch::Tensor& x_n, double t, const torch::Tensor& obstacles, double scale) const {
-  if (scale == 0.0 || !obstacles.defined()) return x_n;
-  return x_n - (scale * GuidanceFactor(config_.schedule, t)) * Gradient(x_n, obstacles);
-}
-
-void Guide::WriteScript(jit::ScriptModule& module) const {
-  cost_->WriteScript(module, "guidance_cost");  // also writes guidance_cost_<term> for every weighted term
-  std::string s = R"PY(
-def guide_gradient(self, x: Tensor, obstacles: Tensor) -> Tensor:
-    raw = self.denormalize_unclamped(x)
-    gradient = torch.zeros_like(x)
-)PY";
-  for (const WeightedSumCost::Term& term : cost_->terms()) {
-    if (term.weight == 0.0) continue;
-    s += "    value, part = self.guidance_cost_" + term.name + "(raw, obstacles)\n";
-    if (config_.clip > 0.0) {
-      const std::string clip = jit::ScriptFloat(config_.clip);
-      s += "    part = part / (torch.norm(part, 2, -1, True).clamp_min(" + clip + ") / " + clip + ")\n";
-    }
-    s += "    gradient = gradient + " + jit::ScriptFloat(term.weight) + " * part\n";
+  if (!config.user_cost.empty()) {
+    const std::string source = ReadUserCost(config.user_cost);
+    terms.push_back(TermBuilder("UserCost", "guidance.user_cost_weight", context)
+                        .Attribute("source", config.user_cost)
+                        .MethodsFromText(source, "guidance.user_cost: " + config.user_cost)
+                        .Methods("guidance/user_cost.py")
+                        .Build());
   }
-  s += "    return gradient * (0.5 * (self.hi - self.lo))\n";
-  s += "\ndef guide(self, x: Tensor, t: float, obstacles: Tensor, scale: float) -> Tensor:\n";
-  switch (config_.schedule) {
-    case GuidanceSchedule::kOneMinusT:
-      s += "    b = 1.0 - t\n";
-      break;
-    case GuidanceSchedule::kRatio:
-      s += "    b = (1.0 - t) / max(t, " + jit::ScriptFloat(kMinRatioTime) + ")\n";
-      break;
-    case GuidanceSchedule::kRising:
-      s += "    b = t\n";
-      break;
+  // The terms as a chain, the first term outermost.
+  torch::jit::Module chain = jit::ModuleBuilder("NoCost").Methods("guidance/no_cost.py").Build();
+  for (auto term = terms.rbegin(); term != terms.rend(); ++term) {
+    chain = jit::ModuleBuilder("CostChain").Submodule("term", *term).Submodule("rest", chain).Methods("guidance/cost_chain.py").Build();
   }
-  s += "    return x - (scale * b) * self.guide_gradient(x, obstacles)\n";
-  module.Define(s);
+  return jit::ModuleBuilder("Guide")
+      .Submodule("normalizer", normalizer)
+      .Submodule("costs", chain)
+      .Attribute("num_joints", robot.num_joints())
+      .Methods("guidance/guide.py")
+      .Build();
 }
 
 }  // namespace flowplan::guidance

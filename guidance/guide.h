@@ -1,31 +1,25 @@
 #pragma once
 
-// Guidance of a sampler towards low cost (SPEC section 2): after each sampler
-// step, the normalized trajectories move against the gradient of the cost of
-// their de-normalized states,
-//   x ← x − s · b_t · Σ_k w_k · clip(∇ C_k(denormalize(x))) · (hi − lo)/2,
-// over the weighted terms of the cost (collision, smoothness), with
-// b_t = 1 − t (the paper's choice) or (1 − t)/t, and clip() capping the norm of
-// each state's gradient of each term in raw units, as MPD does (without it the
-// GP prior's gradient on early, noisy samples dwarfs the collision term).
+// Guidance (SPEC section 2): the costs that steer every learned planner
+// around obstacles, and the guide that applies them. The computation is the
+// TorchScript of this folder (guide.py, the cost classes, guidance.py); this
+// file builds the modules from a config. A cost term is its class file plus
+// one line in kCostTerms (guide.cc); a user may add a cost of their own as a
+// TorchScript file (guidance.user_cost, docs/planning.md).
 
-#include <torch/torch.h>
+#include <torch/script.h>
 
-#include <memory>
 #include <string>
 
 #include "core/config.h"
-#include "guidance/cost.h"
-#include "jit/script_writer.h"
 #include "kinematics/robot.h"
-#include "models/normalizer.h"
 
 namespace flowplan::guidance {
 
 /// b_t, the factor on the gradient at flow time t (0 noise, 1 data).
 enum class GuidanceSchedule {
-  kOneMinusT,  // 1 − t
-  kRatio,      // (1 − t)/t, with t at least kMinRatioTime
+  kOneMinusT,  // 1 − t (the paper's)
+  kRatio,      // (1 − t)/t, with t at least 1e-3
   kRising,     // t: strongest after the last step, where the network's own pull back to the data is strongest
 };
 
@@ -36,19 +30,21 @@ inline const config::EnumNames<GuidanceSchedule>& EnumEntries(GuidanceSchedule) 
   return names;
 }
 
-/// Smallest t the (1 − t)/t schedule divides by.
-inline constexpr double kMinRatioTime = 1e-3;
-
-/// The `guidance` section of an experiment config. Every field can also be set
-/// for one planning call (`flowplan plan guidance.scale=2`, PlanRequest::guidance).
+/// The `guidance` section of an experiment config. Every number here is also a
+/// per-call setting of a planner (by its key, e.g. "guidance.clip"), and so is
+/// the schedule; the user cost file is compiled in.
 struct GuidanceConfig {
   double scale = 1.0;  // s; 0: unguided
   GuidanceSchedule schedule = GuidanceSchedule::kOneMinusT;
   double clip = 0.0;                // cap on each term's gradient norm per state (raw units), 0: none
   double collision_weight = 0.1;    // weight of the collision cost (SPEC / the paper)
   double smoothness_weight = 1e-6;  // weight of the GP smoothness prior
-  double margin = 0.05;             // world units added to the radii in the collision hinge (MPD: 0.05 m)
+  double margin = 0.05;             // world units added to the robot's spheres in the collision hinge (MPD: 0.05 m)
   double smoothness_sigma = 1.0;    // σ of the GP prior
+  double joint_limit_weight = 0.0;  // weight of the joint-limit hinge
+  double joint_limit_margin = 0.05;  // joint units (rad) the hinge keeps from each limit
+  std::string user_cost;            // a TorchScript file defining cost(self, q, qd, scene); empty: none
+  double user_cost_weight = 1.0;    // weight of the user cost
 
   template <class V>
   void Visit(V& v) {
@@ -58,42 +54,24 @@ struct GuidanceConfig {
             config::NonNegative());
     v.Field("collision_weight", collision_weight, "weight of the collision cost", config::NonNegative());
     v.Field("smoothness_weight", smoothness_weight, "weight of the GP smoothness prior", config::NonNegative());
-    v.Field("margin", margin, "clearance added to the radii in the collision hinge (world units)",
+    v.Field("margin", margin, "clearance added to the robot's spheres in the collision hinge (world units)",
             config::NonNegative());
     v.Field("smoothness_sigma", smoothness_sigma, "sigma of the GP smoothness prior", config::Positive());
+    v.Field("joint_limit_weight", joint_limit_weight, "weight of the joint-limit hinge (0: off)",
+            config::NonNegative());
+    v.Field("joint_limit_margin", joint_limit_margin, "distance the joint-limit hinge keeps from each limit",
+            config::NonNegative());
+    v.Field("user_cost", user_cost,
+            "TorchScript file defining `def cost(self, q, qd, scene) -> Tensor` (docs/planning.md); empty for none");
+    v.Field("user_cost_weight", user_cost_weight, "weight of the user cost", config::NonNegative());
   }
 };
 
-/// b_t of `schedule` at flow time t.
-double GuidanceFactor(GuidanceSchedule schedule, double t);
-
-/// collision_weight · CollisionCost + smoothness_weight · SmoothnessCost for
-/// `robot`, whose states are sampled `dt` s apart.
-std::shared_ptr<const WeightedSumCost> MakeGuidanceCost(const GuidanceConfig& config,
-                                                        std::shared_ptr<const kinematics::Robot> robot, double dt);
-
-/// Applies guidance to normalized trajectories. Immutable; safe to share between threads.
-class Guide {
- public:
-  Guide(std::shared_ptr<const WeightedSumCost> cost, models::MinMaxNormalizer normalizer, GuidanceConfig config);
-
-  /// Σ_k w_k clip(∇ C_k) with respect to normalized x (B, T, D), each term's
-  /// raw gradient capped at config.clip per state (when positive). `obstacles` (K, W+1).
-  torch::Tensor Gradient(const torch::Tensor& x_n, const torch::Tensor& obstacles) const;
-
-  /// x − scale · b_t · Gradient(x): one guidance step at flow time t.
-  torch::Tensor Step(const torch::Tensor& x_n, double t, const torch::Tensor& obstacles, double scale) const;
-
-  /// Adds `guide_gradient(self, x, obstacles)` (Gradient), `guide(self, x,
-  /// t: float, obstacles, scale: float)` (Step) and the cost's methods. Needs the normalizer's and the robot's methods in the module.
-  void WriteScript(jit::ScriptModule& module) const;
-
-  const GuidanceConfig& config() const { return config_; }
-
- private:
-  std::shared_ptr<const WeightedSumCost> cost_;
-  models::MinMaxNormalizer normalizer_;
-  GuidanceConfig config_;
-};
+/// The guide module (guide.py) of a robot whose states x = [q, q̇] (D = 2J)
+/// are sampled `dt` s apart, normalized by `normalizer` (a Normalizer module):
+/// every cost term of kCostTerms, and the user's cost when config.user_cost names one.
+/// @throws flowplan::Error naming guidance.user_cost if the file cannot be read or compiled.
+torch::jit::Module BuildGuide(const GuidanceConfig& config, const kinematics::Robot& robot,
+                              const torch::jit::Module& normalizer, double dt);
 
 }  // namespace flowplan::guidance

@@ -7,39 +7,11 @@
 
 namespace flowplan::jit {
 
-std::string ScriptModule::Buffer(const std::string& name, const torch::Tensor& value) {
-  for (const auto& [existing, tensor] : buffers_) FLOWPLAN_DEMAND(existing != name);
-  buffers_.emplace_back(name, value.detach().clone());
-  return "self." + name;
-}
-
-void ScriptModule::Attribute(const std::string& name, const c10::TypePtr& type, const c10::IValue& value) {
-  for (const auto& attribute : attributes_) FLOWPLAN_DEMAND(std::get<0>(attribute) != name);
-  attributes_.emplace_back(name, type, value);
-}
-
-void ScriptModule::Define(const std::string& source) {
-  source_ += source;
-  if (!source_.empty() && source_.back() != '\n') source_ += '\n';
-  source_ += '\n';
-}
-
-torch::jit::Module ScriptModule::Build(const std::string& class_name) const {
-  torch::jit::Module module(class_name);
-  for (const auto& [name, tensor] : buffers_) module.register_buffer(name, tensor);
-  for (const auto& [name, type, value] : attributes_) module.register_attribute(name, type, value);
-  try {
-    module.define(source_);
-  } catch (const c10::Error& e) {
-    throw InternalError(class_name + ": generated TorchScript does not compile: " + e.what_without_backtrace());
-  }
-  return module;
-}
-
 std::string ScriptWriter::Tensor(const std::string& name, const torch::Tensor& value) {
   std::string attribute = prefix_;
   for (char c : name) attribute += (c == '.') ? '_' : c;
-  return module_.Buffer(attribute, value);
+  module_.Buffer(attribute, value);
+  return "self." + attribute;
 }
 
 std::string ScriptWriter::Let(const std::string& expr) {

@@ -1,59 +1,177 @@
 #include "kinematics/robot.h"
 
+#include <cmath>
+
 #include "core/error.h"
 #include "core/format.h"
-#include "kinematics/arm_kinematics.h"
-#include "kinematics/point_kinematics.h"
+#include "jit/library.h"
 
 namespace flowplan::kinematics {
+namespace {
 
-Robot::Robot(RobotDescription description) : description_(std::move(description)) {
-  const int64_t S = description_.num_spheres();
-  radii_ = torch::empty({S}, torch::kFloat64);
-  if (description_.kind == RobotKind::kPoint) {
-    radii_[0] = description_.point_radius;
+torch::Tensor Doubles(const std::vector<double>& values) {
+  return torch::tensor(values, torch::kFloat64).view({static_cast<int64_t>(values.size())});
+}
+
+/// 4×4 poses (n, 4, 4) from positions (n, 3) and quaternions (n, 4) (w, x, y, z).
+torch::Tensor Poses(const torch::Tensor& positions, const torch::Tensor& quaternions) {
+  const torch::Tensor rotations = jit::CallFunction("rotation_matrices", {quaternions}).toTensor();  // (n, 3, 3)
+  torch::Tensor poses = torch::eye(4, torch::kFloat64).repeat({positions.size(0), 1, 1});
+  poses.slice(1, 0, 3).slice(2, 0, 3).copy_(rotations);
+  poses.slice(1, 0, 3).select(2, 3).copy_(positions);
+  return poses;
+}
+
+/// The unit vector (3,) along `axis`.
+torch::Tensor UnitAxis(const std::array<double, 3>& axis) {
+  const double n = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+  return torch::tensor({axis[0] / n, axis[1] / n, axis[2] / n}, torch::kFloat64);
+}
+
+/// [a]× padded to 4×4, of the unit axis a.
+torch::Tensor CrossMatrix(const std::array<double, 3>& axis) {
+  const torch::Tensor unit = UnitAxis(axis);
+  const double x = unit[0].item<double>(), y = unit[1].item<double>(), z = unit[2].item<double>();
+  return torch::tensor({0.0, -z, y, 0.0, z, 0.0, -x, 0.0, -y, x, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, torch::kFloat64)
+      .view({4, 4});
+}
+
+/// Buffers and attributes every robot class has.
+void AddCommon(jit::ModuleBuilder& builder, const RobotDescription& d) {
+  const int64_t J = d.num_joints;
+  torch::Tensor radii = torch::empty({d.num_spheres()}, torch::kFloat64);
+  if (d.kind == RobotKind::kPoint) {
+    radii[0] = d.point_radius;
   } else {
-    for (int64_t s = 0; s < S; ++s) radii_[s] = description_.spheres[s].radius;
+    for (int64_t s = 0; s < d.num_spheres(); ++s) radii[s] = d.spheres[static_cast<size_t>(s)].radius;
   }
+  builder.Buffer("sphere_radii", radii)
+      .Buffer("lower", Doubles(d.joint_lower))
+      .Buffer("upper", Doubles(d.joint_upper))
+      .Buffer("velocity_limit", d.velocity_limit.empty() ? torch::full({J}, INFINITY, torch::kFloat64)
+                                                         : Doubles(d.velocity_limit))
+      .Attribute("num_joints", J)
+      .Attribute("workspace_dim", static_cast<int64_t>(d.workspace_dim))
+      .Attribute("num_spheres", static_cast<int64_t>(d.num_spheres()))
+      .Attribute("description", RobotToYaml(d));
 }
 
-void Robot::CheckJoints(const torch::Tensor& q) const {
-  const int64_t J = num_joints();
-  if (!q.defined() || q.dim() != 2 || q.size(1) != J) {
-    throw Error("kinematics: q: expected (N, " + std::to_string(J) + "), got " +
-                (q.defined() ? ShapeText(q.sizes().vec()) : std::string("an undefined tensor")));
+torch::jit::Module BuildArm(const RobotDescription& d) {
+  const int64_t L = static_cast<int64_t>(d.links.size()), J = d.num_joints;
+  const int64_t S = static_cast<int64_t>(d.spheres.size());
+  torch::Tensor positions = torch::empty({L + 1, 3}, torch::kFloat64), quaternions = torch::empty({L + 1, 4}, torch::kFloat64);
+  std::vector<torch::Tensor> cross, cross_sq;
+  c10::List<int64_t> parents, joints;
+  torch::Tensor joint_links = torch::zeros({J}, torch::kInt64), joint_axes = torch::zeros({J, 3}, torch::kFloat64);
+  for (int64_t l = 0; l < L; ++l) {
+    const RobotLink& link = d.links[static_cast<size_t>(l)];
+    for (int i = 0; i < 3; ++i) positions[l][i] = link.pos[i];
+    for (int i = 0; i < 4; ++i) quaternions[l][i] = link.quat[i];
+    const torch::Tensor k = CrossMatrix(link.axis);
+    cross.push_back(k);
+    cross_sq.push_back(k.matmul(k));
+    parents.push_back(link.parent);
+    joints.push_back(link.joint);
+    if (link.joint >= 0) {
+      joint_links[link.joint] = l;
+      joint_axes[link.joint] = UnitAxis(link.axis);
+    }
   }
-  if (q.scalar_type() != torch::kFloat32 && q.scalar_type() != torch::kFloat64) {
-    throw Error(std::string("kinematics: q: expected float32 or float64, got ") + c10::toString(q.scalar_type()));
+  for (int i = 0; i < 3; ++i) positions[L][i] = d.tcp_pos[i];
+  for (int i = 0; i < 4; ++i) quaternions[L][i] = d.tcp_quat[i];
+  const torch::Tensor poses = Poses(positions, quaternions);  // links, then the TCP
+  torch::Tensor sphere_links = torch::empty({S}, torch::kInt64), sphere_local = torch::empty({S, 3}, torch::kFloat64);
+  torch::Tensor ancestors = torch::zeros({J, S}, torch::kFloat64), tcp_ancestors = torch::zeros({J}, torch::kFloat64);
+  for (int64_t l = d.tcp_link; l >= 0; l = parents[static_cast<size_t>(l)]) {
+    if (joints[static_cast<size_t>(l)] >= 0) tcp_ancestors[joints[static_cast<size_t>(l)]] = 1.0;
   }
+  for (int64_t s = 0; s < S; ++s) {
+    const RobotSphere& sphere = d.spheres[static_cast<size_t>(s)];
+    sphere_links[s] = static_cast<int64_t>(sphere.link);
+    for (int i = 0; i < 3; ++i) sphere_local[s][i] = sphere.centre[i];
+    for (int64_t l = sphere.link; l >= 0; l = parents[static_cast<size_t>(l)]) {
+      if (joints[static_cast<size_t>(l)] >= 0) ancestors[joints[static_cast<size_t>(l)]][s] = 1.0;
+    }
+  }
+  const IkSettings ik;
+  jit::ModuleBuilder builder("Arm");
+  AddCommon(builder, d);
+  builder.Buffer("fixed", poses.slice(0, 0, L))
+      .Buffer("cross", torch::stack(cross))
+      .Buffer("cross_sq", torch::stack(cross_sq))
+      .Buffer("tcp_pose", poses[L])
+      .Buffer("sphere_links", sphere_links)
+      .Buffer("sphere_local", sphere_local)
+      .Buffer("joint_links", joint_links)
+      .Buffer("joint_axes", joint_axes)
+      .Buffer("ancestors", ancestors)
+      .Buffer("tcp_ancestors", tcp_ancestors)
+      .Buffer("home", d.home.empty() ? torch::zeros({J}, torch::kFloat64) : Doubles(d.home))
+      .Attribute("parents", parents)
+      .Attribute("joints", joints)
+      .Attribute("tcp_link", static_cast<int64_t>(d.tcp_link))
+      .Attribute("num_links", L)
+      .Attribute("ik_iterations", ik.iterations)
+      .Attribute("ik_damping", ik.damping)
+      .Attribute("ik_max_step", ik.max_step)
+      .Attribute("ik_limit_margin", ik.limit_margin)
+      .Attribute("ik_posture_gain", ik.posture_gain)
+      .Attribute("ik_position_tolerance", ik.position_tolerance)
+      .Attribute("ik_orientation_tolerance", ik.orientation_tolerance)
+      .Methods("kinematics/arm.py");
+  return builder.Build();
 }
 
-void Robot::WritePublicScript(jit::ScriptModule& module) const {
-  const std::string J = std::to_string(num_joints()), W = std::to_string(workspace_dim());
-  const std::string S = std::to_string(num_spheres());
-  module.Buffer("robot_sphere_radii", radii_);
-  module.Attribute("robot", c10::StringType::get(), RobotToYaml(description_));
-  module.Attribute("num_joints", c10::IntType::get(), num_joints());
-  module.Attribute("workspace_dim", c10::IntType::get(), workspace_dim());
-  module.Define(R"PY(
-def tcp(self, q: Tensor) -> Tensor:
-    assert q.dim() >= 1 and q.size(-1) == )PY" + J + R"PY(, "tcp: q: expected (..., )PY" + J + R"PY()"
-    shape = q.shape[:-1]
-    return self.robot_tcp(q.reshape(-1, )PY" + J + R"PY()).reshape(shape + [)PY" + W + R"PY(])
+torch::jit::Module BuildPoint(const RobotDescription& d) {
+  jit::ModuleBuilder builder("Point");
+  AddCommon(builder, d);
+  return builder.Methods("kinematics/point.py").Build();
+}
 
-def collision_spheres(self, q: Tensor) -> Tensor:
-    assert q.dim() >= 1 and q.size(-1) == )PY" + J + R"PY(, "collision_spheres: q: expected (..., )PY" + J + R"PY()"
-    shape = q.shape[:-1]
-    centres, axes, origins = self.robot_spheres(q.reshape(-1, )PY" + J + R"PY())
-    radii = self.robot_sphere_radii.to(centres.dtype).view(1, )PY" + S + R"PY(, 1).expand(centres.size(0), )PY" + S + R"PY(, 1)
-    return torch.cat([centres, radii], -1).reshape(shape + [)PY" + S + ", " + std::to_string(workspace_dim() + 1) + R"PY(])
-)PY");
+}  // namespace
+
+Robot::Robot(const RobotDescription& description, const std::string& where) : description_(description) {
+  description_.Validate(where);
+  module_ = description_.kind == RobotKind::kPoint ? BuildPoint(description_) : BuildArm(description_);
+}
+
+torch::Tensor Robot::SphereRadii() const { return module_.attr("sphere_radii").toTensor(); }
+
+torch::Tensor Robot::Tcp(const torch::Tensor& q) const { return jit::Call(module_, "tcp", {q}).toTensor(); }
+
+torch::Tensor Robot::SphereCentres(const torch::Tensor& q) const {
+  return jit::Call(module_, "sphere_centres", {q}).toTensor();
+}
+
+torch::Tensor Robot::Clearance(const torch::Tensor& q, const geometry::SceneRows& scene) const {
+  const torch::Tensor q64 = q.to(torch::kFloat64);
+  const torch::Tensor centres = SphereCentres(q64);
+  return jit::CallFunction("sphere_clearance", {centres, SphereRadii(), scene}).toTensor();
+}
+
+torch::Tensor Robot::PointClearance(const torch::Tensor& points, const geometry::SceneRows& scene) {
+  const auto out = jit::CallFunction("scene_distance", {points.to(torch::kFloat64), scene}).toTuple();
+  return out->elements()[0].toTensor();
+}
+
+IkSolution Robot::InverseTcp(const torch::Tensor& targets, const torch::Tensor& seed) const {
+  const int64_t W = workspace_dim(), J = num_joints();
+  if (!targets.defined() || targets.dim() != 2 || targets.size(1) != W) {
+    throw Error("IK: targets: expected (N, " + std::to_string(W) + "), got " +
+                (targets.defined() ? ShapeText(targets.sizes().vec()) : "(undefined)"));
+  }
+  if (is_arm() && description_.home.empty()) {
+    throw Error("kinematics: robot \"" + description_.name + "\" has no home posture to solve IK from");
+  }
+  torch::Tensor start = seed.defined() ? seed.to(torch::kFloat64) : targets.to(torch::kFloat64);
+  if (!seed.defined() && is_arm()) start = module_.attr("home").toTensor().view({1, J}).expand({targets.size(0), J});
+  const auto out = jit::Call(module_, "ik_solve", {targets.to(torch::kFloat64), start}).toTuple();
+  return {out->elements()[0].toTensor(), out->elements()[1].toTensor(), out->elements()[2].toTensor(),
+          out->elements()[3].toTensor()};
 }
 
 std::shared_ptr<const Robot> MakeRobot(const RobotDescription& description, const std::string& where) {
-  description.Validate(where);
-  if (description.kind == RobotKind::kPoint) return std::make_shared<PointKinematics>(description);
-  return std::make_shared<ArmKinematics>(description);
+  return std::make_shared<Robot>(description, where);
 }
 
 }  // namespace flowplan::kinematics

@@ -1,83 +1,92 @@
 #pragma once
 
-// Batched kinematics of a robot in LibTorch: TCP position and collision
-// spheres of joint configurations, and the vector–Jacobian product that turns
-// a gradient on the sphere centres into a gradient on the joints, written out
-// (not taken by autograd) so that guidance works in an exported planner even
-// where autograd cannot run (a caller under torch.inference_mode()). Every
-// implementation also writes the same functions as TorchScript.
+// A robot's kinematics: a TorchScript module built from a RobotDescription
+// (the class Arm of kinematics/arm.py for a tree of hinge joints, the class
+// Point of kinematics/point.py for a ball or disc), the one implementation
+// that guidance, exported planners, RRT-Connect, the start/goal checks, the
+// reports and the problem generator use. Every method is batched; gradients
+// flow to q through autograd, and the module also writes out the
+// vector–Jacobian products guidance uses (so that exported planners plan under
+// torch.inference_mode(), where autograd cannot run).
 //
-// Shapes: N configurations, J joints, S collision spheres, W workspace dims.
+// Shapes: N configurations, J joints, S collision spheres, W workspace dims, K obstacles.
 
+#include <torch/script.h>
 #include <torch/torch.h>
 
 #include <memory>
+#include <string>
 
-#include "jit/script_writer.h"
+#include "geometry/scene_rows.h"
 #include "kinematics/robot_description.h"
 
 namespace flowplan::kinematics {
 
-/// Sphere centres of a batch of configurations with what their gradient needs.
-struct SpherePoses {
-  torch::Tensor centres;        // (N, S, W), m
-  torch::Tensor joint_axes;     // (N, J, 3), unit hinge axes in the world; arms only
-  torch::Tensor joint_origins;  // (N, J, 3), m, a point on each hinge axis; arms only
+/// Joint configurations that put the TCP at targets, with what was reached.
+struct IkSolution {
+  torch::Tensor q;                  // (N, J) rad, float64
+  torch::Tensor position_error;     // (N,) m
+  torch::Tensor orientation_error;  // (N,) rad
+  torch::Tensor converged;          // (N,) bool: within kIkPositionTolerance and kIkOrientationTolerance
 };
 
-/// A robot's kinematics. Immutable after construction and safe to share between threads.
-///
-/// WriteScript() adds these methods to an exported module (shapes as above;
-/// dtype and device follow q):
-///   tcp(q (..., J)) -> (..., W)
-///   collision_spheres(q (..., J)) -> (..., S, W + 1): centre and radius of every sphere
-///   robot_spheres(q (N, J)) -> (centres, joint_axes, joint_origins) as SpherePoses
-///   robot_spheres_vjp(centres, joint_axes, joint_origins, g (N, S, W)) -> (N, J)
-///   robot_tcp_vjp(q (N, J), g (N, W)) -> (N, J)
-/// the buffer robot_sphere_radii (S,) and the attributes robot (the description
-/// as YAML), num_joints and workspace_dim.
+inline constexpr double kIkPositionTolerance = 1e-5;     // m
+inline constexpr double kIkOrientationTolerance = 1e-4;  // rad
+
+/// The damped-least-squares solver's settings (attributes of the module).
+struct IkSettings {
+  int64_t iterations = 300;
+  double damping = 0.05;        // λ (m, rad)
+  double max_step = 0.2;        // rad, largest joint change per iteration
+  double limit_margin = 0.01;   // rad kept from every joint limit
+  double posture_gain = 0.1;    // pull towards home in the task's null space
+  double position_tolerance = kIkPositionTolerance;
+  double orientation_tolerance = kIkOrientationTolerance;
+};
+
+/// Immutable after construction and safe to share between threads.
 class Robot {
  public:
-  explicit Robot(RobotDescription description);
-  virtual ~Robot() = default;
-  Robot(const Robot&) = delete;
-  Robot& operator=(const Robot&) = delete;
+  /// @throws flowplan::Error, prefixed by `where`, if the description is inconsistent.
+  explicit Robot(const RobotDescription& description, const std::string& where = "robot");
 
   const RobotDescription& description() const { return description_; }
   int64_t num_joints() const { return description_.num_joints; }        // J
   int64_t workspace_dim() const { return description_.workspace_dim; }  // W
   int64_t num_spheres() const { return description_.num_spheres(); }    // S
+  bool is_arm() const { return description_.kind == RobotKind::kArm; }
 
-  /// Sphere radii (S,), m.
-  torch::Tensor SphereRadii(torch::ScalarType dtype = torch::kFloat64) const { return radii_.to(dtype); }
+  /// The TorchScript module (methods tcp, sphere_centres, collision_spheres,
+  /// spheres, spheres_vjp, tcp_vjp, ik, ik_solve; see kinematics/arm.py).
+  const torch::jit::Module& module() const { return module_; }
 
-  /// TCP positions (N, W), m, of configurations q (N, J), float32 or float64.
-  /// @throws flowplan::Error "kinematics: q: expected (N, 7), got (3, 6)".
-  virtual torch::Tensor Tcp(const torch::Tensor& q) const = 0;
+  /// Sphere radii (S,), float64.
+  torch::Tensor SphereRadii() const;
 
-  /// ∂/∂q of Σ ⟨g, Tcp(q)⟩: q (N, J), g (N, W) -> (N, J), written out.
-  virtual torch::Tensor TcpVjp(const torch::Tensor& q, const torch::Tensor& g) const = 0;
+  /// TCP positions (..., W) of q (..., J); dtype follows q.
+  /// @throws flowplan::Error "tcp: q: expected (..., 7), got [3, 6]".
+  torch::Tensor Tcp(const torch::Tensor& q) const;
 
-  /// Sphere centres of q (N, J), with what SpheresVjp needs.
-  virtual SpherePoses Spheres(const torch::Tensor& q) const = 0;
+  /// Collision sphere centres (..., S, W) of q (..., J).
+  torch::Tensor SphereCentres(const torch::Tensor& q) const;
 
-  /// ∂/∂q of Σ ⟨grad_centres, centres(q)⟩ at the configurations of `poses`:
-  /// grad_centres (N, S, W) -> (N, J).
-  virtual torch::Tensor SpheresVjp(const SpherePoses& poses, const torch::Tensor& grad_centres) const = 0;
+  /// Whole-robot clearance (N, K) of q (N, J) from every obstacle of `scene`:
+  /// the smallest signed distance between a collision sphere and the obstacle
+  /// (negative: they overlap). float64.
+  torch::Tensor Clearance(const torch::Tensor& q, const geometry::SceneRows& scene) const;
 
-  /// Adds tcp, collision_spheres, robot_spheres, robot_spheres_vjp and robot_sphere_radii.
-  virtual void WriteScript(jit::ScriptModule& module) const = 0;
+  /// Signed distance (N, K) of points (N, W) to every obstacle of `scene`. float64.
+  static torch::Tensor PointClearance(const torch::Tensor& points, const geometry::SceneRows& scene);
 
- protected:
-  /// @throws flowplan::Error unless q is (N, J) float32 or float64.
-  void CheckJoints(const torch::Tensor& q) const;
-  /// The public tcp() and collision_spheres() of the script, written from the
-  /// private `robot_tcp(q (N, J)) -> (N, W)` and robot_spheres the subclass adds.
-  void WritePublicScript(jit::ScriptModule& module) const;
+  /// Inverse kinematics of TCP positions `targets` (N, W), with the TCP
+  /// orientation of the home posture, from `seed` (N, J) (default: home). A
+  /// point robot's solution is the target itself. float64.
+  /// @throws flowplan::Error if an arm has no home posture.
+  IkSolution InverseTcp(const torch::Tensor& targets, const torch::Tensor& seed = torch::Tensor()) const;
 
  private:
   RobotDescription description_;
-  torch::Tensor radii_;  // (S,) float64
+  torch::jit::Module module_;
 };
 
 /// The kinematics of `description` (an arm or a point).

@@ -1,15 +1,17 @@
 #include "models/conditioning.h"
 
+#include "jit/library.h"
+
 namespace flowplan::models {
 
 torch::Tensor Inpaint(const torch::Tensor& x, const torch::Tensor& start, const torch::Tensor& goal) {
-  const int64_t T = x.size(1);
-  return torch::cat({start.unsqueeze(1), x.slice(1, 1, T - 1), goal.unsqueeze(1)}, 1);
+  return jit::CallFunction("inpaint", {x, start, goal}).toTensor();
 }
 
 torch::Tensor ConditionVector(Conditioning conditioning, const torch::Tensor& start, const torch::Tensor& goal) {
-  if (conditioning != Conditioning::kDirect) return torch::Tensor();
-  return torch::cat({start, goal}, -1);
+  const c10::IValue out =
+      jit::CallFunction("condition_vector", {start, goal, conditioning == Conditioning::kInpaint});
+  return out.isNone() ? torch::Tensor() : out.toTensor();
 }
 
 }  // namespace flowplan::models

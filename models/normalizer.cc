@@ -1,6 +1,7 @@
 #include "models/normalizer.h"
 
 #include "core/error.h"
+#include "jit/library.h"
 
 namespace flowplan::models {
 
@@ -11,6 +12,7 @@ MinMaxNormalizer::MinMaxNormalizer(torch::Tensor lo, torch::Tensor hi)
                 "-d and " + std::to_string(hi_.dim()) + "-d");
   }
   if (!(hi_ > lo_).all().item<bool>()) throw Error("normalizer: expected hi > lo in every dimension");
+  module_ = jit::ModuleBuilder("Normalizer").Buffer("lo", lo_).Buffer("hi", hi_).Methods("models/normalizer.py").Build();
 }
 
 MinMaxNormalizer MinMaxNormalizer::Fit(const torch::Tensor& states) {
@@ -36,32 +38,17 @@ void MinMaxNormalizer::CheckInput(const torch::Tensor& x) const {
 
 torch::Tensor MinMaxNormalizer::Normalize(const torch::Tensor& x) const {
   CheckInput(x);
-  return (x - lo_) / (hi_ - lo_) * 2.0 - 1.0;
+  return jit::Call(module_, "normalize", {x}).toTensor();
 }
 
 torch::Tensor MinMaxNormalizer::DenormalizeUnclamped(const torch::Tensor& x) const {
   CheckInput(x);
-  return (x + 1.0) * 0.5 * (hi_ - lo_) + lo_;
+  return jit::Call(module_, "denormalize_unclamped", {x}).toTensor();
 }
 
 torch::Tensor MinMaxNormalizer::Denormalize(const torch::Tensor& x) const {
-  return DenormalizeUnclamped(x.clamp(-1.0, 1.0));
-}
-
-void MinMaxNormalizer::WriteScript(jit::ScriptModule& module) const {
-  FLOWPLAN_DEMAND(fitted());
-  module.Buffer("lo", lo_);
-  module.Buffer("hi", hi_);
-  module.Define(R"PY(
-def normalize(self, x: Tensor) -> Tensor:
-    return (x - self.lo) / (self.hi - self.lo) * 2.0 - 1.0
-
-def denormalize_unclamped(self, x: Tensor) -> Tensor:
-    return (x + 1.0) * 0.5 * (self.hi - self.lo) + self.lo
-
-def denormalize(self, x: Tensor) -> Tensor:
-    return self.denormalize_unclamped(torch.clamp(x, -1.0, 1.0))
-)PY");
+  CheckInput(x);
+  return jit::Call(module_, "denormalize", {x}).toTensor();
 }
 
 }  // namespace flowplan::models

@@ -1,13 +1,14 @@
 #pragma once
 
+#include <torch/script.h>
 #include <torch/torch.h>
-
-#include "jit/script_writer.h"
 
 namespace flowplan::models {
 
 /// Per-dimension min–max normalization to [-1, 1] (SPEC section 2). Fitted on
-/// the training split only; travels with every checkpoint and export.
+/// the training split only; travels with every checkpoint and export. The maps
+/// are the TorchScript class Normalizer (models/normalizer.py), which planners
+/// hold as a submodule.
 class MinMaxNormalizer {
  public:
   MinMaxNormalizer() = default;
@@ -25,9 +26,9 @@ class MinMaxNormalizer {
   /// [-1, 1] -> raw without clamping (for costs that need gradients through it).
   torch::Tensor DenormalizeUnclamped(const torch::Tensor& x) const;
 
-  /// Adds the buffers lo, hi (D,) and the methods normalize(x), denormalize(x)
-  /// (clamping first) and denormalize_unclamped(x), x (..., D), to an exported module.
-  void WriteScript(jit::ScriptModule& module) const;
+  /// The Normalizer module: buffers lo, hi (D,), methods normalize(x),
+  /// denormalize(x) (clamping first), denormalize_unclamped(x), x (..., D).
+  const torch::jit::Module& module() const { return module_; }
 
   const torch::Tensor& lo() const { return lo_; }  // (D,)
   const torch::Tensor& hi() const { return hi_; }  // (D,)
@@ -38,6 +39,7 @@ class MinMaxNormalizer {
   void CheckInput(const torch::Tensor& x) const;
   torch::Tensor lo_;  // (D,) float32
   torch::Tensor hi_;  // (D,) float32
+  torch::jit::Module module_;
 };
 
 }  // namespace flowplan::models

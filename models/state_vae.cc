@@ -1,6 +1,7 @@
 #include "models/state_vae.h"
 
 #include "core/error.h"
+#include "jit/library.h"
 
 namespace flowplan::models {
 
@@ -36,41 +37,29 @@ torch::Tensor StateVae::Decode(const torch::Tensor& z) {
   return decoder_.back()(h);
 }
 
-torch::Tensor StateVae::DecodeVjp(const torch::Tensor& z, const torch::Tensor& g) {
-  // Forward, keeping each hidden layer's pre-activation sign.
-  std::vector<torch::Tensor> active;
-  torch::Tensor h = z;
-  for (size_t i = 0; i + 1 < decoder_.size(); ++i) {
-    const torch::Tensor pre = decoder_[i](h);
-    active.push_back(pre > 0);
-    h = torch::relu(pre);
-  }
-  // Backward: through W^T, masked by the ReLUs.
-  torch::Tensor grad = torch::matmul(g, decoder_.back()->weight);
-  for (size_t i = decoder_.size() - 1; i-- > 0;) {
-    grad = torch::matmul(grad * active[i].to(grad.dtype()), decoder_[i]->weight);
-  }
-  return grad;
-}
-
-void StateVae::WriteScript(jit::ScriptModule& module) const {
-  std::string encode = "def vae_encode(self, x: Tensor) -> Tuple[Tensor, Tensor]:\n    h = x\n";
+torch::jit::Module StateVae::ToScript() const {
+  // Written op for op as Encode, Decode and DecodeVjp compute.
+  jit::ModuleBuilder module("StateVae");
+  auto buffer = [&](const std::string& name, const torch::Tensor& value) {
+    module.Buffer(name, value);
+    return "self." + name;
+  };
+  std::string encode = "def encode(self, x: Tensor) -> Tuple[Tensor, Tensor]:\n    h = x\n";
   for (size_t i = 0; i < encoder_.size(); ++i) {
-    const std::string w = module.Buffer("vae_encoder" + std::to_string(i) + "_weight", encoder_[i]->weight);
-    const std::string b = module.Buffer("vae_encoder" + std::to_string(i) + "_bias", encoder_[i]->bias);
+    const std::string w = buffer("encoder" + std::to_string(i) + "_weight", encoder_[i]->weight);
+    const std::string b = buffer("encoder" + std::to_string(i) + "_bias", encoder_[i]->bias);
     encode += "    h = torch.relu(torch.linear(h, " + w + ", " + b + "))\n";
   }
-  encode += "    return torch.linear(h, " + module.Buffer("vae_mean_weight", mean_->weight) + ", " +
-            module.Buffer("vae_mean_bias", mean_->bias) + "), torch.linear(h, " +
-            module.Buffer("vae_log_var_weight", log_var_->weight) + ", " +
-            module.Buffer("vae_log_var_bias", log_var_->bias) + ")\n";
+  encode += "    return torch.linear(h, " + buffer("mean_weight", mean_->weight) + ", " + buffer("mean_bias", mean_->bias) +
+            "), torch.linear(h, " + buffer("log_var_weight", log_var_->weight) + ", " +
+            buffer("log_var_bias", log_var_->bias) + ")\n";
   std::vector<std::pair<std::string, std::string>> layers;
   for (size_t i = 0; i < decoder_.size(); ++i) {
-    layers.emplace_back(module.Buffer("vae_decoder" + std::to_string(i) + "_weight", decoder_[i]->weight),
-                        module.Buffer("vae_decoder" + std::to_string(i) + "_bias", decoder_[i]->bias));
+    layers.emplace_back(buffer("decoder" + std::to_string(i) + "_weight", decoder_[i]->weight),
+                        buffer("decoder" + std::to_string(i) + "_bias", decoder_[i]->bias));
   }
-  std::string decode = "\ndef vae_decode(self, z: Tensor) -> Tensor:\n    h = z\n";
-  std::string vjp = "\ndef vae_decode_vjp(self, z: Tensor, g: Tensor) -> Tensor:\n    h = z\n";
+  std::string decode = "\ndef decode(self, z: Tensor) -> Tensor:\n    h = z\n";
+  std::string vjp = "\ndef decode_vjp(self, z: Tensor, g: Tensor) -> Tensor:\n    h = z\n";
   for (size_t i = 0; i + 1 < layers.size(); ++i) {
     decode += "    h = torch.relu(torch.linear(h, " + layers[i].first + ", " + layers[i].second + "))\n";
     vjp += "    pre" + std::to_string(i) + " = torch.linear(h, " + layers[i].first + ", " + layers[i].second + ")\n";
@@ -82,7 +71,7 @@ void StateVae::WriteScript(jit::ScriptModule& module) const {
     vjp += "    grad = torch.matmul(grad * (pre" + std::to_string(i) + " > 0).to(grad.dtype), " + layers[i].first + ")\n";
   }
   vjp += "    return grad\n";
-  module.Define(encode + decode + vjp);
+  return module.Attribute("latent_dim", latent_).GeneratedMethods(encode + decode + vjp, "the state VAE").Build();
 }
 
 }  // namespace flowplan::models

@@ -1,11 +1,11 @@
 #pragma once
 
+#include <torch/script.h>
 #include <torch/torch.h>
 
 #include <vector>
 
 #include "core/config.h"
-#include "jit/script_writer.h"
 #include "models/network.h"
 
 namespace flowplan::models {
@@ -24,8 +24,8 @@ struct StateVaeConfig {
 
 /// A variational autoencoder over single normalized states (D,): an MLP
 /// encoder (ReLU) to a Gaussian over the latent (L,), an MLP decoder back.
-/// Decode's vector–Jacobian product is written out, so that planning in the
-/// latent space runs in an exported planner without autograd.
+/// Its script (ToScript) also writes out Decode's vector–Jacobian product, so
+/// that planning in the latent space runs without autograd.
 class StateVae : public Network {
  public:
   StateVae(const StateVaeConfig& config, int64_t state_dim);
@@ -38,11 +38,10 @@ class StateVae : public Network {
   Encoding Encode(const torch::Tensor& x);
   /// z: (N, L) -> (N, D) normalized states.
   torch::Tensor Decode(const torch::Tensor& z);
-  /// ∂/∂z of Σ ⟨g, Decode(z)⟩: z (N, L), g (N, D) -> (N, L).
-  torch::Tensor DecodeVjp(const torch::Tensor& z, const torch::Tensor& g);
 
-  /// Adds vae_encode(x) -> (mean, log_var), vae_decode(z) and vae_decode_vjp(z, g).
-  void WriteScript(jit::ScriptModule& module) const;
+  /// The VAE as a TorchScript module: encode(x) -> (mean, log_var), decode(z)
+  /// and decode_vjp(z, g), its parameters copied into buffers.
+  torch::jit::Module ToScript() const;
 
   int64_t state_dim() const { return state_dim_; }
   int64_t latent_dim() const { return latent_; }

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/format.h"
+#include "jit/script_writer.h"
 
 namespace flowplan::models {
 
@@ -25,6 +26,27 @@ void CheckTrajectoryInputs(const torch::Tensor& x, const torch::Tensor& t, const
     throw Error("trajectory network: cond: expected (" + std::to_string(batch) + ", " + std::to_string(cond_dim) +
                 "), got " + ShapeString(cond));
   }
+}
+
+torch::jit::Module ScriptNetwork(const TrajectoryNet& net) {
+  const std::string D = std::to_string(net.state_dim()), C = std::to_string(net.cond_dim());
+  jit::ModuleBuilder builder("TrajectoryNetwork");
+  jit::ScriptWriter writer(builder, "p_");
+  const std::string out = net.WriteScript(writer);  // the variable holding the output
+  std::string source = R"PY(
+def forward(self, x: Tensor, t: Tensor, cond: Optional[Tensor]) -> Tensor:
+    assert x.dim() == 3 and x.size(2) == )PY" + D + R"PY(, "network: x: expected (B, T, )PY" + D + R"PY(), normalized, got " + str(x.shape)
+    assert t.dim() == 1 and t.size(0) == x.size(0), "network: t: expected (B,) with the B of x, got " + str(t.shape)
+)PY";
+  source += net.cond_dim() == 0
+                ? "    assert cond is None, \"network: cond: this network takes no condition; pass None\"\n"
+                : "    assert cond is not None and cond.dim() == 2 and cond.size(0) == x.size(0) and cond.size(1) == " + C +
+                      ", \"network: cond: expected (B, " + C + "), the normalized start and goal\"\n";
+  source += writer.Body(1) + "    return " + out + "\n";
+  return builder.Attribute("state_dim", net.state_dim())
+      .Attribute("cond_dim", net.cond_dim())
+      .GeneratedMethods(source, "the network's forward pass")
+      .Build();
 }
 
 }  // namespace flowplan::models

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <torch/script.h>
 #include <torch/torch.h>
 
 #include <memory>
@@ -38,6 +39,11 @@ class TrajectoryNet : public Network {
 };
 
 using TrajectoryNetPtr = std::shared_ptr<TrajectoryNet>;
+
+/// The network as a TorchScript module with one method,
+///   forward(x (B, T, D), t (B,), cond: Optional[Tensor] (B, C)) -> (B, T, D),
+/// its parameters copied into buffers (what planners and exported files run).
+torch::jit::Module ScriptNetwork(const TrajectoryNet& net);
 
 /// Checks x (B, T, D), t (B,) and cond (B, C) against a network's dimensions.
 /// @throws flowplan::Error "expected (B, T, 4), got (…)" style messages.

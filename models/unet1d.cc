@@ -163,6 +163,16 @@ torch::Tensor UNet1D::Forward(const torch::Tensor& x, const torch::Tensor& t, co
   return h.transpose(1, 2);  // (B, T, D)
 }
 
+namespace {
+
+/// "stride, padding" of a 1-D convolution, as torch.conv1d / conv_transpose1d take them.
+std::string Geometry(const torch::nn::detail::ConvNdOptions<1>& options) {
+  const auto& padding = c10::get<torch::ExpandingArray<1>>(options.padding());
+  return std::to_string((*options.stride())[0]) + ", " + std::to_string((*padding)[0]);
+}
+
+}  // namespace
+
 std::string UNet1D::WriteScript(jit::ScriptWriter& w) const {
   const std::string angles = w.Let("(t * " + jit::ScriptFloat(config_.time_scale) + ").unsqueeze(-1) * " +
                                    w.Tensor("frequencies", frequencies_) + ".unsqueeze(0)");
@@ -184,7 +194,7 @@ std::string UNet1D::WriteScript(jit::ScriptWriter& w) const {
     skips.push_back(h);
     if (down_[i].down) {
       h = w.Let("torch.conv1d(" + h + ", " + w.Tensor(name + "_down.weight", down_[i].down->weight) + ", " +
-                w.Tensor(name + "_down.bias", down_[i].down->bias) + ", 2, 1)");
+                w.Tensor(name + "_down.bias", down_[i].down->bias) + ", " + Geometry(down_[i].down->options) + ")");
     }
   }
   h = mid0_->WriteScript(w, "mid0", h, feature);
@@ -196,7 +206,7 @@ std::string UNet1D::WriteScript(jit::ScriptWriter& w) const {
     h = up_[i].block0->WriteScript(w, name + "_block0", h, feature);
     h = up_[i].block1->WriteScript(w, name + "_block1", h, feature);
     h = w.Let("torch.conv_transpose1d(" + h + ", " + w.Tensor(name + "_up.weight", up_[i].up->weight) + ", " +
-              w.Tensor(name + "_up.bias", up_[i].up->bias) + ", 2, 1)");
+              w.Tensor(name + "_up.bias", up_[i].up->bias) + ", " + Geometry(up_[i].up->options) + ")");
   }
   h = final_block_->WriteScript(w, "final_block", h);
   h = w.Let("torch.conv1d(" + h + ", " + w.Tensor("final_conv.weight", final_conv_->weight) + ", " +

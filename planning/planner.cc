@@ -10,10 +10,6 @@
 
 namespace flowplan::planning {
 
-void Planner::WriteScript(jit::ScriptModule&) const {
-  throw Error("export: this kind of planner cannot be exported as TorchScript");
-}
-
 void CheckEnds(const torch::Tensor& start, const torch::Tensor& goal, int64_t state_dim, const std::string& where) {
   const std::string want = "(B, " + std::to_string(state_dim) + ")";
   auto shape = [](const torch::Tensor& t) { return t.defined() ? ShapeText(t.sizes().vec()) : "(undefined)"; };
@@ -45,7 +41,8 @@ PlanResult PlanInChunks(const Planner& planner, const PlanRequest& request, int 
   for (const PlanResult& part : parts) {
     plans.push_back(part.plans);
     found.push_back(part.found);
-    result.seconds.insert(result.seconds.end(), part.seconds.begin(), part.seconds.end());
+    result.call_seconds.insert(result.call_seconds.end(), part.call_seconds.begin(), part.call_seconds.end());
+    result.call_plans.insert(result.call_plans.end(), part.call_plans.begin(), part.call_plans.end());
   }
   result.plans = chunks > 0 ? torch::cat(plans, 0) : torch::empty({0, planner.horizon(), planner.state_dim()});
   result.found = chunks > 0 ? torch::cat(found, 0) : torch::empty({0}, torch::kBool);

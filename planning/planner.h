@@ -1,37 +1,50 @@
 #pragma once
 
-// The one interface every planner implements (the flow planner, and the
-// baselines): start and goal states, a scene and a seed in, plans and timing
+// The one interface every planner implements (the learned planners, and
+// RRT-Connect): start and goal states, a scene and a seed in, plans and timing
 // out. Evaluation, `flowplan plan` and the benchmarks use planners only
 // through it.
 //
-// Shapes: B plans, T states, D state dims, K obstacles, W workspace dims.
+// Shapes: B plans, T states, D state dims.
 
 #include <torch/torch.h>
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "guidance/guide.h"
-#include "jit/script_writer.h"
+#include "geometry/scene_rows.h"
 
 namespace flowplan::planning {
 
+/// Settings of one call that differ from the planner's: numbers by their
+/// config key (e.g. "guidance.scale", "guidance.clip", "sampler.steps"), and
+/// the guidance schedule by name. A planner rejects a key it does not take.
+struct PlanSettings {
+  std::map<std::string, double> values;
+  std::optional<std::string> schedule;
+  bool empty() const { return values.empty() && !schedule; }
+};
+
 /// One planning call: B start/goal pairs in one scene.
 struct PlanRequest {
-  torch::Tensor start;      // (B, D) raw states
-  torch::Tensor goal;       // (B, D) raw states
-  torch::Tensor obstacles;  // (K, W+1) rows [centre, radius], world units; undefined or K = 0: free space
-  uint64_t seed = 0;        // every random draw of the call derives from it
-  std::optional<guidance::GuidanceConfig> guidance;  // this call's guidance settings (default: the planner's)
+  torch::Tensor start;          // (B, D) raw states
+  torch::Tensor goal;           // (B, D) raw states
+  geometry::SceneRows scene;    // the obstacles; empty: free space
+  uint64_t seed = 0;            // every random draw of the call derives from it
+  PlanSettings settings;        // this call's settings (default: the planner's)
 };
 
 struct PlanResult {
   torch::Tensor plans;  // (B, T, D) raw
   torch::Tensor found;  // (B,) bool: a plan was found (sampling planners always find one)
-  std::vector<double> seconds;  // (B,) wall time of the call that made each plan, shared by its plans
+  /// (B,) wall time of the call that made each plan, and how many plans that
+  /// call made: a learned planner makes a batch in one call, RRT-Connect one
+  /// plan per call. call_seconds / call_plans is the time per plan.
+  std::vector<double> call_seconds;
+  std::vector<int64_t> call_plans;
 };
 
 class Planner {
@@ -39,16 +52,11 @@ class Planner {
   virtual ~Planner() = default;
 
   /// Plans; does not change the planner, and may be called from several threads at once.
-  /// @throws flowplan::Error on shape mismatches and bad obstacles.
+  /// @throws flowplan::Error on shape mismatches, bad obstacles and unknown settings.
   virtual PlanResult Plan(const PlanRequest& request) const = 0;
 
   virtual int64_t horizon() const = 0;    // T
   virtual int64_t state_dim() const = 0;  // D
-
-  /// Writes the planner as TorchScript into `module` (methods plan, sample and
-  /// the rest of docs/export.md).
-  /// @throws flowplan::Error if this kind of planner cannot be exported.
-  virtual void WriteScript(jit::ScriptModule& module) const;
 };
 
 /// Splits `request` into fixed chunks of `chunk` plans, planned by `threads`

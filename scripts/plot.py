@@ -6,7 +6,8 @@
   plot.py plans EVAL.plans.h5 --data DATA.h5 --out plans.png
       the dataset in grey, the test-pair plans of `flowplan eval stitching` on top
   plot.py scene PLAN.h5 --out plan.png [--data DATA.h5] [--compare OTHER.h5]
-      the TCP paths of `flowplan plan` with the obstacles (particle: the unit
+      the TCP paths of `flowplan plan` with the obstacles (spheres, boxes,
+      cylinders, capsules: their outlines projected; particle: the unit
       square; Franka: the two planes in which the paths spread most), executed
       paths dashed; --compare draws another plan file's paths in grey (e.g. unguided)
 
@@ -101,9 +102,83 @@ def robot_radius(f):
     return 0.0
 
 
+def rotation(turn):
+    """Rotation matrix of a quaternion (w, x, y, z) (3-D) or an angle (2-D)."""
+    if len(turn) == 1:
+        c, s = np.cos(turn[0]), np.sin(turn[0])
+        return np.array([[c, -s], [s, c]])
+    w, x, y, z = np.asarray(turn) / np.linalg.norm(turn)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def surface_points(kind, row, W, inflate=0.0):
+    """Points (M, W) on the surface of an obstacle (grown by `inflate`), for drawing its outline."""
+    angles = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    if W == 2:
+        circle = np.stack([np.cos(angles), np.sin(angles)], 1)
+    else:
+        u, v = np.meshgrid(angles, np.linspace(0, np.pi, 24))
+        circle = np.stack([np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v)], -1).reshape(-1, 3)
+    if kind == "spheres":
+        return row[:W] + (row[W] + inflate) * circle
+    if kind == "capsules":
+        a, b, r = row[:W], row[W:2 * W], row[2 * W] + inflate
+        return np.concatenate([a + r * circle, b + r * circle])
+    centre = row[:W]
+    if kind == "boxes":
+        half, turn = 0.5 * row[W:2 * W], row[2 * W:]
+        corners = np.array(np.meshgrid(*[[-1, 1]] * W)).reshape(W, -1).T * half
+    else:  # cylinders: axis along local z (2-D: local y)
+        radius, half, turn = row[W], 0.5 * row[W + 1], row[W + 2:]
+        if W == 2:
+            corners = np.array([[-radius, -half], [radius, -half], [radius, half], [-radius, half]])
+        else:
+            rim = np.stack([radius * np.cos(angles), radius * np.sin(angles)], 1)
+            corners = np.concatenate([np.c_[rim, np.full(len(rim), -half)], np.c_[rim, np.full(len(rim), half)]])
+    points = centre + corners @ rotation(turn).T
+    if inflate > 0:
+        points = (points[:, None, :] + inflate * circle[None]).reshape(-1, W)
+    return points
+
+
+def convex_hull(points):
+    """The convex hull (H, 2) of 2-D points, counter-clockwise (Andrew's monotone chain)."""
+    pts = sorted(set(map(tuple, np.round(points, 12))))
+    if len(pts) < 3:
+        return np.array(pts)
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower, upper = [], []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def read_scene(f):
+    """[(kind, row)] of a plan file's obstacles, in their numbering order."""
+    if "scene" not in f:
+        return []
+    out = []
+    for kind in ("spheres", "boxes", "cylinders", "capsules"):
+        if kind in f["scene"]:
+            out += [(kind, row) for row in f["scene"][kind][...]]
+    return out
+
+
 def command_scene(args):
     with h5py.File(args.plans, "r") as f:
-        tcp, obstacles, goal_tcp = f["tcp"][...], f["obstacles"][...], f["goal_tcp"][...]
+        tcp, goal_tcp = f["tcp"][...], f["goal_tcp"][...]
+        obstacles = read_scene(f)
         executed = f["executed/tcp"][...] if "executed" in f else None
         env, scale = f.attrs["env"], float(f.attrs["guidance_scale"])
         radius = robot_radius(f)
@@ -115,7 +190,7 @@ def command_scene(args):
         if W == 2:
             planes, names = [(0, 1)], ("x", "y")
         else:
-            spread = np.concatenate([tcp.reshape(-1, 3), obstacles[:, :3]]).std(0)
+            spread = np.concatenate([tcp.reshape(-1, 3)] + [row[None, :3] for _, row in obstacles]).std(0)
             order = np.argsort(-spread)
             planes, names = [(order[0], order[1]), (order[0], order[2])], ("x (m)", "y (m)", "z (m)")
         fig, axes = plt.subplots(1, len(planes), figsize=(6 * len(planes), 6), squeeze=False)
@@ -134,11 +209,13 @@ def command_scene(args):
                 for i in range(len(executed)):
                     ax.plot(executed[i, :, a], executed[i, :, b], color="tab:orange", lw=0.8, ls="--", alpha=0.8,
                             label="executed in MuJoCo" if i == 0 else None)
-            for k, o in enumerate(obstacles):
-                ax.add_patch(plt.Circle((o[a], o[b]), o[-1], color="tab:red", alpha=0.35,
-                                        label="obstacle" if k == 0 else None))
+            for k, (kind, row) in enumerate(obstacles):
+                # The shape's outline in this plane: the hull of its surface points' projections.
+                hull = convex_hull(surface_points(kind, row, W)[:, [a, b]])
+                ax.add_patch(plt.Polygon(hull, color="tab:red", alpha=0.35, label="obstacle" if k == 0 else None))
                 if radius > 0:
-                    ax.add_patch(plt.Circle((o[a], o[b]), o[-1] + radius, fill=False, ls=":", color="tab:red"))
+                    grown = convex_hull(surface_points(kind, row, W, radius)[:, [a, b]])
+                    ax.add_patch(plt.Polygon(grown, fill=False, ls=":", color="tab:red"))
             ax.plot(tcp[0, 0, a], tcp[0, 0, b], "ko", ms=6, label="start")
             ax.plot(goal_tcp[a], goal_tcp[b], "k*", ms=11, label="goal")
             ax.set_xlabel(names[a] if W == 3 else names[0])

@@ -9,7 +9,9 @@ kinematics written here (modified Denavit-Hartenberg parameters of the Panda;
 no flowplan code), each plan's TCP path, the clearance of the TCP and of every
 collision sphere of the arm to every obstacle, the goal distance and the joint
 speeds, and from them the two success counts of `flowplan plan`: the TCP never
-inside an obstacle, and no collision sphere of the arm inside one; both also
+inside an obstacle, and no collision sphere of the arm inside one (obstacles of
+every shape: spheres, boxes, cylinders, capsules, by signed distances written
+here from the shapes' definitions); both also
 need the last TCP within the goal tolerance and joint speeds within
 max_speed_ratio times the limits. The collision spheres (link, centre in the
 link frame, radius) are geometry, read from the file's `robot` attribute.
@@ -69,12 +71,48 @@ def link_frames(q):
     return frames
 
 
+def rotation(quaternion):
+    """Local-to-world rotation (3, 3) of a quaternion (w, x, y, z) of any norm."""
+    w, x, y, z = np.asarray(quaternion) / np.linalg.norm(quaternion)
+    return np.array([[w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z]])
+
+
+def inside_box(p, half):
+    """Signed distance of points p (..., n) to the box |x_i| <= half_i (nearest point outside, nearest face inside)."""
+    outside = np.linalg.norm(p - np.clip(p, -half, half), axis=-1)
+    return np.where(outside > 0, outside, -np.min(half - np.abs(p), axis=-1))
+
+
+def signed_distance(kind, row, p):
+    """Signed distance of points p (..., 3) to one obstacle (negative inside)."""
+    if kind == "spheres":
+        return np.linalg.norm(p - row[:3], axis=-1) - row[3]
+    if kind == "capsules":
+        a, ab = row[:3], row[3:6] - row[:3]
+        t = np.clip((p - a) @ ab / max(ab @ ab, 1e-300), 0, 1)
+        return np.linalg.norm(p - (a + t[..., None] * ab), axis=-1) - row[6]
+    if kind == "boxes":
+        return inside_box((p - row[:3]) @ rotation(row[6:10]), 0.5 * row[3:6])
+    local = (p - row[:3]) @ rotation(row[5:9])  # cylinders: axis along local z
+    return inside_box(np.stack([np.linalg.norm(local[..., :2], axis=-1), local[..., 2]], -1),
+                      np.array([row[3], 0.5 * row[4]]))
+
+
+def read_obstacles(f):
+    """[(kind, row)] of a plan file's obstacles."""
+    scene = f["scene"]
+    return [(kind, row.astype(np.float64)) for kind in ("spheres", "boxes", "cylinders", "capsules") if kind in scene
+            for row in scene[kind][...]]
+
+
 def recount(prefix):
     with h5py.File(prefix + ".h5", "r") as f:
         if f.attrs["env"] != "franka":
             raise SystemExit(f"{prefix}.h5: env {f.attrs['env']!r}, only franka plans are recounted")
         plans = f["plans"][...].astype(np.float64)      # (N, T, D)
-        obstacles = f["obstacles"][...].astype(np.float64).reshape(-1, 4)  # (K, 4)
+        obstacles = read_obstacles(f)
         goal_tcp = f["goal_tcp"][...].astype(np.float64)
         dt = float(f.attrs["dt"])
         robot = yaml.safe_load(f.attrs["robot"])
@@ -87,10 +125,9 @@ def recount(prefix):
     centres = np.stack([(frames[names[s["link"]]] @ np.append(s["centre"], 1.0))[:, :3] for s in robot["spheres"]],
                        1).reshape(n, t, -1, 3)                    # (N, T, S, 3)
     radii = np.array([s["radius"] for s in robot["spheres"]])    # (S,)
-    if len(obstacles):
-        tcp_gap = (np.linalg.norm(tcp[:, :, None] - obstacles[:, :3], axis=-1) - obstacles[:, 3]).min((1, 2))
-        arm_gap = (np.linalg.norm(centres[:, :, :, None] - obstacles[:, :3], axis=-1) - radii[:, None] -
-                   obstacles[:, 3]).min((1, 2, 3))
+    if obstacles:
+        tcp_gap = np.min([signed_distance(kind, row, tcp).min(1) for kind, row in obstacles], 0)
+        arm_gap = np.min([(signed_distance(kind, row, centres) - radii).min((1, 2)) for kind, row in obstacles], 0)
     else:
         tcp_gap = arm_gap = np.full(n, np.inf)
     goal = np.linalg.norm(tcp[:, -1] - goal_tcp, axis=-1)

@@ -25,12 +25,6 @@ void ReplaceOnce(std::string& text, const std::string& from, const std::string& 
 }
 
 /// Distance from point p to the segment [a, b].
-double SegmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Vector3d ab = b - a;
-  const double length2 = ab.squaredNorm();
-  const double s = length2 > 0.0 ? std::clamp((p - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
-  return (p - (a + s * ab)).norm();
-}
 
 /// Centred quadratic Savitzky–Golay smoothing weight of offset k in a window of half-width m.
 double SavitzkyGolayWeight(int m, int k) {
@@ -45,20 +39,54 @@ void ExecutionConfig::Validate() const {
   }
 }
 
-FrankaModel MakeFrankaScene(const std::vector<ObstacleSphere>& obstacles, double timestep) {
+namespace {
+
+std::string Numbers(const std::vector<double>& values) {
+  std::string out;
+  for (double v : values) out += (out.empty() ? "" : " ") + Number(v);
+  return out;
+}
+
+/// The orientation attribute of a box or cylinder (MuJoCo normalises the quaternion).
+std::string Orientation(const std::vector<double>& quaternion) {
+  return quaternion.empty() ? std::string() : " quat=\"" + Numbers(quaternion) + "\"";
+}
+
+}  // namespace
+
+FrankaModel MakeFrankaScene(const geometry::Scene& scene, double timestep) {
+  scene.Validate(3, "execution scene");
   std::string xml = FrankaModelXml();
   // Room for contacts of every capsule with several obstacles.
   ReplaceOnce(xml, "njmax=\"64\"", "njmax=\"2000\"");
-  ReplaceOnce(xml, "nconmax=\"16\"", "nconmax=\"500\"");
+  ReplaceOnce(xml, "nconmax=\"16\"", "nconmax=\"1000\"");
+  // Contacts are detected within kMeasuredDistance (margin) and act only on overlaps (gap = margin).
+  const std::string common = " margin=\"" + Number(kMeasuredDistance) + "\" gap=\"" + Number(kMeasuredDistance) +
+                             "\" group=\"4\" contype=\"0\" conaffinity=\"1\" rgba=\"0.8 0.2 0.2 0.5\"/>";
+  std::vector<std::string> shapes;
+  for (const auto& s : scene.spheres) {
+    shapes.push_back("type=\"sphere\" pos=\"" + Numbers(s.centre) + "\" size=\"" + Number(s.radius) + "\"");
+  }
+  for (const auto& b : scene.boxes) {
+    shapes.push_back("type=\"box\" pos=\"" + Numbers(b.centre) + "\" size=\"" +
+                     Numbers({0.5 * b.size[0], 0.5 * b.size[1], 0.5 * b.size[2]}) + "\"" + Orientation(b.quaternion));
+  }
+  for (const auto& c : scene.cylinders) {
+    shapes.push_back("type=\"cylinder\" pos=\"" + Numbers(c.centre) + "\" size=\"" +
+                     Numbers({c.radius, 0.5 * c.height}) + "\"" + Orientation(c.quaternion));
+  }
+  for (const auto& c : scene.capsules) {
+    const bool point = c.a == c.b;  // MuJoCo needs a segment of non-zero length
+    shapes.push_back(point ? "type=\"sphere\" pos=\"" + Numbers(c.a) + "\" size=\"" + Number(c.radius) + "\""
+                           : "type=\"capsule\" fromto=\"" + Numbers(c.a) + " " + Numbers(c.b) + "\" size=\"" +
+                                 Number(c.radius) + "\"");
+  }
   std::string geoms;
-  for (size_t k = 0; k < obstacles.size(); ++k) {
-    const ObstacleSphere& o = obstacles[k];
-    geoms += "\n    <geom name=\"obstacle" + std::to_string(k) + "\" type=\"sphere\" pos=\"" + Number(o.centre.x()) +
-             " " + Number(o.centre.y()) + " " + Number(o.centre.z()) + "\" size=\"" + Number(o.radius) +
-             "\" group=\"4\" contype=\"0\" conaffinity=\"1\" rgba=\"0.8 0.2 0.2 0.5\"/>";
+  for (size_t k = 0; k < shapes.size(); ++k) {
+    geoms += "\n    <geom name=\"obstacle" + std::to_string(k) + "\" " + shapes[k] + common;
   }
   ReplaceOnce(xml, "<worldbody>", "<worldbody>" + geoms);
-  FrankaModel model(xml, "Franka scene with " + std::to_string(obstacles.size()) + " obstacles");
+  FrankaModel model(xml, "Franka scene with " + std::to_string(shapes.size()) + " obstacles");
   model.SetPhysics(timestep, Integrator::kEuler);
   model.EnableObstacleContacts();
   return model;
@@ -90,9 +118,6 @@ FrankaExecutor::FrankaExecutor(const FrankaModel& scene, int num_obstacles, cons
   config_.Validate();
   const mjModel& m = scene.mj();
   FLOWPLAN_DEMAND(std::abs(m.opt.timestep - 1.0 / config.control_hz) < 1e-12);
-  for (int g = 0; g < m.ngeom; ++g) {
-    if (m.geom_bodyid[g] > 0 && m.geom_group[g] == kCollisionGeomGroup) arm_geoms_.push_back(g);
-  }
   for (int k = 0; k < num_obstacles; ++k) {
     const std::string name = "obstacle" + std::to_string(k);
     const int g = mj_name2id(&m, mjOBJ_GEOM, name.c_str());
@@ -117,7 +142,7 @@ ExecutionResult FrankaExecutor::Execute(const std::vector<double>& input, int64_
   result.num_states = T + static_cast<int64_t>(std::llround(config_.settle_time / dt));
   result.states.assign(static_cast<size_t>(result.num_states * kStateDim), 0.0);
   result.tcp.assign(static_cast<size_t>(result.num_states * 3), 0.0);
-  result.min_distance.assign(static_cast<size_t>(num_obstacles_), std::numeric_limits<double>::infinity());
+  result.min_distance.assign(static_cast<size_t>(num_obstacles_), kMeasuredDistance);
   const JointVector& torque_limit = scene_.limits().torque;
   const int site = scene_.tcp_site();
   const double h = m.opt.timestep;
@@ -160,23 +185,7 @@ ExecutionResult FrankaExecutor::Execute(const std::vector<double>& input, int64_
       for (int i = 0; i < 3; ++i) result.tcp[recorded * 3 + i] = d.site_xpos[3 * site + i];
       ++recorded;
     }
-    // Distances of every arm capsule (or sphere) to every obstacle surface.
-    for (int g : arm_geoms_) {
-      const Eigen::Vector3d centre(d.geom_xpos[3 * g], d.geom_xpos[3 * g + 1], d.geom_xpos[3 * g + 2]);
-      const double radius = m.geom_size[3 * g];
-      Eigen::Vector3d a = centre, b = centre;
-      if (m.geom_type[g] == mjGEOM_CAPSULE) {
-        const Eigen::Vector3d axis(d.geom_xmat[9 * g + 2], d.geom_xmat[9 * g + 5], d.geom_xmat[9 * g + 8]);
-        a = centre - m.geom_size[3 * g + 1] * axis;
-        b = centre + m.geom_size[3 * g + 1] * axis;
-      }
-      for (int o = 0; o < num_obstacles_; ++o) {
-        const int og = obstacle_geoms_[o];
-        const Eigen::Vector3d c(d.geom_xpos[3 * og], d.geom_xpos[3 * og + 1], d.geom_xpos[3 * og + 2]);
-        const double distance = SegmentDistance(c, a, b) - radius - m.geom_size[3 * og];
-        result.min_distance[o] = std::min(result.min_distance[o], distance);
-      }
-    }
+    // MuJoCo's contacts: every arm–obstacle pair within kMeasuredDistance, with its signed distance.
     for (int c = 0; c < d.ncon; ++c) {
       const mjContact& contact = d.contact[c];
       int arm = contact.geom1, obstacle = contact.geom2;
@@ -184,6 +193,8 @@ ExecutionResult FrankaExecutor::Execute(const std::vector<double>& input, int64_
       const auto it = std::find(obstacle_geoms_.begin(), obstacle_geoms_.end(), obstacle);
       if (it == obstacle_geoms_.end()) continue;
       const int index = static_cast<int>(it - obstacle_geoms_.begin());
+      result.min_distance[index] = std::min(result.min_distance[index], contact.dist);
+      if (contact.dist >= 0.0) continue;  // near, not touching
       ContactEvent& event = contacts[{arm, index}];
       if (event.steps == 0) {
         event.arm_geom = mj_id2name(&m, mjOBJ_GEOM, arm) ? mj_id2name(&m, mjOBJ_GEOM, arm) : std::to_string(arm);

@@ -14,22 +14,24 @@
 #include <vector>
 
 #include "core/config.h"
+#include "geometry/scene.h"
 #include "sim/franka_model.h"
 #include "sim/mujoco_util.h"
 
 namespace flowplan::sim {
 
-/// A sphere in the world: centre (m) and radius (m).
-struct ObstacleSphere {
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  double radius = 0.0;
-};
+/// Distances up to this (m) between the arm's collision geoms and the obstacles
+/// are measured; farther ones are reported as this or more.
+inline constexpr double kMeasuredDistance = 0.5;
 
-/// The Franka of FrankaModelXml() with `obstacles` as static sphere geoms
-/// ("obstacle0", …) that the arm's collision capsules collide with (the arm
-/// does not collide with itself), contacts enabled, physics at `timestep` s.
-/// @throws flowplan::Error if MuJoCo rejects the model (e.g. a negative radius).
-FrankaModel MakeFrankaScene(const std::vector<ObstacleSphere>& obstacles, double timestep);
+/// The Franka of FrankaModelXml() with the obstacles of `scene` (3-D) as
+/// static geoms of their own shape ("obstacle0", … in the scene's numbering:
+/// spheres, boxes, cylinders, capsules) that the arm's collision capsules
+/// collide with (the arm does not collide with itself), contacts enabled,
+/// physics at `timestep` s. MuJoCo reports every arm–obstacle pair closer than
+/// kMeasuredDistance (margin) but exerts contact forces only on overlaps (gap).
+/// @throws flowplan::Error if MuJoCo rejects the model.
+FrankaModel MakeFrankaScene(const geometry::Scene& scene, double timestep);
 
 /// How a plan is smoothed before it is tracked.
 enum class PlanSmoothing {
@@ -84,7 +86,8 @@ struct ExecutionResult {
   std::vector<double> states;          // (T_exec, 14): q (rad), q̇ (rad/s) at the plan's dt
   std::vector<double> tcp;             // (T_exec, 3), m
   double goal_distance = 0.0;          // m, TCP at the end to the goal TCP
-  std::vector<double> min_distance;    // (K,) m, smallest distance of the arm's capsules to each obstacle (< 0: inside)
+  std::vector<double> min_distance;    // (K,) m, smallest distance of the arm's capsules to each obstacle, by MuJoCo's
+                                       // collision detection (< 0: overlap; kMeasuredDistance or more: farther)
   std::vector<ContactEvent> contacts;  // every arm–obstacle contact
   double max_tracking_error = 0.0;     // rad, largest |q_ref − q| over joints and time
   int64_t warnings = 0;                // MuJoCo warnings
@@ -96,7 +99,7 @@ std::vector<double> SmoothPlan(const std::vector<double>& plan, int64_t T, PlanS
 /// Tracks plans in one scene; owns its mjData (one per worker thread).
 class FrankaExecutor {
  public:
-  /// `scene` from MakeFrankaScene(obstacles, 1 / config.control_hz).
+  /// `scene` from MakeFrankaScene(obstacles, 1 / config.control_hz) with `num_obstacles` obstacles.
   FrankaExecutor(const FrankaModel& scene, int num_obstacles, const ExecutionConfig& config);
 
   /// Starts at plan state 0 and tracks the plan (T, 14) = [q, q̇], states `dt` s
@@ -109,7 +112,6 @@ class FrankaExecutor {
   int num_obstacles_;
   ExecutionConfig config_;
   MjDataPtr data_;
-  std::vector<int> arm_geoms_;       // collision geoms on the arm
   std::vector<int> obstacle_geoms_;  // (K,)
 };
 

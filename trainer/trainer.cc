@@ -16,7 +16,6 @@
 #include "core/random.h"
 #include "distributed/gradient_all_reduce.h"
 #include "models/normalizer.h"
-#include "planning/zoo.h"
 #include "trainer/training_batch.h"
 #include "trainer/run_dir.h"
 #include "trainer/sharded_gradient.h"
@@ -213,9 +212,6 @@ class TrainingRun {
     // Written only once the run is known to start: a failed start leaves the folder as it was.
     if (lead_) WriteFileAtomically(run_.config(), setup.config_yaml);
     val_n_ = data.val.size(0) > 0 ? normalizer_.Normalize(data.val) : data.val;
-    ema_planner_ = planning::MakeLearnedPlanner(
-        {ema_, normalizer_, setup.objective, T_, setup.sampler,
-         planning::GuidanceSetup{kinematics::MakeRobot(data.robot, "training data"), data.dt, {}}});
     gradient_ = std::make_unique<ShardedGradient>(*net_, [&] { return BuildNet(setup_, D_); }, config_.shards,
                                                   setup.threads);
     if (ranks > 1) {
@@ -278,8 +274,8 @@ class TrainingRun {
   void Restore() {
     const std::string path = run_.LatestCheckpoint();
     const checkpoints::CheckpointHeader header = checkpoints::ReadCheckpointHeader(path);
-    if (header.horizon != T_ || header.normalizer.dim() != D_) {
-      throw Error(path + ": checkpoint was trained on (T, D) = (" + std::to_string(header.horizon) + ", " +
+    if (header.trajectory.horizon != T_ || header.normalizer.dim() != D_) {
+      throw Error(path + ": checkpoint was trained on (T, D) = (" + std::to_string(header.trajectory.horizon) + ", " +
                   std::to_string(header.normalizer.dim()) + "), the data has (" + std::to_string(T_) + ", " +
                   std::to_string(D_) + ")");
     }
@@ -399,30 +395,21 @@ class TrainingRun {
     window_steps_ = 0;
   }
 
-  /// Validation loss and stitching errors of the EMA weights into result_.
+  /// Validation loss and the evaluator's scores of the EMA weights into result_.
   void Evaluate() {
     ema_->eval();
     result_.val_loss = ValidationLoss(*objective_, *ema_, val_n_, setup_.objective.conditioning, config_.val_batch_size,
                                       StreamSeed(setup_.seed, kValidationStream));
-    result_.test = Stitching(data_.test_pairs, "test");
-    result_.train = Stitching(data_.train_pairs, "train");
-    spdlog::info("eval step {}: val loss {:.5f}, stitching error test {:.4f} ± {:.4f}, train {:.4f} ± {:.4f}", step_,
-                 result_.val_loss, result_.test.mean, result_.test.stddev, result_.train.mean, result_.train.stddev);
-  }
-
-  eval::StitchingResult Stitching(const datasets::EvalPairTensors& pairs, const std::string& label) const {
-    if (!pairs.names.empty()) return eval::EvaluateStitching(*ema_planner_, pairs, data_.state_labels, label, setup_.eval, setup_.threads);
-    eval::StitchingResult none;  // datasets without start/goal families (e.g. random reaches)
-    none.pairs = label;
-    none.mean = none.stddev = NAN;
-    return none;
+    result_.scores = setup_.evaluate ? setup_.evaluate(ema_, normalizer_) : Scores{};
+    std::string scores;
+    for (const auto& [name, value] : result_.scores) scores += fmt::format(", {} {:.4f}", name, value);
+    spdlog::info("eval step {}: val loss {:.5f}{}", step_, result_.val_loss, scores);
   }
 
   void LogEvaluation() {
-    metrics_->Write("{\"step\": " + std::to_string(step_) + ", \"val_loss\": " + JsonNumber(result_.val_loss) +
-                    ", \"stitch_test_mean\": " + JsonNumber(result_.test.mean) + ", \"stitch_test_std\": " +
-                    JsonNumber(result_.test.stddev) + ", \"stitch_train_mean\": " + JsonNumber(result_.train.mean) +
-                    ", \"stitch_train_std\": " + JsonNumber(result_.train.stddev) + "}");
+    std::string row = "{\"step\": " + std::to_string(step_) + ", \"val_loss\": " + JsonNumber(result_.val_loss);
+    for (const auto& [name, value] : result_.scores) row += ", " + JsonString(name) + ": " + JsonNumber(value);
+    metrics_->Write(row + "}");
   }
 
   /// Writes a checkpoint of the current step and returns its path. Collective
@@ -446,11 +433,7 @@ class TrainingRun {
     header.config_yaml = setup_.config_yaml;
     header.normalizer = normalizer_;
     header.rng_states = states;
-    header.env = data_.env;
-    header.dt = data_.dt;
-    header.state_labels = data_.state_labels;
-    header.horizon = T_;
-    header.robot = data_.robot;
+    header.trajectory = data_.info;
     header.data_fingerprint = data_.fingerprint;
     checkpoints::SaveCheckpoint(path, header, {net_.get(), ema_.get(), &optimizer_});
     run_.PruneCheckpoints(config_.keep_checkpoints);
@@ -471,7 +454,6 @@ class TrainingRun {
   models::MinMaxNormalizer normalizer_;
   std::vector<DataPart> parts_;  // this process's parts, ascending
   torch::Tensor val_n_;    // (N_val, T, D) normalized
-  std::unique_ptr<planning::Planner> ema_planner_;
   std::unique_ptr<ShardedGradient> gradient_;
   std::unique_ptr<distributed::GradientAllReduce> all_reduce_;  // null in a single process
   bool stop_agreed_ = false;

@@ -3,15 +3,26 @@
 #include <cstdint>
 #include <string>
 
+#include <functional>
+#include <utility>
+#include <vector>
+
 #include "datasets/trajectory_loader.h"
 #include "distributed/communicator.h"
-#include "eval/stitching.h"
 #include "models/model_config.h"
+#include "models/normalizer.h"
 #include "objectives/objective.h"
-#include "planning/flow_planner.h"
 #include "trainer/trainer_config.h"
 
 namespace flowplan::trainer {
+
+/// Named scores of the EMA weights at an evaluation (e.g. "stitch_test_mean"),
+/// in the order they are logged; NaN where a score does not apply.
+using Scores = std::vector<std::pair<std::string, double>>;
+
+/// Scores the EMA weights `net` (with the run's normalizer) besides the
+/// validation loss, e.g. by planning with them. Called on rank 0 only.
+using Evaluator = std::function<Scores(const models::NetworkPtr& net, const models::MinMaxNormalizer& normalizer)>;
 
 /// Everything a training run needs besides the data.
 struct TrainingSetup {
@@ -24,8 +35,7 @@ struct TrainingSetup {
   models::ModelConfig model;
   objectives::ObjectiveConfig objective;
   TrainerConfig train;
-  planning::SamplerConfig sampler;
-  eval::EvalConfig eval;
+  Evaluator evaluate;  // null: the validation loss only
   int64_t stop_at_step = 0;  // > 0: stop there with a checkpoint (the schedule still spans train.steps)
   /// The job this process belongs to; null: a single process. In a job of W
   /// processes each trains train.data_parts / W parts of the data, gradients
@@ -41,8 +51,7 @@ struct TrainResult {
   int64_t steps = 0;            // the step it stopped at
   double train_loss = 0.0;       // mean loss over the last logging window
   double val_loss = 0.0;         // EMA weights, NaN without a validation split
-  eval::StitchingResult test;    // EMA weights, test (stitching) pairs; mean NaN if none
-  eval::StitchingResult train;   // EMA weights, training pairs
+  Scores scores;                 // EMA weights, the evaluator's last scores
   std::string checkpoint;        // the final checkpoint
   double seconds = 0.0;
 };

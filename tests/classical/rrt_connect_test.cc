@@ -8,30 +8,38 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "kinematics/arm_kinematics.h"
+#include "kinematics/robot.h"
 #include "sim/franka_execution.h"
 #include "sim/franka_model.h"
+#include "tests/support/planners.h"
 
 namespace flowplan::classical {
 namespace {
 
 constexpr double kDt = 1.0 / 15.0;
 
-std::shared_ptr<const kinematics::Robot> Disc() {
-  return kinematics::MakeRobot(kinematics::PointRobot("disc", 2, 0.05, 0.0, 1.0));
+/// A disc of radius 0.05 in the unit square, T states.
+kinematics::TrajectoryInfo Disc(int64_t T) {
+  kinematics::TrajectoryInfo info = testing::DiscTrajectory(T);
+  info.dt = kDt;
+  info.robot = kinematics::PointRobot("disc", 2, 0.05, 0.0, 1.0);
+  return info;
 }
 
+geometry::SceneRows Disc05() { return geometry::SphereRows(torch::tensor({{0.5f, 0.5f, 0.2f}})); }
+
 TEST(RrtConnectTest, ParticleGoesAroundADiscWithConsistentVelocities) {
-  const RrtConnectPlanner planner(Disc(), 64, 4, kDt, RrtConnectConfig{});
+  const RrtConnectPlanner planner(Disc(64), RrtConnectConfig{});
   planning::PlanRequest request;
   request.start = torch::tensor({{0.1f, 0.5f, 0.0f, 0.0f}, {0.2f, 0.45f, 0.0f, 0.0f}});
   request.goal = torch::tensor({{0.9f, 0.5f, 0.0f, 0.0f}, {0.8f, 0.55f, 0.0f, 0.0f}});
-  request.obstacles = torch::tensor({{0.5f, 0.5f, 0.2f}});
+  request.scene = Disc05();
   request.seed = 3;
   const planning::PlanResult result = planner.Plan(request);
   ASSERT_EQ(result.plans.sizes(), torch::IntArrayRef({2, 64, 4}));
   EXPECT_TRUE(result.found.all().item<bool>());
-  ASSERT_EQ(result.seconds.size(), 2u);
+  ASSERT_EQ(result.call_seconds.size(), 2u);
+  EXPECT_EQ(result.call_plans, (std::vector<int64_t>{1, 1}));
   const torch::Tensor plans = result.plans.to(torch::kFloat64);
   for (int64_t b = 0; b < 2; ++b) {
     const torch::Tensor p = plans[b].slice(1, 0, 2), v = plans[b].slice(1, 2, 4);
@@ -52,11 +60,11 @@ TEST(RrtConnectTest, ParticleGoesAroundADiscWithConsistentVelocities) {
 }
 
 TEST(RrtConnectTest, SameSeedSamePlansAndEachPlanIsItsOwnSearch) {
-  const RrtConnectPlanner planner(Disc(), 32, 4, kDt, RrtConnectConfig{});
+  const RrtConnectPlanner planner(Disc(32), RrtConnectConfig{});
   planning::PlanRequest request;
   request.start = torch::tensor({{0.1f, 0.5f, 0.0f, 0.0f}, {0.1f, 0.5f, 0.0f, 0.0f}});
   request.goal = torch::tensor({{0.9f, 0.5f, 0.0f, 0.0f}, {0.9f, 0.5f, 0.0f, 0.0f}});
-  request.obstacles = torch::tensor({{0.5f, 0.5f, 0.2f}});
+  request.scene = Disc05();
   request.seed = 7;
   const torch::Tensor a = planner.Plan(request).plans;
   EXPECT_TRUE(torch::equal(a, planner.Plan(request).plans));
@@ -67,11 +75,11 @@ TEST(RrtConnectTest, SameSeedSamePlansAndEachPlanIsItsOwnSearch) {
 }
 
 TEST(RrtConnectTest, StartInsideAnObstacleIsNotFoundAndFallsBackToTheLine) {
-  const RrtConnectPlanner planner(Disc(), 16, 4, kDt, RrtConnectConfig{});
+  const RrtConnectPlanner planner(Disc(16), RrtConnectConfig{});
   planning::PlanRequest request;
   request.start = torch::tensor({{0.5f, 0.5f, 0.0f, 0.0f}});
   request.goal = torch::tensor({{0.9f, 0.5f, 0.0f, 0.0f}});
-  request.obstacles = torch::tensor({{0.5f, 0.5f, 0.2f}});
+  request.scene = Disc05();
   const planning::PlanResult result = planner.Plan(request);
   EXPECT_FALSE(result.found[0].item<bool>());
   EXPECT_LT((result.plans[0].select(1, 1) - 0.5).abs().max().item<float>(), 1e-6);
@@ -80,39 +88,75 @@ TEST(RrtConnectTest, StartInsideAnObstacleIsNotFoundAndFallsBackToTheLine) {
 TEST(RrtConnectTest, RobotsWithoutFiniteLimitsOrOddStatesAreRejected) {
   using ::testing::HasSubstr;
   using ::testing::ThrowsMessage;
-  EXPECT_THAT([] { RrtConnectPlanner(Disc(), 16, 3, kDt, RrtConnectConfig{}); },
+  kinematics::TrajectoryInfo odd = Disc(16);
+  odd.state_labels = {"x", "y", "vx"};
+  EXPECT_THAT([&] { RrtConnectPlanner(odd, RrtConnectConfig{}); },
               ThrowsMessage<Error>(HasSubstr("rrt_connect: states of 3 dimensions")));
-  const auto unbounded = kinematics::MakeRobot(kinematics::PointRobot("disc", 2, 0.05, -INFINITY, INFINITY));
-  EXPECT_THAT([&] { RrtConnectPlanner(unbounded, 16, 4, kDt, RrtConnectConfig{}); },
+  kinematics::TrajectoryInfo unbounded = Disc(16);
+  unbounded.robot = kinematics::PointRobot("disc", 2, 0.05, -INFINITY, INFINITY);
+  EXPECT_THAT([&] { RrtConnectPlanner(unbounded, RrtConnectConfig{}); },
               ThrowsMessage<Error>(HasSubstr("has no finite range")));
+}
+
+/// Plans the Franka once between joint configurations in `scene`, and executes the plan in MuJoCo among the same
+/// obstacles as collision geoms.
+sim::ExecutionResult PlanAndExecute(const geometry::Scene& scene, const torch::Tensor& start_q,
+                                    const torch::Tensor& goal_q, const Eigen::Vector3d& goal_tcp) {
+  const RrtConnectPlanner planner(testing::FrankaTrajectory(64), RrtConnectConfig{});
+  planning::PlanRequest request;
+  request.start = torch::cat({start_q.view({1, 7}), torch::zeros({1, 7}, torch::kFloat64)}, 1).to(torch::kFloat32);
+  request.goal = torch::cat({goal_q.view({1, 7}), torch::zeros({1, 7}, torch::kFloat64)}, 1).to(torch::kFloat32);
+  request.scene = geometry::Rows(scene, 3, "test scene");
+  request.seed = 1;
+  const planning::PlanResult result = planner.Plan(request);
+  EXPECT_TRUE(result.found[0].item<bool>());
+  sim::ExecutionConfig config;
+  const sim::FrankaModel world = sim::MakeFrankaScene(scene, 1.0 / config.control_hz);
+  sim::FrankaExecutor executor(world, static_cast<int>(scene.size()), config);
+  const torch::Tensor plan = result.plans[0].to(torch::kFloat64).contiguous();
+  const std::vector<double> states(plan.data_ptr<double>(), plan.data_ptr<double>() + plan.numel());
+  return executor.Execute(states, 64, kDt, goal_tcp);
 }
 
 TEST(RrtConnectTest, FrankaAroundTheSphereExecutesInMujocoWithoutContact) {
   // The paper's scene: TCP from (0.5, −0.3, 0.2) to (0.5, 0.3, 0.2) around a 0.10 m sphere at (0.5, 0, 0.2).
-  const sim::FrankaModel franka = sim::LoadFrankaModel();
-  const auto robot = kinematics::MakeRobot(franka.description());
-  const auto& arm = dynamic_cast<const kinematics::ArmKinematics&>(*robot);
+  const kinematics::Robot robot(sim::LoadFrankaModel().description());
   const kinematics::IkSolution ik =
-      arm.InverseTcp(torch::tensor({{0.5, -0.3, 0.2}, {0.5, 0.3, 0.2}}, torch::kFloat64));
+      robot.InverseTcp(torch::tensor({{0.5, -0.3, 0.2}, {0.5, 0.3, 0.2}}, torch::kFloat64));
   ASSERT_TRUE(ik.converged.all().item<bool>());
-  const RrtConnectPlanner planner(robot, 64, 14, kDt, RrtConnectConfig{});
-  planning::PlanRequest request;
-  request.start = torch::cat({ik.q.slice(0, 0, 1), torch::zeros({1, 7}, torch::kFloat64)}, 1).to(torch::kFloat32);
-  request.goal = torch::cat({ik.q.slice(0, 1, 2), torch::zeros({1, 7}, torch::kFloat64)}, 1).to(torch::kFloat32);
-  request.obstacles = torch::tensor({{0.5f, 0.0f, 0.2f, 0.1f}});
-  request.seed = 1;
-  const planning::PlanResult result = planner.Plan(request);
-  ASSERT_TRUE(result.found[0].item<bool>());
-
-  sim::ExecutionConfig config;
-  const sim::FrankaModel scene = sim::MakeFrankaScene({{Eigen::Vector3d(0.5, 0.0, 0.2), 0.1}}, 1.0 / config.control_hz);
-  sim::FrankaExecutor executor(scene, 1, config);
-  const torch::Tensor plan = result.plans[0].to(torch::kFloat64).contiguous();
-  const std::vector<double> states(plan.data_ptr<double>(), plan.data_ptr<double>() + plan.numel());
-  const sim::ExecutionResult executed = executor.Execute(states, 64, kDt, Eigen::Vector3d(0.5, 0.3, 0.2));
+  geometry::Scene scene;
+  scene.spheres = {{{0.5, 0.0, 0.2}, 0.1}};
+  const sim::ExecutionResult executed = PlanAndExecute(scene, ik.q[0], ik.q[1], Eigen::Vector3d(0.5, 0.3, 0.2));
   EXPECT_TRUE(executed.contacts.empty()) << executed.contacts.size() << " contacts, first with "
                                          << executed.contacts.front().arm_geom;
   EXPECT_GT(executed.min_distance[0], 0.0);
+  EXPECT_LT(executed.goal_distance, 0.03);
+}
+
+TEST(RrtConnectTest, FrankaOverABoxWallAndPastACylinderBetweenJointGoals) {
+  // Start and goal are joint configurations on either side of a wall (a box,
+  // turned 10° about z) with a post (a cylinder) beside it: the arm must lift
+  // over the wall. Validity uses the same distances as guidance; MuJoCo's
+  // contacts with the shapes as geoms are the independent check.
+  const torch::Tensor start_q = torch::tensor({-0.55, 0.35, 0.0, -2.2, 0.0, 2.55, 0.23}, torch::kFloat64);
+  const torch::Tensor goal_q = torch::tensor({0.55, 0.35, 0.0, -2.2, 0.0, 2.55, 1.33}, torch::kFloat64);
+  const kinematics::Robot robot(sim::LoadFrankaModel().description());
+  const torch::Tensor goal_tcp = robot.Tcp(goal_q.view({1, 7}))[0];
+  geometry::Scene scene;
+  const double turn = 5.0 * M_PI / 180.0;
+  scene.boxes = {{{0.5, 0.0, 0.15}, {0.5, 0.04, 0.3}, {std::cos(turn), 0.0, 0.0, std::sin(turn)}, NAN}};
+  scene.cylinders = {{{0.25, 0.1, 0.2}, 0.04, 0.4, {}, NAN}};
+  const geometry::SceneRows rows = geometry::Rows(scene, 3, "test scene");
+  ASSERT_GT(robot.Clearance(torch::stack({start_q, goal_q}), rows).min().item<double>(), 0.02);
+  // The straight joint-space line goes through the wall.
+  const torch::Tensor line = start_q + torch::linspace(0, 1, 50, torch::kFloat64).view({-1, 1}) * (goal_q - start_q);
+  ASSERT_LT(robot.Clearance(line, rows).min().item<double>(), 0.0);
+  const sim::ExecutionResult executed = PlanAndExecute(
+      scene, start_q, goal_q, Eigen::Vector3d(goal_tcp[0].item<double>(), goal_tcp[1].item<double>(), goal_tcp[2].item<double>()));
+  EXPECT_TRUE(executed.contacts.empty()) << executed.contacts.size() << " contacts, first with "
+                                         << executed.contacts.front().arm_geom;
+  EXPECT_GT(executed.min_distance[0], 0.0);
+  EXPECT_GT(executed.min_distance[1], 0.0);
   EXPECT_LT(executed.goal_distance, 0.03);
 }
 

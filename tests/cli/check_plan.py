@@ -3,8 +3,10 @@
 usage: check_plan.py PLAN.h5 PLAN.json
 Recomputes every plan's TCP path (Franka: modified Denavit-Hartenberg parameters
 written here, sharing no code with flowplan; particle: the position), the TCP
-clearance to every obstacle, the goal distance and the TCP success flags, and
-compares them with what flowplan wrote.
+clearance to every obstacle (spheres, boxes, cylinders, capsules: signed
+distances written here from the shapes' definitions, by nearest points), the
+goal distance and the TCP success flags, and compares them with what flowplan
+wrote.
 """
 import json
 import sys
@@ -33,9 +35,51 @@ def franka_tcp(q):
     return out.reshape(*shape, 3)
 
 
+def rotation(turn):
+    """Local-to-world rotation of a quaternion (w, x, y, z) of any norm, or of an angle (2-D)."""
+    if len(turn) == 1:
+        c, s = np.cos(turn[0]), np.sin(turn[0])
+        return np.array([[c, -s], [s, c]])
+    w, x, y, z = np.asarray(turn) / np.linalg.norm(turn)
+    return np.array([[w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z]])
+
+
+def box_distance(p, half):
+    """Signed distance of points p (N, n) to the box |x_i| <= half_i: to its nearest point outside,
+    minus the distance to the nearest face inside."""
+    nearest = np.clip(p, -half, half)
+    outside = np.linalg.norm(p - nearest, axis=-1)
+    inside = np.min(half - np.abs(p), axis=-1)
+    return np.where(outside > 0, outside, -inside)
+
+
+def distance(kind, row, p):
+    """Signed distance of points p (N, W) to one obstacle."""
+    W = p.shape[1]
+    if kind == "spheres":
+        return np.linalg.norm(p - row[:W], axis=-1) - row[W]
+    if kind == "capsules":
+        a, b, r = row[:W], row[W:2 * W], row[2 * W]
+        t = np.clip((p - a) @ (b - a) / max((b - a) @ (b - a), 1e-300), 0, 1)
+        return np.linalg.norm(p - (a + t[:, None] * (b - a)), axis=-1) - r
+    if kind == "boxes":
+        local = (p - row[:W]) @ rotation(row[2 * W:])
+        return box_distance(local, 0.5 * row[W:2 * W])
+    local = (p - row[:W]) @ rotation(row[W + 2:])  # cylinders, axis along the last local axis
+    radial = np.linalg.norm(local[:, :W - 1], axis=-1)
+    return box_distance(np.stack([radial, local[:, W - 1]], 1), np.array([row[W], 0.5 * row[W + 1]]))
+
+
 with h5py.File(sys.argv[1], "r") as f, open(sys.argv[2]) as report_file:
     report = json.load(report_file)
-    plans, tcp, obstacles = f["plans"][...].astype(np.float64), f["tcp"][...], f["obstacles"][...]
+    plans, tcp = f["plans"][...].astype(np.float64), f["tcp"][...]
+    obstacles = [(kind, row) for kind in ("spheres", "boxes", "cylinders", "capsules") if kind in f["scene"]
+                 for row in f["scene"][kind][...]]
+    names = f.attrs["obstacle_names"].split(",") if obstacles else []
+    assert names == report["obstacles"] == [f"{k}[{i}]" for k in ("spheres", "boxes", "cylinders", "capsules")
+                                            for i in range(len(f["scene"][k]) if k in f["scene"] else 0)], names
     goal_tcp, env = f["goal_tcp"][...], f.attrs["env"]
     mine = franka_tcp(plans[..., :7]) if env == "franka" else plans[..., :2]
     assert np.abs(mine - tcp).max() < 1e-4, np.abs(mine - tcp).max()
@@ -46,7 +90,7 @@ with h5py.File(sys.argv[1], "r") as f, open(sys.argv[2]) as report_file:
     for i, sample in enumerate(samples):
         goal = np.linalg.norm(mine[i, -1] - goal_tcp)
         assert abs(goal - sample["goal_distance"]) < 1e-4, (goal, sample["goal_distance"])
-        clearance = [np.min(np.linalg.norm(mine[i] - o[:-1], axis=-1)) - o[-1] for o in obstacles]
+        clearance = [np.min(distance(kind, row, mine[i])) for kind, row in obstacles]
         assert np.allclose(clearance, sample["tcp_clearance"], atol=1e-4), (clearance, sample["tcp_clearance"])
         collides = bool(len(clearance)) and min(clearance) < 0
         assert sample["tcp_collision"] == collides

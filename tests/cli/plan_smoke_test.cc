@@ -93,10 +93,46 @@ TEST_F(ParticlePlanTest, WritesPlansReportAndFigureThatAnIndependentScriptConfir
   EXPECT_THAT(outcome.output, HasSubstr("20 plans in"));
   EXPECT_TRUE(fs::exists(Path("p.png")));
   const std::string report = ReadText(Path("p.json"));
-  EXPECT_THAT(report, HasSubstr("\"obstacles\": [0.5, 0.3, 0.1, 0.3, 0.7, 0.05]"));
+  EXPECT_THAT(report, HasSubstr("\"scene\": {\"spheres\": [[0.5, 0.3, 0.1], [0.3, 0.7, 0.05]]}"));
+  EXPECT_THAT(report, HasSubstr("\"obstacles\": [\"spheres[0]\", \"spheres[1]\"]"));
   EXPECT_THAT(report, HasSubstr("\"arm_clearance\": ["));
   const Outcome check = RunCommand(CheckPlan(Path("p")));
   EXPECT_EQ(check.exit_code, 0) << check.output;
+}
+
+TEST_F(ParticlePlanTest, EveryShapeFromTheCommandLineAndFromAFileIsPlannedAroundAndReported) {
+  // 2-D analogues: a rotated rectangle, a cylinder seen from the side, a stadium.
+  std::ofstream(Path("shapes.yaml")) << "boxes: [{centre: [0.5, 0.25], size: [0.1, 0.2], angle: 0.3}]\n"
+                                        "capsules: [{a: [0.2, 0.6], b: [0.3, 0.7], radius: 0.04}]\n";
+  const Outcome outcome = Flowplan("plan --ckpt " + Path("run") + " --start 0,0 --goal 1,0 --scene " +
+                                   Path("shapes.yaml") + " --cylinder 0.75,0.4,0.05,0.2,1.2 --sphere 0.4,0.8,0.05 "
+                                   "-n 12 --seed 2 guidance.scale=2 --out " + Path("shapes"));
+  ExpectOk(outcome);
+  EXPECT_TRUE(fs::exists(Path("shapes.png")));
+  const std::string report = ReadText(Path("shapes.json"));
+  EXPECT_THAT(report, HasSubstr("\"obstacles\": [\"spheres[0]\", \"boxes[0]\", \"cylinders[0]\", \"capsules[0]\"]"));
+  EXPECT_THAT(report, HasSubstr("\"boxes\": [[0.5, 0.25, 0.1, 0.2, 0.3]]"));
+  const Outcome check = RunCommand(CheckPlan(Path("shapes")));
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  ExpectCleanFailure(Flowplan("plan --ckpt " + Path("run") + " --start 0,0 --goal 1,0 --box 0.5,0.3,0.1"),
+                     "--box \"0.5,0.3,0.1\": expected cx,cy,lx,ly[,angle] (the robot's workspace is 2-D), got 3 numbers");
+  std::ofstream(Path("turned.yaml")) << "boxes: [{centre: [0.5, 0.25], size: [0.1, 0.2], quaternion: [1, 0, 0, 0]}]\n";
+  ExpectCleanFailure(Flowplan("plan --ckpt " + Path("run") + " --start 0,0 --goal 1,0 --scene " + Path("turned.yaml")),
+                     "turned.yaml: boxes[0].quaternion: a 2-D obstacle is turned by `angle`");
+}
+
+TEST_F(ParticlePlanTest, AnExportedFileTakesEveryGuidanceSettingPerCall) {
+  // What the run folder plans with guidance.margin=0.1 guidance.clip=0.5 sampler.steps=6, the exported file plans too.
+  const std::string common = " --start 0,0 --goal 1,0 --sphere 0.5,0.3,0.1 -n 8 --seed 3 --no-plot"
+                             " guidance.margin=0.1 guidance.clip=0.5 sampler.steps=6 guidance.schedule=rising";
+  ExpectOk(Flowplan("plan --ckpt " + Path("run") + common + " --out " + Path("set_run")));
+  ExpectOk(Flowplan("plan --planner " + Path("run/planner.pt") + common + " --out " + Path("set_file")));
+  ExpectOk(Flowplan("plan --planner " + Path("run/planner.pt") + " --start 0,0 --goal 1,0 --sphere 0.5,0.3,0.1 -n 8 "
+                    "--seed 3 --no-plot --out " + Path("unset_file")));
+  const std::string compare = std::string(FLOWPLAN_PYTHON) + " -c \"import h5py, numpy as np; p = lambda n: h5py.File('" +
+                              Path("") + "' + n + '.h5')['plans'][...]; d = np.abs(p('set_run') - p('set_file')).max(); "
+                              "assert d < 1e-5, d; assert np.abs(p('set_file') - p('unset_file')).max() > 1e-3\"";
+  EXPECT_EQ(std::system(compare.c_str()), 0);
 }
 
 TEST_F(ParticlePlanTest, SameSeedSameBytesForAnyThreadCountAndFromTheExportedFile) {
@@ -115,9 +151,9 @@ TEST_F(ParticlePlanTest, SameSeedSameBytesForAnyThreadCountAndFromTheExportedFil
 
 TEST_F(ParticlePlanTest, BadInputsEndInOneClearLine) {
   const std::string run = "plan --ckpt " + Path("run") + " ";
-  ExpectCleanFailure(Flowplan(run + "--start 0.5,0.3 --goal 1,0 --sphere 0.5,0.3,0.1"), "start is inside obstacle 0");
-  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 0.5,0.3 --sphere 0.5,0.3,0.1"), "goal is inside obstacle 0");
-  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --sphere 0.5,0.3,0.2,0.1"), "expected 3 numbers");
+  ExpectCleanFailure(Flowplan(run + "--start 0.5,0.3 --goal 1,0 --sphere 0.5,0.3,0.1"), "start is inside obstacle spheres[0]");
+  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 0.5,0.3 --sphere 0.5,0.3,0.1"), "goal is inside obstacle spheres[0]");
+  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --sphere 0.5,0.3,0.2,0.1"), "expected cx,cy,r");
   ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --sphere 0.5,0.3,-0.1"), "non-negative radius");
   ExpectCleanFailure(Flowplan(run + "--start 0,0,0 --goal 1,0"), "--start: expected 2 positions or 4 state values");
   ExpectCleanFailure(Flowplan(run + "--start 0,nan --goal 1,0"), "--start value 2 \"nan\": not a finite number");
@@ -133,8 +169,10 @@ TEST_F(ParticlePlanTest, BadInputsEndInOneClearLine) {
   ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --scene " + Path("nan_radius.yaml")),
                      "spheres[0].radius: expected a number");
   ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --execute"), "execution in MuJoCo needs the Franka");
-  ExpectCleanFailure(Flowplan("plan --planner " + Path("run/planner.pt") + " --start 0,0 --goal 1,0 guidance.margin=0.1"),
-                     "guidance.margin: is compiled into");
+  ExpectCleanFailure(Flowplan("plan --planner " + Path("run/planner.pt") + " --start 0,0 --goal 1,0 sampler.splitting=midpoint"),
+                     "sampler.splitting: is compiled into");
+  ExpectCleanFailure(Flowplan("plan --planner " + Path("run/planner.pt") + " --start 0,0 --goal 1,0 model.unet.groups=4"),
+                     "model.unet.groups: the network was trained with");
   EXPECT_FALSE(fs::exists(Path("run/plan.h5")));  // nothing half-written by the failures
 }
 
@@ -174,13 +212,14 @@ TEST(FrankaPlanTest, PlansFromTcpPointsExecutesInMujocoAndRejectsUnreachableTarg
   ExpectOk(outcome);
   EXPECT_THAT(outcome.output, HasSubstr("executed"));
   const std::string report = ReadText(path("p.json"));
-  EXPECT_THAT(report, HasSubstr("\"obstacles\": [0.5, 0, 0.2, 0.05]"));
+  EXPECT_THAT(report, HasSubstr("\"scene\": {\"spheres\": [[0.5, 0, 0.2, 0.05]]}"));
   EXPECT_THAT(report, HasSubstr("\"executed\": {\"goal_distance\": "));
   EXPECT_THAT(report, HasSubstr("\"success_rate_executed\": "));
   const Outcome check = RunCommand(CheckPlan(path("p")));
   EXPECT_EQ(check.exit_code, 0) << check.output;
-  // RRT-Connect on the same robot, horizon and dt (from the config's dataset), around a 0.10 m sphere.
-  const Outcome rrt = Flowplan("plan --rrt-connect" + config + " --start-tcp 0.5,-0.3,0.2 --goal-tcp 0.5,0.3,0.2 --scene " +
+  // RRT-Connect on the same robot, horizon and dt (the config's generator makes them; no data file), around a
+  // 0.10 m sphere.
+  const Outcome rrt = Flowplan("plan --rrt-connect" + config + " data.path=" + path("none.h5") + " --start-tcp 0.5,-0.3,0.2 --goal-tcp 0.5,0.3,0.2 --scene " +
                                Source("configs/scenes/franka_sphere.yaml") + " --radius 0.1 -n 2 --execute --out " +
                                path("rrt") + " --max-speed-ratio 3");  // 16 states: a fast move around the sphere
   ExpectOk(rrt);
@@ -191,8 +230,37 @@ TEST(FrankaPlanTest, PlansFromTcpPointsExecutesInMujocoAndRejectsUnreachableTarg
   EXPECT_EQ(check_rrt.exit_code, 0) << check_rrt.output;
   ExpectCleanFailure(Flowplan(plan.substr(0, plan.find("--goal-tcp")) + "--goal-tcp 2,0,0.5"),
                      "--goal-tcp: target (2, 0, 0.5) is unreachable");
-  ExpectCleanFailure(Flowplan(plan + "--sphere 0.5,-0.3,0.2,0.05"), "start is inside obstacle 1");  // 0: the preset's scene
-  ExpectCleanFailure(Flowplan(plan + "--sphere 0.5,0.3,0.2"), "expected 4 numbers");
+  ExpectCleanFailure(Flowplan(plan + "--sphere 0.5,-0.3,0.2,0.05"), "start is inside obstacle spheres[1]");  // 0: the preset's
+  ExpectCleanFailure(Flowplan(plan + "--sphere 0.5,0.3,0.2"), "expected cx,cy,cz,r");
+  ExpectCleanFailure(Flowplan(plan + "--box 0.5,0,0.2,0.1,0.1,0.1,0,0,0,0"),
+                     "--box \"0.5,0,0.2,0.1,0.1,0.1,0,0,0,0\".quaternion: expected a non-zero quaternion");
+  ExpectCleanFailure(Flowplan(plan + "--cylinder 0.5,0,0.2,-0.1,0.2"), "--cylinder \"0.5,0,0.2,-0.1,0.2\": expected a non-negative radius");
+}
+
+TEST(FrankaPlanTest, BoxesAndCylindersBetweenJointGoalsForTheLearnedPlannerAndRrtConnect) {
+  // A wall (a box) and a post (a cylinder) between two joint configurations, from the command line; the plans'
+  // TCP clearances are checked by an independent script, RRT-Connect's whole-arm plans by MuJoCo's contacts.
+  const fs::path dir = flowplan::testing::ScratchDir();
+  auto path = [&](const std::string& name) { return (dir / name).string(); };
+  const std::string config = " --config " + Source("configs/franka_reach.yaml") + " generate.out=" + path("data.h5") +
+                             " data.path=" + path("data.h5") + " run_dir=" + path("run") +
+                             " generate.episodes=16 generate.franka.horizon=16 model.unet.down_dims=[8,16]"
+                             " train.steps=2 train.batch_size=4 train.eval_every=0 sampler.steps=2 --log-level warn";
+  ExpectOk(Flowplan("generate" + config));
+  ExpectOk(Flowplan("train" + config));
+  const std::string shapes = " --start -0.55,0.35,0,-2.2,0,2.55,0.23 --goal 0.55,0.35,0,-2.2,0,2.55,1.33"
+                             " --box 0.5,0,0.15,0.5,0.04,0.3,0.9990482,0,0,0.0436194 --cylinder 0.25,0.1,0.2,0.04,0.4 "
+                             "--max-speed-ratio 3 -n 2 --no-plot scene.spheres=[]";  // not the preset's sphere
+  ExpectOk(Flowplan("plan --ckpt " + path("run") + shapes + " --out " + path("learned")));
+  const Outcome check = RunCommand(CheckPlan(path("learned")));
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  const Outcome rrt = Flowplan("plan --rrt-connect" + config + shapes + " --execute --out " + path("rrt"));
+  ExpectOk(rrt);
+  const std::string report = ReadText(path("rrt.json"));
+  EXPECT_THAT(report, HasSubstr("\"obstacles\": [\"boxes[0]\", \"cylinders[0]\"]"));
+  EXPECT_THAT(report, HasSubstr("\"success_rate_arm\": 1, \"success_rate_executed\": 1"));
+  const Outcome check_rrt = RunCommand(CheckPlan(path("rrt")));
+  EXPECT_EQ(check_rrt.exit_code, 0) << check_rrt.output;
 }
 
 }  // namespace

@@ -51,8 +51,8 @@ TEST(GeneratorTest, ParticleCrossHasTheXShapeAndEvalPairs) {
   ParticleCrossTask task{sim::ParticleConfig{}};
   const TrajectoryDataset d = GenerateDataset(task, Options(400, 2));
   ASSERT_EQ(d.num_episodes, 400);
-  ASSERT_EQ(d.horizon, 64);
-  ASSERT_EQ(d.state_dim, 4);
+  ASSERT_EQ(d.info.horizon, 64);
+  ASSERT_EQ(d.info.state_dim(), 4);
   // Each family ends near its commanded goal corner.
   for (int64_t i = 0; i < d.num_episodes; ++i) {
     const float* last = &d.states[(i * 64 + 63) * 4];

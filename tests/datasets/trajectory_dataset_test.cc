@@ -21,13 +21,12 @@ using ::testing::ThrowsMessage;
 
 TrajectoryDataset SmallDataset() {
   TrajectoryDataset d;
-  d.env = "particle";
-  d.dt = 0.05;
-  d.state_labels = {"x", "y", "vx", "vy"};
-  d.robot = kinematics::PointRobot("disc", 2, 0.03, 0.0, 1.0);
+  d.info.env = "particle";
+  d.info.dt = 0.05;
+  d.info.state_labels = {"x", "y", "vx", "vy"};
+  d.info.robot = kinematics::PointRobot("disc", 2, 0.03, 0.0, 1.0);
   d.num_episodes = 3;
-  d.horizon = 5;
-  d.state_dim = 4;
+  d.info.horizon = 5;
   for (int i = 0; i < 3 * 5 * 4; ++i) d.states.push_back(0.25f * static_cast<float>(i) - 3.0f);
   d.point_dim = 2;
   d.commanded_start = {0, 0, 0, 1, 0, 0};
@@ -54,7 +53,7 @@ TEST(TrajectoryDatasetTest, FingerprintChangesWithTheDataAndNotWithBookkeeping) 
   changed.states[17] += 1e-3f;
   EXPECT_NE(DatasetFingerprint(changed), print);
   changed = d;
-  changed.robot.point_radius = 0.05;
+  changed.info.robot.point_radius = 0.05;
   EXPECT_NE(DatasetFingerprint(changed), print);
   changed = d;
   changed.test_pairs.goal[0] = 2;
@@ -71,12 +70,12 @@ TEST(TrajectoryDatasetTest, RoundTripKeepsEverything) {
   const std::string path = TempPath("round_trip.h5");
   WriteDataset(path, d);
   const TrajectoryDataset back = ReadDataset(path);
-  EXPECT_EQ(back.env, d.env);
-  EXPECT_EQ(back.dt, d.dt);
-  EXPECT_EQ(back.state_labels, d.state_labels);
+  EXPECT_EQ(back.info.env, d.info.env);
+  EXPECT_EQ(back.info.dt, d.info.dt);
+  EXPECT_EQ(back.info.state_labels, d.info.state_labels);
   EXPECT_EQ(back.num_episodes, 3);
-  EXPECT_EQ(back.horizon, 5);
-  EXPECT_EQ(back.state_dim, 4);
+  EXPECT_EQ(back.info.horizon, 5);
+  EXPECT_EQ(back.info.state_dim(), 4);
   EXPECT_EQ(back.states, d.states);
   EXPECT_EQ(back.commanded_start, d.commanded_start);
   EXPECT_EQ(back.commanded_goal, d.commanded_goal);
@@ -87,8 +86,8 @@ TEST(TrajectoryDatasetTest, RoundTripKeepsEverything) {
   EXPECT_EQ(back.test_pairs.goal, d.test_pairs.goal);
   EXPECT_EQ(back.test_pairs.names, d.test_pairs.names);
   EXPECT_EQ(back.config_yaml, d.config_yaml);
-  EXPECT_EQ(kinematics::RobotToYaml(back.robot), kinematics::RobotToYaml(d.robot));
-  EXPECT_EQ(back.robot.point_radius, 0.03);
+  EXPECT_EQ(kinematics::RobotToYaml(back.info.robot), kinematics::RobotToYaml(d.info.robot));
+  EXPECT_EQ(back.info.robot.point_radius, 0.03);
   EXPECT_EQ(DatasetFingerprint(back), DatasetFingerprint(d));
   EXPECT_EQ(back.seed, 3u);
   EXPECT_EQ(back.rejected_episodes, 2);

@@ -5,7 +5,8 @@
 
 #include "core/error.h"
 #include "models/model_config.h"
-#include "planning/flow_planner.h"
+#include "planning/assemble.h"
+#include "tests/support/planners.h"
 
 namespace flowplan::eval {
 namespace {
@@ -36,14 +37,15 @@ TEST(StitchingTest, PositionsComeFromTheLabelsNotFromHalfTheState) {
                   0.5f * (2.0f + 1.5f));
 }
 
-planning::FlowPlanner SmallPlanner() {
+std::unique_ptr<planning::LearnedPlanner> SmallPlanner() {
   torch::manual_seed(0);
   models::ModelConfig config;
   config.unet.down_dims = {8, 16};
-  auto net = models::MakeTrajectoryNet(config, 4, 0);
-  models::MinMaxNormalizer normalizer(torch::zeros({4}) - 1, torch::ones({4}));
-  return planning::FlowPlanner(net, normalizer, models::Conditioning::kInpaint, 16,
-                               planning::SamplerConfig{3, planning::Splitting::kMidpoint});
+  planning::PlannerParts parts = testing::Parts(models::MakeTrajectoryNet(config, 4, 0), testing::DiscTrajectory(16),
+                                                testing::UnitNormalizer(4));
+  parts.sampler.steps = 3;
+  parts.sampler.splitting = planning::Splitting::kMidpoint;
+  return planning::AssemblePlanner(parts);
 }
 
 std::vector<std::string> Labels() { return {"x", "y", "vx", "vy"}; }
@@ -55,11 +57,11 @@ datasets::EvalPairTensors Pairs() {
 
 TEST(StitchingTest, ResultDoesNotDependOnTheThreadCount) {
   at::set_num_threads(1);
-  const planning::FlowPlanner planner = SmallPlanner();
+  const auto planner = SmallPlanner();
   EvalConfig config;
   config.num_plans = 40;  // three chunks of 16, the last one short
-  const StitchingResult one = EvaluateStitching(planner, Pairs(), Labels(), "test", config, 1);
-  const StitchingResult three = EvaluateStitching(planner, Pairs(), Labels(), "test", config, 3);
+  const StitchingResult one = EvaluateStitching(*planner, Pairs(), Labels(), "test", config, 1);
+  const StitchingResult three = EvaluateStitching(*planner, Pairs(), Labels(), "test", config, 3);
   EXPECT_TRUE(torch::equal(one.plans, three.plans));
   EXPECT_EQ(one.mean, three.mean);
   ASSERT_EQ(one.plans.size(0), 40);
@@ -89,9 +91,9 @@ TEST(StitchingTest, WrongShapesAreNamed) {
 }
 
 TEST(StitchingTest, NoPairsIsAClearError) {
-  const planning::FlowPlanner planner = SmallPlanner();
+  const auto planner = SmallPlanner();
   datasets::EvalPairTensors none{torch::zeros({0, 4}), torch::zeros({0, 4}), {}};
-  EXPECT_THAT([&] { EvaluateStitching(planner, none, Labels(), "test", EvalConfig{}); },
+  EXPECT_THAT([&] { EvaluateStitching(*planner, none, Labels(), "test", EvalConfig{}); },
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("defines no test pairs")));
 }
 

@@ -1,5 +1,6 @@
-// The guidance costs: their written-out gradients against finite differences
-// and autograd in double precision, hand-computed values, and scenes.
+// The guidance cost terms (guidance/*.py): their written-out gradients against
+// central differences and autograd in float64, hand-computed values, a user's
+// cost with its autograd gradient, and the guide's weighting and clipping.
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -7,11 +8,10 @@
 #include <fstream>
 
 #include "core/error.h"
-#include "guidance/collision_cost.h"
 #include "guidance/guide.h"
-#include "guidance/scene.h"
-#include "guidance/smoothness_cost.h"
-#include "kinematics/arm_kinematics.h"
+#include "jit/library.h"
+#include "kinematics/robot.h"
+#include "models/normalizer.h"
 #include "sim/franka_model.h"
 #include "tests/support/scratch_dir.h"
 
@@ -21,192 +21,282 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
-std::shared_ptr<const kinematics::Robot> Franka() {
-  static const auto robot = kinematics::MakeRobot(sim::LoadFrankaModel().description());
+const kinematics::Robot& Franka() {
+  static const kinematics::Robot robot(sim::LoadFrankaModel().description());
   return robot;
 }
 
-std::shared_ptr<const kinematics::Robot> Disc(double radius) {
-  return kinematics::MakeRobot(kinematics::PointRobot("disc", 2, radius, 0.0, 1.0));
+kinematics::Robot Disc(double radius) { return kinematics::Robot(kinematics::PointRobot("disc", 2, radius, 0.0, 1.0)); }
+
+/// The settings a call passes to the costs.
+c10::Dict<std::string, double> Opts(const GuidanceConfig& config) {
+  c10::Dict<std::string, double> opts;
+  for (const auto& [key, value] : config::ListNumbers(config, "guidance")) opts.insert(key, value);
+  return opts;
 }
 
-/// Central differences of Σ_b cost(x)_b in every entry of x, float64.
-torch::Tensor NumericGradient(const Cost& cost, const torch::Tensor& x, const torch::Tensor& obstacles) {
-  torch::Tensor numeric = torch::zeros_like(x);
+/// The guide of `config` for `robot` (raw == normalized states when `unit`).
+torch::jit::Module Guide(const GuidanceConfig& config, const kinematics::Robot& robot, double dt = 0.05) {
+  const int64_t D = 2 * robot.num_joints();
+  const models::MinMaxNormalizer unit(-torch::ones({D}), torch::ones({D}));
+  return BuildGuide(config, robot, unit.module(), dt);
+}
+
+/// Term k of the guide's chain (0 collision, 1 smoothness, 2 joint limit, 3 the user's).
+torch::jit::Module Term(const torch::jit::Module& guide, int k) {
+  torch::jit::Module chain = guide.attr("costs").toModule();
+  for (int i = 0; i < k; ++i) chain = chain.attr("rest").toModule();
+  return chain.attr("term").toModule();
+}
+
+struct Evaluated {
+  torch::Tensor value, grad_q, grad_qd;  // (B,), (B, T, J), (B, T, J)
+};
+
+Evaluated Evaluate(const torch::jit::Module& term, const torch::Tensor& q, const torch::Tensor& qd,
+                   const geometry::SceneRows& scene, const c10::Dict<std::string, double>& opts) {
+  const auto out = jit::Call(term, "value_and_gradient", {q, qd, scene, opts}).toTuple()->elements();
+  return {out[0].toTensor(), out[1].toTensor(), out[2].toTensor()};
+}
+
+/// Central differences of Σ_b value in every entry of q and qd, float64.
+std::pair<torch::Tensor, torch::Tensor> Numeric(const torch::jit::Module& term, const torch::Tensor& q,
+                                                const torch::Tensor& qd, const geometry::SceneRows& scene,
+                                                const c10::Dict<std::string, double>& opts) {
   const double h = 1e-6;
-  auto flat_x = x.view({-1});
-  auto flat_g = numeric.view({-1});
-  for (int64_t i = 0; i < flat_x.numel(); ++i) {
-    torch::Tensor plus = x.clone(), minus = x.clone();
-    plus.view({-1})[i] += h;
-    minus.view({-1})[i] -= h;
-    flat_g[i] = (cost.Value(plus, obstacles).sum().item<double>() - cost.Value(minus, obstacles).sum().item<double>()) /
-                (2 * h);
+  std::vector<torch::Tensor> out;
+  for (int which = 0; which < 2; ++which) {
+    const torch::Tensor x = which == 0 ? q : qd;
+    torch::Tensor g = torch::zeros_like(x);
+    for (int64_t i = 0; i < x.numel(); ++i) {
+      torch::Tensor plus = x.clone(), minus = x.clone();
+      plus.view({-1})[i] += h;
+      minus.view({-1})[i] -= h;
+      const double up = Evaluate(term, which ? q : plus, which ? plus : qd, scene, opts).value.sum().item<double>();
+      const double down = Evaluate(term, which ? q : minus, which ? minus : qd, scene, opts).value.sum().item<double>();
+      g.view({-1})[i] = (up - down) / (2 * h);
+    }
+    out.push_back(g);
   }
-  return numeric;
+  return {out[0], out[1]};
 }
 
-torch::Tensor AutogradGradient(const Cost& cost, const torch::Tensor& x, const torch::Tensor& obstacles) {
-  const torch::Tensor leaf = x.clone().requires_grad_(true);
-  return torch::autograd::grad({cost.Value(leaf, obstacles).sum()}, {leaf})[0];
+std::pair<torch::Tensor, torch::Tensor> Autograd(const torch::jit::Module& term, const torch::Tensor& q,
+                                                 const torch::Tensor& qd, const geometry::SceneRows& scene,
+                                                 const c10::Dict<std::string, double>& opts) {
+  const torch::Tensor a = q.clone().requires_grad_(true), b = qd.clone().requires_grad_(true);
+  const auto grads = torch::autograd::grad({Evaluate(term, a, b, scene, opts).value.sum()}, {a, b}, {}, false, false, true);
+  return {grads[0].defined() ? grads[0] : torch::zeros_like(q), grads[1].defined() ? grads[1] : torch::zeros_like(qd)};
 }
 
-/// A Franka trajectory (B, T, 14) of random joint angles within the limits and velocities.
-torch::Tensor FrankaTrajectory(int64_t B, int64_t T, uint64_t seed) {
+double Largest(const torch::Tensor& t) { return t.abs().max().item<double>(); }
+
+/// Random Franka joint angles inside the limits, (B, T, 7), and velocities.
+std::pair<torch::Tensor, torch::Tensor> FrankaStates(int64_t B, int64_t T, uint64_t seed) {
   torch::manual_seed(seed);
-  const auto& d = Franka()->description();
+  const auto& d = Franka().description();
   const torch::Tensor lo = torch::tensor(d.joint_lower, torch::kFloat64), hi = torch::tensor(d.joint_upper, torch::kFloat64);
-  const torch::Tensor q = lo + (hi - lo) * (0.2 + 0.6 * torch::rand({B, T, 7}, torch::kFloat64));
-  return torch::cat({q, torch::randn({B, T, 7}, torch::kFloat64)}, 2);
+  return {lo + (hi - lo) * (0.2 + 0.6 * torch::rand({B, T, 7}, torch::kFloat64)), torch::randn({B, T, 7}, torch::kFloat64)};
 }
 
-TEST(CollisionCostTest, FrankaGradientMatchesFiniteDifferencesAndAutograd) {
-  const torch::Tensor x = FrankaTrajectory(2, 4, 1);
-  // Obstacles placed on sphere centres of the trajectory, so that many pairs are active.
-  const torch::Tensor centres = Franka()->Spheres(x.slice(2, 0, 7).reshape({-1, 7})).centres;  // (8, S, 3)
-  const torch::Tensor obstacles = torch::cat(
-      {torch::stack({centres[1][30] + 0.03, centres[6][50] - 0.02}), torch::tensor({{0.12}, {0.2}}, torch::kFloat64)}, 1);
-  const CollisionCost cost(Franka(), 0.05);
-  const CostAndGradient written = cost.ValueAndGradient(x, obstacles);
+TEST(CollisionCostTest, FrankaGradientMatchesFiniteDifferencesAndAutogradForEveryShape) {
+  const auto [q, qd] = FrankaStates(2, 3, 1);
+  const torch::Tensor centres = Franka().SphereCentres(q.reshape({-1, 7}));  // (6, S, 3)
+  // One obstacle of each shape near a sphere centre of the trajectory, so that pairs are active (off it by a few
+  // cm: a sphere centre exactly on a cylinder's or capsule's axis has no defined gradient).
+  auto at = [&](int n, int s) { return centres[n][s] + torch::tensor({0.013, -0.021, 0.017}, torch::kFloat64); };
+  geometry::SceneRows scene;
+  scene.insert("spheres", torch::cat({at(1, 30) + 0.03, torch::tensor({0.12}, torch::kFloat64)}).view({1, 4}));
+  scene.insert("boxes", torch::cat({at(4, 50) - 0.02, torch::tensor({0.2, 0.1, 0.15, 0.9, 0.1, 0.3, -0.2},
+                                                                   torch::kFloat64)}).view({1, 10}));
+  scene.insert("cylinders", torch::cat({at(2, 10), torch::tensor({0.08, 0.3, 0.7, 0.7, 0.0, 0.1}, torch::kFloat64)})
+                                .view({1, 9}));
+  scene.insert("capsules", torch::cat({at(5, 20) - 0.05, at(5, 20) + 0.08, torch::tensor({0.05}, torch::kFloat64)})
+                               .view({1, 7}));
+  GuidanceConfig config;
+  const torch::jit::Module collision = Term(Guide(config, Franka()), 0);
+  const auto opts = Opts(config);
+  const Evaluated written = Evaluate(collision, q, qd, scene, opts);
   EXPECT_GT(written.value.min().item<double>(), 0.0) << "the test needs active pairs in every trajectory";
-  EXPECT_TRUE(torch::allclose(written.value, cost.Value(x, obstacles), 0, 1e-12));
-  const torch::Tensor numeric = NumericGradient(cost, x, obstacles);
-  EXPECT_LT((written.gradient - numeric).abs().max().item<double>(), 1e-6 * std::max(1.0, numeric.abs().max().item<double>()));
-  EXPECT_LT((written.gradient - AutogradGradient(cost, x, obstacles)).abs().max().item<double>(), 1e-10);
+  const auto [numeric_q, numeric_qd] = Numeric(collision, q, qd, scene, opts);
+  EXPECT_LT(Largest(written.grad_q - numeric_q), 1e-6 * std::max(1.0, Largest(numeric_q)));
+  EXPECT_LT(Largest(written.grad_q - Autograd(collision, q, qd, scene, opts).first), 1e-10);
   // Velocities do not enter.
-  EXPECT_EQ(written.gradient.slice(2, 7, 14).abs().max().item<double>(), 0.0);
+  EXPECT_EQ(Largest(written.grad_qd), 0.0);
+  EXPECT_EQ(Largest(numeric_qd), 0.0);
 }
 
-TEST(CollisionCostTest, HandComputedHingeOfADiscAndTwoSpheres) {
+TEST(CollisionCostTest, HandComputedHingeOfADiscAndTwoSpheresAndABox) {
   // Disc of radius 0.1 at (0.5, 0.5); obstacles: radius 0.2 at (0.5, 0.8), 0.3 away (reach 0.05 + 0.1 + 0.2 = 0.35:
   // penetration 0.05), and radius 0.1 at (0.1, 0.5), 0.4 away (reach 0.25: none).
-  const CollisionCost cost(Disc(0.1), 0.05);
-  const torch::Tensor x = torch::tensor({0.5, 0.5, 0.0, 0.0}, torch::kFloat64).view({1, 1, 4});
-  const torch::Tensor obstacles = torch::tensor({{0.5, 0.8, 0.2}, {0.1, 0.5, 0.1}}, torch::kFloat64);
-  const CostAndGradient r = cost.ValueAndGradient(x, obstacles);
+  GuidanceConfig config;
+  const kinematics::Robot disc = Disc(0.1);
+  const torch::jit::Module collision = Term(Guide(config, disc), 0);
+  const auto opts = Opts(config);
+  geometry::SceneRows scene = geometry::SphereRows(torch::tensor({{0.5, 0.8, 0.2}, {0.1, 0.5, 0.1}}, torch::kFloat64));
+  const torch::Tensor q = torch::tensor({0.5, 0.5}, torch::kFloat64).view({1, 1, 2}), qd = torch::zeros({1, 1, 2}, torch::kFloat64);
+  const Evaluated r = Evaluate(collision, q, qd, scene, opts);
   EXPECT_NEAR(r.value.item<double>(), 0.05, 1e-12);
-  // The gradient points from the obstacle to the disc, negated: moving towards +y raises the cost.
-  EXPECT_NEAR(r.gradient[0][0][0].item<double>(), 0.0, 1e-12);
-  EXPECT_NEAR(r.gradient[0][0][1].item<double>(), 1.0, 1e-12);
-  // Two states, the second one inside both: 0.05 + (0.35 − 0.3) ... summed over states.
-  const torch::Tensor two = torch::tensor({{0.5, 0.5, 0.0, 0.0}, {0.2, 0.55, 0.0, 0.0}}, torch::kFloat64).view({1, 2, 4});
-  const double d1 = std::hypot(0.3, 0.25), d2 = std::hypot(0.1, 0.05);
-  EXPECT_NEAR(cost.Value(two, obstacles).item<double>(), 0.05 + std::max(0.0, 0.35 - d1) + (0.25 - d2), 1e-12);
+  // Moving towards +y (into the obstacle) raises the cost.
+  EXPECT_NEAR(r.grad_q[0][0][0].item<double>(), 0.0, 1e-12);
+  EXPECT_NEAR(r.grad_q[0][0][1].item<double>(), 1.0, 1e-12);
+  // A square of side 0.2 below the disc, its top face 0.12 below the disc's centre: penetration 0.15 − 0.12.
+  scene.insert("boxes", torch::tensor({{0.5, 0.28, 0.2, 0.2, 0.0}}, torch::kFloat64));
+  EXPECT_NEAR(Evaluate(collision, q, qd, scene, opts).value.item<double>(), 0.05 + 0.03, 1e-12);
 }
 
 TEST(CollisionCostTest, ZeroFarFromEveryObstacleAndWithoutObstacles) {
-  const torch::Tensor x = FrankaTrajectory(3, 8, 2);
-  const CollisionCost cost(Franka(), 0.05);
-  const CostAndGradient far = cost.ValueAndGradient(x, torch::tensor({{5.0, 5.0, 5.0, 0.5}}, torch::kFloat64));
-  EXPECT_EQ(far.value.abs().max().item<double>(), 0.0);
-  EXPECT_EQ(far.gradient.abs().max().item<double>(), 0.0);
-  const CostAndGradient none = cost.ValueAndGradient(x, torch::zeros({0, 4}, torch::kFloat64));
-  EXPECT_EQ(none.value.abs().max().item<double>(), 0.0);
-  EXPECT_EQ(none.gradient.sizes(), x.sizes());
+  const auto [q, qd] = FrankaStates(3, 8, 2);
+  GuidanceConfig config;
+  const torch::jit::Module collision = Term(Guide(config, Franka()), 0);
+  geometry::SceneRows far = geometry::SphereRows(torch::tensor({{5.0, 5.0, 5.0, 0.5}}, torch::kFloat64));
+  far.insert("boxes", torch::tensor({{-5.0, 5.0, 5.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0}}, torch::kFloat64));
+  const Evaluated away = Evaluate(collision, q, qd, far, Opts(config));
+  EXPECT_EQ(Largest(away.value), 0.0);
+  EXPECT_EQ(Largest(away.grad_q), 0.0);
+  const Evaluated none = Evaluate(collision, q, qd, geometry::SceneRows(), Opts(config));
+  EXPECT_EQ(Largest(none.value), 0.0);
+  EXPECT_EQ(none.grad_q.sizes(), q.sizes());
 }
 
-TEST(SmoothnessCostTest, ZeroAtConstantVelocityAndPositiveOtherwise) {
+TEST(SmoothnessCostTest, ZeroAtConstantVelocityHandValueAndGradients) {
   const double dt = 1.0 / 15.0;
-  const SmoothnessCost cost(7, dt, 1.0);
+  GuidanceConfig config;
+  const torch::jit::Module smoothness = Term(Guide(config, Franka(), dt), 1);
+  const auto opts = Opts(config);
   const torch::Tensor q0 = torch::randn({2, 1, 7}, torch::kFloat64), v = torch::randn({2, 1, 7}, torch::kFloat64);
   const torch::Tensor steps = torch::arange(64, torch::kFloat64).view({1, 64, 1});
-  const torch::Tensor x = torch::cat({q0 + dt * steps * v, v.expand({2, 64, 7})}, 2);
-  const torch::Tensor empty = torch::zeros({0, 4});
-  EXPECT_LT(cost.Value(x, empty).abs().max().item<double>(), 1e-15);
-  EXPECT_LT(cost.ValueAndGradient(x, empty).gradient.abs().max().item<double>(), 1e-9);
-  torch::Tensor bent = x.clone();
+  const torch::Tensor q = q0 + dt * steps * v, qd = v.expand({2, 64, 7}).contiguous();
+  const Evaluated straight = Evaluate(smoothness, q, qd, geometry::SceneRows(), opts);
+  EXPECT_LT(Largest(straight.value), 1e-15);
+  EXPECT_LT(Largest(straight.grad_q), 1e-9);
+  torch::Tensor bent = q.clone();
   bent[0][30][2] += 0.01;
-  const torch::Tensor value = cost.Value(bent, empty);
-  EXPECT_GT(value[0].item<double>(), 0.0);
+  const torch::Tensor value = Evaluate(smoothness, bent, qd, geometry::SceneRows(), opts).value;
   EXPECT_LT(value[1].item<double>(), 1e-15);
-  // Hand value of one position offset δ at state i: e_{i-1} = (δ, 0), e_i = (−δ, 0):
-  // 2 · 12/dt³ δ² (σ = 1).
+  // One position offset δ at state i: e_{i-1} = (δ, 0), e_i = (−δ, 0): 2 · 12/dt³ δ² (σ = 1).
   EXPECT_NEAR(value[0].item<double>(), 2 * 12 / (dt * dt * dt) * 1e-4, 1e-6);
-}
-
-TEST(SmoothnessCostTest, GradientMatchesFiniteDifferencesAndAutograd) {
-  const SmoothnessCost cost(2, 0.05, 0.7);
+  // Gradients against differences and autograd, σ = 0.7 per call.
+  GuidanceConfig other = config;
+  other.smoothness_sigma = 0.7;
   torch::manual_seed(3);
-  const torch::Tensor x = torch::randn({2, 6, 5}, torch::kFloat64);  // an extra dimension beyond [q, q̇]
-  const torch::Tensor empty = torch::zeros({0, 3});
-  const CostAndGradient written = cost.ValueAndGradient(x, empty);
-  const torch::Tensor numeric = NumericGradient(cost, x, empty);
-  EXPECT_LT((written.gradient - numeric).abs().max().item<double>(), 1e-5 * numeric.abs().max().item<double>());
-  EXPECT_LT((written.gradient - AutogradGradient(cost, x, empty)).abs().max().item<double>(), 1e-8);
-  EXPECT_EQ(written.gradient.select(2, 4).abs().max().item<double>(), 0.0);
+  const torch::Tensor a = torch::randn({2, 6, 7}, torch::kFloat64), b = torch::randn({2, 6, 7}, torch::kFloat64);
+  const Evaluated written = Evaluate(smoothness, a, b, geometry::SceneRows(), Opts(other));
+  const auto [numeric_q, numeric_qd] = Numeric(smoothness, a, b, geometry::SceneRows(), Opts(other));
+  EXPECT_LT(Largest(written.grad_q - numeric_q), 1e-5 * Largest(numeric_q));
+  EXPECT_LT(Largest(written.grad_qd - numeric_qd), 1e-5 * Largest(numeric_qd));
+  const auto [auto_q, auto_qd] = Autograd(smoothness, a, b, geometry::SceneRows(), Opts(other));
+  EXPECT_LT(Largest(written.grad_q - auto_q), 1e-8 * Largest(auto_q));
+  EXPECT_LT(Largest(written.grad_qd - auto_qd), 1e-8 * Largest(auto_qd));
 }
 
-TEST(GuideTest, WeightedSumGradientAndClipping) {
+TEST(JointLimitCostTest, HingeOnTheDistanceToTheLimits) {
   GuidanceConfig config;
-  config.collision_weight = 2.0;   // states inside the obstacle: norm 2, clipped
-  config.smoothness_weight = 1e-6;  // states outside: small, kept
-  config.clip = 0.5;
-  const auto cost = MakeGuidanceCost(config, Disc(0.05), 0.05);
-  const torch::Tensor x = torch::rand({2, 8, 4}, torch::kFloat64);
-  const torch::Tensor obstacles = torch::tensor({{0.5, 0.5, 0.3}}, torch::kFloat64);
-  const CostAndGradient written = cost->ValueAndGradient(x, obstacles);
-  EXPECT_LT((written.gradient - AutogradGradient(*cost, x, obstacles)).abs().max().item<double>(), 1e-10);
-  // raw = x_n + 1 (lo 0, hi 2): the chain rule's factor (hi − lo)/2 is 1.
-  const Guide guide(cost, models::MinMaxNormalizer(torch::zeros({4}), torch::full({4}, 2.0)), config);
-  const torch::Tensor x_n = x.to(torch::kFloat32) - 1.0;
-  const torch::Tensor got = guide.Gradient(x_n, obstacles.to(torch::kFloat32));
-  // Each term's gradient is capped at norm 0.5 per state before it is weighted.
-  torch::Tensor expected = torch::zeros_like(x);
-  int64_t clipped = 0;
-  for (const auto& term : cost->terms()) {
-    torch::Tensor part = term.cost->ValueAndGradient(x, obstacles).gradient;
-    const torch::Tensor norm = part.norm(2, -1, true);
-    clipped += (norm > 0.5).sum().item<int64_t>();
-    part = torch::where(norm > 0.5, part * 0.5 / norm, part);
-    expected = expected + term.weight * part;
-  }
-  EXPECT_GT(clipped, 0) << "the test needs states whose gradient is capped";
-  EXPECT_TRUE(torch::allclose(got, expected.to(torch::kFloat32), 1e-5, 1e-6));
-  EXPECT_LE(got.norm(2, -1).max().item<float>(), 2.0f * 0.5f + 1e-6f * 0.5f + 1e-5f);
-  EXPECT_DOUBLE_EQ(GuidanceFactor(GuidanceSchedule::kOneMinusT, 0.25), 0.75);
-  EXPECT_DOUBLE_EQ(GuidanceFactor(GuidanceSchedule::kRatio, 0.25), 3.0);
-  EXPECT_DOUBLE_EQ(GuidanceFactor(GuidanceSchedule::kRatio, 0.0), 1.0 / kMinRatioTime);
+  config.joint_limit_margin = 0.1;
+  const torch::jit::Module limits = Term(Guide(config, Disc(0.05)), 2);  // the disc's limits: [0, 1] per axis
+  // x 0.05 below 0 + 0.1 → 0.05; y 0.97 above 1 − 0.1 → 0.07; then a state well inside.
+  const torch::Tensor q = torch::tensor({{{0.05, 0.97}, {0.5, 0.5}}}, torch::kFloat64);
+  const torch::Tensor qd = torch::zeros_like(q);
+  const Evaluated r = Evaluate(limits, q, qd, geometry::SceneRows(), Opts(config));
+  EXPECT_NEAR(r.value.item<double>(), 0.05 + 0.07, 1e-12);
+  EXPECT_TRUE(torch::equal(r.grad_q, torch::tensor({{{-1.0, 1.0}, {0.0, 0.0}}}, torch::kFloat64)));
+  const auto [numeric_q, numeric_qd] = Numeric(limits, q, qd, geometry::SceneRows(), Opts(config));
+  EXPECT_LT(Largest(r.grad_q - numeric_q), 1e-6);
+  // Off by default: the guide does not run for it alone.
+  EXPECT_FALSE(jit::Call(Guide(GuidanceConfig{}, Disc(0.05)), "active", {geometry::SceneRows(), Opts(GuidanceConfig{})}).toBool());
+  EXPECT_TRUE(jit::Call(Guide(config, Disc(0.05)), "active",
+                        {geometry::SceneRows(), Opts([&] {
+                           GuidanceConfig on = config;
+                           on.joint_limit_weight = 1.0;
+                           return on;
+                         }())}).toBool());
 }
 
-TEST(RobotTest, SphereVectorJacobianProductMatchesAutograd) {
-  torch::manual_seed(4);
-  const torch::Tensor q = FrankaTrajectory(1, 5, 4).slice(2, 0, 7).squeeze(0);
-  const torch::Tensor g = torch::randn({5, Franka()->num_spheres(), 3}, torch::kFloat64);
-  const kinematics::SpherePoses poses = Franka()->Spheres(q);
-  const torch::Tensor leaf = q.clone().requires_grad_(true);
-  const torch::Tensor autograd =
-      torch::autograd::grad({(Franka()->Spheres(leaf).centres * g).sum()}, {leaf})[0];
-  EXPECT_LT((Franka()->SpheresVjp(poses, g) - autograd).abs().max().item<double>(), 1e-10);
-}
-
-std::string WriteScene(const std::string& name, const std::string& text) {
+std::string WriteFile(const std::string& name, const std::string& text) {
   const std::string path = (flowplan::testing::ScratchDir() / name).string();
   std::ofstream(path) << text;
   return path;
 }
 
-TEST(SceneTest, FileIsReadIntoObstacleRows) {
-  const std::string path =
-      WriteScene("two.yaml", "spheres:\n  - {centre: [0.5, 0.0, 0.2], radius: 0.1}\n  - centre: [0.1, 0.2, 0.3]\n    radius: 0\n");
-  const torch::Tensor o = LoadScene(path).Obstacles(3, path);
-  EXPECT_TRUE(torch::equal(o, torch::tensor({{0.5f, 0.0f, 0.2f, 0.1f}, {0.1f, 0.2f, 0.3f, 0.0f}})));
-  EXPECT_EQ(LoadScene(WriteScene("empty.yaml", "spheres: []\n")).Obstacles(3, "x").size(0), 0);
+TEST(UserCostTest, GradientByAutogradAlsoUnderNoGradAndAClearErrorUnderInferenceMode) {
+  // Keep the disc above y = 0.6: sum over states of relu(0.6 − y)², with the robot's TCP.
+  GuidanceConfig config;
+  config.user_cost = WriteFile("above.py", R"PY(
+def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:
+    height = self.robot.tcp(q)[:, :, 1]
+    return (torch.relu(0.6 - height) ** 2).sum(1) + 0.0 * qd.sum([1, 2])
+)PY");
+  const torch::jit::Module user = Term(Guide(config, Disc(0.05)), 3);
+  const torch::Tensor q = torch::tensor({{{0.2, 0.5}, {0.3, 0.7}}}, torch::kFloat64), qd = torch::zeros_like(q);
+  torch::NoGradGuard no_grad;  // as a planner calls it
+  const Evaluated r = Evaluate(user, q, qd, geometry::SceneRows(), Opts(config));
+  EXPECT_NEAR(r.value.item<double>(), 0.01, 1e-12);
+  EXPECT_TRUE(torch::allclose(r.grad_q, torch::tensor({{{0.0, -0.2}, {0.0, 0.0}}}, torch::kFloat64), 0, 1e-12));
+  EXPECT_FALSE(at::GradMode::is_enabled()) << "the cost restores the caller's grad mode";
+  {
+    c10::InferenceMode inference;
+    const torch::Tensor qi = torch::tensor({{{0.2, 0.5}}}, torch::kFloat64);
+    EXPECT_THAT([&] { Evaluate(user, qi, torch::zeros_like(qi), geometry::SceneRows(), Opts(config)); },
+                ThrowsMessage<Error>(HasSubstr("above.py: a user cost takes its gradient by autograd, which cannot run "
+                                               "under torch.inference_mode(); plan under torch.no_grad() instead")));
+  }
 }
 
-TEST(SceneTest, BadScenesNameTheFileAndEntry) {
-  const std::string negative = WriteScene("negative.yaml", "spheres:\n  - {centre: [0.5, 0.0, 0.2], radius: -0.1}\n");
-  EXPECT_THAT([&] { LoadScene(negative); },
-              ThrowsMessage<Error>(HasSubstr("negative.yaml:2: spheres[0].radius: expected a non-negative value, got \"-0.1\"")));
-  const std::string nan = WriteScene("nan.yaml", "spheres:\n  - {centre: [0.5, 0.0, 0.2], radius: .nan}\n");
-  EXPECT_THAT([&] { LoadScene(nan); }, ThrowsMessage<Error>(HasSubstr("spheres[0].radius: expected a number")));
-  const std::string flat = WriteScene("flat.yaml", "spheres:\n  - {centre: [0.5, 0.0], radius: 0.1}\n");
-  EXPECT_THAT([&] { LoadScene(flat).Obstacles(3, flat); },
-              ThrowsMessage<Error>(HasSubstr("flat.yaml: spheres[0].centre: expected 3 values (the robot's workspace is 3-D), got 2")));
-  const std::string missing = WriteScene("missing.yaml", "spheres:\n  - {centre: [0.5, 0.0, 0.2]}\n");
-  EXPECT_THAT([&] { LoadScene(missing).Obstacles(3, missing); },
-              ThrowsMessage<Error>(HasSubstr("missing.yaml: spheres[0].radius: missing")));
-  const std::string typo = WriteScene("typo.yaml", "spheres:\n  - {center: [0.5, 0.0, 0.2], radius: 0.1}\n");
-  EXPECT_THAT([&] { LoadScene(typo); }, ThrowsMessage<Error>(HasSubstr("spheres[0].center: unknown key")));
+TEST(UserCostTest, BadFilesAreOneClearError) {
+  GuidanceConfig config;
+  config.user_cost = WriteFile("typo.py", "def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
+                                          "    return q.sum([1, 2) \n");
+  EXPECT_THAT([&] { Guide(config, Disc(0.05)); },
+              ThrowsMessage<Error>(HasSubstr("guidance.user_cost: " + config.user_cost + ": does not compile as TorchScript")));
+  config.user_cost = WriteFile("free.py", "def cost(q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
+                                          "    return q.sum([1, 2])\n");
+  EXPECT_THAT([&] { Guide(config, Disc(0.05)); },
+              ThrowsMessage<Error>(HasSubstr("expected a method `def cost(self, q: Tensor")));
+  config.user_cost = "/nonexistent/cost.py";
+  EXPECT_THAT([&] { Guide(config, Disc(0.05)); },
+              ThrowsMessage<Error>(HasSubstr("guidance.user_cost: /nonexistent/cost.py: no such file")));
+  config.user_cost = WriteFile("shape.py", "def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
+                                           "    return q.sum()\n");
+  const torch::jit::Module user = Term(Guide(config, Disc(0.05)), 3);
+  EXPECT_THAT([&] { Evaluate(user, torch::zeros({2, 3, 2}), torch::zeros({2, 3, 2}), geometry::SceneRows(), Opts(config)); },
+              ThrowsMessage<Error>(HasSubstr("shape.py: cost: expected a value per trajectory (2,), got []")));
+}
+
+TEST(GuideTest, WeightedSumOfClippedTermsAndTheSchedules) {
+  GuidanceConfig config;
+  config.collision_weight = 2.0;    // states inside the obstacle: norm 1, clipped to 0.5
+  config.smoothness_weight = 1e-6;  // small, kept
+  config.clip = 0.5;
+  const kinematics::Robot disc = Disc(0.05);
+  const torch::jit::Module guide = Guide(config, disc);
+  const auto opts = Opts(config);
+  torch::manual_seed(5);
+  const torch::Tensor x = torch::rand({2, 8, 4}, torch::kFloat64);  // raw == normalized here
+  const geometry::SceneRows scene = geometry::SphereRows(torch::tensor({{0.5, 0.5, 0.3}}, torch::kFloat64));
+  const torch::Tensor got = jit::Call(guide, "gradient", {x, scene, opts}).toTensor();
+  torch::Tensor expected = torch::zeros_like(x);
+  int64_t clipped = 0;
+  for (const auto& [k, weight] : {std::pair{0, 2.0}, std::pair{1, 1e-6}}) {
+    const Evaluated r = Evaluate(Term(guide, k), x.slice(2, 0, 2), x.slice(2, 2, 4), scene, opts);
+    torch::Tensor part = torch::cat({r.grad_q, r.grad_qd}, 2);
+    const torch::Tensor norm = part.norm(2, -1, true);
+    clipped += (norm > 0.5).sum().item<int64_t>();
+    part = torch::where(norm > 0.5, part * 0.5 / norm, part);
+    expected = expected + weight * part;
+  }
+  EXPECT_GT(clipped, 0) << "the test needs states whose gradient is capped";
+  EXPECT_TRUE(torch::allclose(got, expected, 1e-12, 1e-12));
+  // b_t of each schedule.
+  auto factor = [](const std::string& schedule, double t) {
+    return jit::CallFunction("schedule_factor", {schedule, t}).toDouble();
+  };
+  EXPECT_DOUBLE_EQ(factor("one_minus_t", 0.25), 0.75);
+  EXPECT_DOUBLE_EQ(factor("ratio", 0.25), 3.0);
+  EXPECT_DOUBLE_EQ(factor("ratio", 0.0), 1e3);
+  EXPECT_DOUBLE_EQ(factor("rising", 0.25), 0.25);
+  // A step moves x against scale · b_t times the gradient.
+  const torch::Tensor stepped = jit::Call(guide, "step", {x, 0.25, scene, opts, std::string("rising")}).toTensor();
+  EXPECT_TRUE(torch::allclose(stepped, x - 0.25 * config.scale * got, 1e-12, 1e-12));
 }
 
 }  // namespace

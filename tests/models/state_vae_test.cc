@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
+#include "jit/library.h"
 
 namespace flowplan::models {
 namespace {
@@ -21,7 +22,7 @@ TEST(StateVaeTest, ShapesFollowTheConfig) {
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("state VAE: x: expected (N, 14)")));
 }
 
-TEST(StateVaeTest, DecodeVjpIsAutogradsVectorJacobianProduct) {
+TEST(StateVaeTest, ScriptMatchesTheNetworkAndItsDecodeVjpIsAutogradsVectorJacobianProduct) {
   torch::manual_seed(3);
   StateVaeConfig config;
   config.hidden = {32, 16};
@@ -32,7 +33,13 @@ TEST(StateVaeTest, DecodeVjpIsAutogradsVectorJacobianProduct) {
   const torch::Tensor g = torch::randn({5, 4}, torch::kFloat64);
   (vae.Decode(z) * g).sum().backward();
   torch::NoGradGuard no_grad;
-  EXPECT_TRUE(torch::allclose(vae.DecodeVjp(z.detach(), g), z.grad(), 1e-12, 1e-12));
+  const torch::jit::Module script = vae.ToScript();
+  EXPECT_TRUE(torch::allclose(jit::Call(script, "decode_vjp", {z.detach(), g}).toTensor(), z.grad(), 1e-12, 1e-12));
+  EXPECT_TRUE(torch::equal(jit::Call(script, "decode", {z.detach()}).toTensor(), vae.Decode(z.detach())));
+  const torch::Tensor x = torch::randn({5, 4}, torch::kFloat64);
+  const auto encoded = jit::Call(script, "encode", {x}).toTuple()->elements();
+  EXPECT_TRUE(torch::equal(encoded[0].toTensor(), vae.Encode(x).mean));
+  EXPECT_TRUE(torch::equal(encoded[1].toTensor(), vae.Encode(x).log_var));
 }
 
 }  // namespace

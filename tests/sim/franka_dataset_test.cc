@@ -55,13 +55,13 @@ TEST(FrankaDatasetTest, MergedShardsEqualTheWholeFile) {
 TEST(FrankaDatasetTest, CrossLayoutFamiliesAndEvaluationPairs) {
   FrankaTask task(FrankaGoals::kCross, FrankaTaskConfig{});
   const TrajectoryDataset d = GenerateDataset(task, Options(8, 2));
-  EXPECT_EQ(d.env, "franka");
-  EXPECT_DOUBLE_EQ(d.dt, 1.0 / 15.0);
+  EXPECT_EQ(d.info.env, "franka");
+  EXPECT_DOUBLE_EQ(d.info.dt, 1.0 / 15.0);
   ASSERT_EQ(d.num_episodes, 8);
-  ASSERT_EQ(d.horizon, 64);
-  ASSERT_EQ(d.state_dim, 14);
-  EXPECT_EQ(d.state_labels.front(), "q1");
-  EXPECT_EQ(d.state_labels.back(), "dq7");
+  ASSERT_EQ(d.info.horizon, 64);
+  ASSERT_EQ(d.info.state_dim(), 14);
+  EXPECT_EQ(d.info.state_labels.front(), "q1");
+  EXPECT_EQ(d.info.state_labels.back(), "dq7");
   ASSERT_EQ(d.point_dim, 3);
   EXPECT_EQ(d.extras.count("tcp"), 1u);
   EXPECT_EQ(d.extras.count("torques"), 1u);
@@ -175,7 +175,7 @@ TEST(FrankaDatasetTest, ShippedConfigsLoadAndGenerate) {
     ASSERT_GT(d.num_episodes, 0) << path;
     // Kept episodes obey the arm's velocity limits (recorded states included).
     const sim::FrankaLimits limits = sim::LoadFrankaModel().limits();
-    for (int64_t i = 0; i < d.num_episodes * d.horizon; ++i) {
+    for (int64_t i = 0; i < d.num_episodes * d.info.horizon; ++i) {
       for (int j = 0; j < 7; ++j) {
         ASSERT_LE(std::abs(d.states[static_cast<size_t>(i * 14 + 7 + j)]), limits.velocity[j] + 1e-6)
             << path << ", joint " << j + 1;

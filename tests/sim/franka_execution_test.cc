@@ -58,7 +58,8 @@ TEST_F(FrankaExecutionTest, TracksASmoothMoveToTheGoalWithoutObstacles) {
 
 TEST_F(FrankaExecutionTest, APlanThroughAnObstacleMakesContactAndFarOnesDoNot) {
   const JointVector q0 = Ik({0.5, -0.3, 0.2}), q1 = Ik({0.5, 0.3, 0.2});
-  const std::vector<ObstacleSphere> obstacles = {{{0.5, 0.0, 0.2}, 0.1}, {{-0.6, 0.0, 0.3}, 0.1}};
+  geometry::Scene obstacles;
+  obstacles.spheres = {{{0.5, 0.0, 0.2}, 0.1}, {{-0.6, 0.0, 0.3}, 0.1}};
   const FrankaModel scene = MakeFrankaScene(obstacles, 1.0 / config_.control_hz);
   FrankaExecutor executor(scene, 2, config_);
   const ExecutionResult r = executor.Execute(SmoothMove(q0, q1, 64), 64, kDt, Tcp(q1));
@@ -72,16 +73,50 @@ TEST_F(FrankaExecutionTest, APlanThroughAnObstacleMakesContactAndFarOnesDoNot) {
   EXPECT_GT(r.min_distance[1], 0.3);  // behind the robot
 }
 
+TEST_F(FrankaExecutionTest, EveryShapeIsACollisionGeomOfItsOwn) {
+  // Each shape astride the straight move from (0.5, -0.3, 0.2) to (0.5, 0.3, 0.2)
+  // makes contact; the same shape 0.8 m higher does not.
+  const JointVector q0 = Ik({0.5, -0.3, 0.2}), q1 = Ik({0.5, 0.3, 0.2});
+  const std::vector<double> plan = SmoothMove(q0, q1, 64);
+  const double s = std::sqrt(0.5);
+  for (double lift : {0.0, 0.8}) {
+    geometry::Scene scene;
+    scene.boxes.push_back({{0.5, 0.0, 0.2 + lift}, {0.1, 0.1, 0.1}, {s, 0.0, 0.0, s}, NAN});
+    scene.cylinders.push_back({{0.5, 0.05, 0.2 + lift}, 0.04, 0.2, {s, s, 0.0, 0.0}, NAN});  // axis along y
+    scene.capsules.push_back({{0.45, -0.05, 0.2 + lift}, {0.55, -0.05, 0.2 + lift}, 0.03});
+    for (int k = 0; k < 3; ++k) {
+      geometry::Scene one;
+      if (k == 0) one.boxes = scene.boxes;
+      if (k == 1) one.cylinders = scene.cylinders;
+      if (k == 2) one.capsules = scene.capsules;
+      const FrankaModel world = MakeFrankaScene(one, 1.0 / config_.control_hz);
+      FrankaExecutor executor(world, 1, config_);
+      const ExecutionResult r = executor.Execute(plan, 64, kDt, Tcp(q1));
+      EXPECT_EQ(r.contacts.empty(), lift > 0) << "shape " << k << " lifted " << lift;
+      if (lift > 0) {
+        EXPECT_GT(r.min_distance[0], 0.2) << "shape " << k;
+      } else {
+        EXPECT_LT(r.min_distance[0], 0.0) << "shape " << k;
+      }
+    }
+  }
+}
+
 TEST_F(FrankaExecutionTest, DistancesAreThoseOfTheCapsules) {
   // Holding the ready pose, with an obstacle 5 cm below the TCP: the fingers'
   // capsules reach to about the TCP, so the distance is close to 5 cm minus the radius.
   const JointVector q = FrankaReadyPose();
   const Eigen::Vector3d tcp = Tcp(q);
-  const std::vector<ObstacleSphere> obstacles = {{tcp - Eigen::Vector3d(0, 0, 0.15), 0.1}};
+  const Eigen::Vector3d below = tcp - Eigen::Vector3d(0, 0, 0.15);
+  geometry::Scene obstacles;
+  obstacles.spheres = {{{below.x(), below.y(), below.z()}, 0.1}};
+  // A box whose top face is 5 cm below the TCP, measured by MuJoCo's box collider.
+  obstacles.boxes = {{{below.x(), below.y(), below.z() - 0.1}, {0.4, 0.4, 0.2}, {}, NAN}};
   const FrankaModel scene = MakeFrankaScene(obstacles, 1.0 / config_.control_hz);
-  FrankaExecutor executor(scene, 1, config_);
+  FrankaExecutor executor(scene, 2, config_);
   const ExecutionResult r = executor.Execute(SmoothMove(q, q, 8), 8, kDt, tcp);
   EXPECT_NEAR(r.min_distance[0], 0.05, 0.02);
+  EXPECT_NEAR(r.min_distance[1], r.min_distance[0], 1e-3);
   EXPECT_TRUE(r.contacts.empty());
   EXPECT_LT(r.goal_distance, 1e-3);
 }

@@ -43,8 +43,6 @@ TrainingSetup TinySetup(const std::string& name) {
   setup.train.log_every = 4;
   setup.train.eval_every = 6;
   setup.train.checkpoint_every = 6;
-  setup.eval.num_plans = 4;
-  setup.sampler.steps = 2;
   return setup;
 }
 
@@ -80,7 +78,6 @@ class ResumeTest : public ::testing::TestWithParam<ZooCase> {
     setup.objective.name = GetParam().objective;
     setup.objective.conditioning = GetParam().conditioning;
     setup.objective.ddpm.steps = 5;
-    setup.sampler.latent.iterations = 2;
     return setup;
   }
 };
@@ -225,6 +222,14 @@ TEST(TrainerTest, RunFolderHoldsConfigMetricsAndPrunedCheckpoints) {
   TrainingSetup setup = TinySetup("layout");
   setup.train.checkpoint_every = 2;
   setup.train.keep_checkpoints = 2;
+  // The evaluator sees the EMA weights and the normalizer; its scores are logged.
+  std::vector<double> norms;
+  setup.evaluate = [&](const models::NetworkPtr& net, const models::MinMaxNormalizer& normalizer) {
+    double sum = 0.0;
+    for (const auto& p : net->parameters()) sum += p.pow(2).sum().item<double>();
+    norms.push_back(std::sqrt(sum));
+    return Scores{{"ema_norm", norms.back()}, {"lo0", normalizer.lo()[0].item<double>()}};
+  };
   const TrainResult result = Train(setup, TinyData(), TrainStart::kFresh);
   RunDir run(setup.run_dir);
   EXPECT_TRUE(fs::exists(run.config()));
@@ -234,9 +239,16 @@ TEST(TrainerTest, RunFolderHoldsConfigMetricsAndPrunedCheckpoints) {
   const auto header = checkpoints::ReadCheckpointHeader(result.checkpoint);
   EXPECT_EQ(header.step, 12);
   EXPECT_EQ(header.config_yaml, "tiny: true\n");
-  EXPECT_EQ(header.horizon, 16);
-  EXPECT_EQ(header.state_labels.size(), 4u);
-  EXPECT_TRUE(std::isfinite(result.test.mean));
+  EXPECT_EQ(header.trajectory.horizon, 16);
+  EXPECT_EQ(header.trajectory.state_labels.size(), 4u);
+  ASSERT_EQ(norms.size(), 2u);  // steps 6 and 12
+  ASSERT_EQ(result.scores.size(), 2u);
+  EXPECT_EQ(result.scores[0].first, "ema_norm");
+  EXPECT_EQ(result.scores[0].second, norms.back());
+  EXPECT_EQ(result.scores[1].second, header.normalizer.lo()[0].item<double>());
+  const std::string metrics = ReadFile(run.metrics());
+  EXPECT_NE(metrics.find("\"step\": 6, \"val_loss\": "), std::string::npos);
+  EXPECT_NE(metrics.find("\"ema_norm\": "), std::string::npos);
 }
 
 TEST(TrainerTest, FreshRunRefusesAFolderWithCheckpoints) {

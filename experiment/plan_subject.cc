@@ -1,0 +1,99 @@
+// `flowplan plan`: the planner of --ckpt, --planner or --rrt-connect, and the
+// settings of the call.
+
+#include <filesystem>
+
+#include "classical/rrt_connect.h"
+#include "core/error.h"
+#include "datasets/generate_config.h"
+#include "experiment/command_line.h"
+#include "experiment/plan.h"
+#include "experiment/trained_planner.h"
+#include "planning/learned_planner.h"
+
+namespace flowplan::experiment {
+namespace fs = std::filesystem;
+namespace {
+
+/// The per-call settings of `planner` that `config` sets: every number the
+/// planner takes (by its key) and the guidance schedule.
+planning::PlanSettings CallSettings(const planning::LearnedPlanner& planner, const ExperimentConfig& config) {
+  std::map<std::string, double> numbers;
+  for (const auto& entry : config::ListNumbers(config.guidance, "guidance")) numbers.insert(entry);
+  for (const auto& entry : config::ListNumbers(config.sampler, "sampler")) numbers.insert(entry);
+  planning::PlanSettings settings;
+  for (const auto& [key, value] : planner.settings()) {
+    const auto found = numbers.find(key);
+    if (found != numbers.end() && found->second != value) settings.values[key] = found->second;
+  }
+  const std::string schedule = config::EnumName(config.guidance.schedule);
+  if (schedule != planner.schedule()) settings.schedule = schedule;
+  return settings;
+}
+
+/// An exported file takes every number of guidance.* and its sampler's settings
+/// per call; what is compiled into it cannot change.
+void CheckExportedKeys(const ExperimentConfig& exported, const ExperimentConfig& changed, const std::string& file) {
+  CheckSameNetwork(exported, changed, file);
+  const auto before = config::ListKeys(exported), after = config::ListKeys(changed);
+  for (size_t i = 0; i < before.size(); ++i) {
+    const std::string& key = before[i].key;
+    const bool compiled = key == "sampler.splitting" || key == "guidance.user_cost" || key.rfind("objective.ddpm.", 0) == 0;
+    if (compiled && before[i].default_value != after[i].default_value) {
+      throw Error(key + ": is compiled into " + file + " (" + before[i].default_value +
+                  "); plan from the run folder with --ckpt, or export again with the setting");
+    }
+  }
+}
+
+PlanSubject FromFile(const PlanArgs& args) {
+  PlanSubject subject;
+  auto planner = planning::LearnedPlanner::Load(args.planner_file);
+  const std::string where = args.planner_file + " (its config)";
+  subject.config = LoadExperimentText(planner->config_yaml(), where, args.overlay_path, args.overrides);
+  CheckExportedKeys(LoadExperimentText(planner->config_yaml(), where, "", {}), subject.config, args.planner_file);
+  subject.settings = CallSettings(*planner, subject.config);
+  subject.trajectory = planner->info();
+  subject.source = args.planner_file;
+  const fs::path parent = fs::path(args.planner_file).parent_path();
+  subject.run_folder = parent.empty() ? "." : parent.string();
+  subject.planner = std::move(planner);
+  return subject;
+}
+
+PlanSubject FromCheckpoint(const PlanArgs& args) {
+  PlanSubject subject;
+  TrainedPlanner loaded = LoadTrainedPlanner(args.ckpt, args.overlay_path, args.overrides);
+  subject.config = loaded.config;
+  subject.trajectory = loaded.planner->info();
+  subject.source = loaded.checkpoint;
+  subject.run_folder = RunFolderOf(loaded.checkpoint);
+  subject.planner = std::move(loaded.planner);
+  return subject;
+}
+
+/// RRT-Connect needs a robot and the trajectories to time its paths to: those
+/// the config's data generator makes (generate.*), no data file.
+PlanSubject FromRrtConnect(const PlanArgs& args) {
+  PlanSubject subject;
+  subject.config = LoadExperiment(args.overlay_path, args.overrides);
+  subject.trajectory = datasets::MakeTask(subject.config.generate)->Layout().info;
+  subject.source = "rrt_connect";
+  subject.run_folder = subject.config.run_dir;
+  subject.planner = std::make_unique<classical::RrtConnectPlanner>(subject.trajectory, subject.config.rrt_connect);
+  return subject;
+}
+
+}  // namespace
+
+PlanSubject LoadPlanSubject(const PlanArgs& args) {
+  const int given = !args.ckpt.empty() + !args.planner_file.empty() + args.rrt_connect;
+  if (given != 1) throw Error("plan: expected one of --ckpt RUN_DIR, --planner FILE or --rrt-connect");
+  PlanSubject subject = !args.planner_file.empty() ? FromFile(args)
+                        : args.rrt_connect         ? FromRrtConnect(args)
+                                                   : FromCheckpoint(args);
+  subject.robot = kinematics::MakeRobot(subject.trajectory.robot, subject.source + ": robot");
+  return subject;
+}
+
+}  // namespace flowplan::experiment

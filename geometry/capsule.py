@@ -1,0 +1,27 @@
+# TorchScript (compiled by flowplan at run time, jit/library.h): capsules
+# (stadiums in 2-D), the points within `radius` of the segment a-b. Row layout
+# (K, 2W + 1): a (W), b (W), radius.
+
+
+def capsule_columns(W: int) -> int:
+    return 2 * W + 1
+
+
+def capsule_problem(params: Tensor, W: int) -> str:
+    return check_non_negative(params[:, 2 * W], "radius")
+
+
+def capsule_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
+    """Signed distance from points (N, W) to capsules (K, 2W + 1) (negative
+    inside): (N, K), and its gradient with respect to the points (N, K, W). On
+    the segment the gradient is 0."""
+    W = points.size(1)
+    a = params[:, 0:W]
+    segment = params[:, W:2 * W] - a                                  # (K, W)
+    offset = points.unsqueeze(1) - a.unsqueeze(0)                     # (N, K, W)
+    length2 = (segment * segment).sum(-1)                             # (K,)
+    along = (offset * segment.unsqueeze(0)).sum(-1) / torch.where(length2 > 0.0, length2, torch.ones_like(length2)).unsqueeze(0)
+    along = torch.clamp(along, 0.0, 1.0)                              # (N, K), 0 for a point capsule
+    away = offset - along.unsqueeze(-1) * segment.unsqueeze(0)        # from the nearest point of the segment
+    length = torch.norm(away, 2, -1)
+    return length - params[:, 2 * W].unsqueeze(0), unit_or(away, length, torch.zeros([W], dtype=points.dtype, device=points.device))

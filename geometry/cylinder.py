@@ -1,0 +1,50 @@
+# TorchScript (compiled by flowplan at run time, jit/library.h): cylinders,
+# their axis the local z axis, centred at the centre. Row layout, 3-D (K, 9):
+# centre (3), radius, height, orientation quaternion (w, x, y, z). In 2-D a
+# cylinder is seen from the side, a rectangle 2·radius wide (local x) and
+# `height` long along its axis (local y): (K, 5) centre (2), radius, height,
+# angle (rad).
+
+
+def cylinder_columns(W: int) -> int:
+    return 9 if W == 3 else 5
+
+
+def cylinder_problem(params: Tensor, W: int) -> str:
+    problem = check_non_negative(params[:, W], "radius")
+    if problem != "":
+        return problem
+    problem = check_non_negative(params[:, W + 1], "height")
+    if problem != "":
+        return problem
+    if W == 3:
+        return check_quaternions(params[:, 5:9])
+    return ""
+
+
+def cylinder_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
+    """Signed distance from points (N, W) to cylinders (K, cylinder_columns(W))
+    (negative inside): (N, K), and its gradient with respect to the points
+    (N, K, W). On the axis the radial direction is taken along local x."""
+    W = points.size(1)
+    rotations = rotation_matrices(params[:, W + 2:])
+    local = to_local(points, params[:, 0:W], rotations)               # (N, K, W)
+    across = local[:, :, 0:W - 1]                                     # (N, K, W - 1)
+    along = local[:, :, W - 1]                                        # (N, K)
+    radial = torch.norm(across, 2, -1)                                # (N, K)
+    side = radial - params[:, W].unsqueeze(0)                         # > 0 outside the mantle
+    cap = along.abs() - 0.5 * params[:, W + 1].unsqueeze(0)          # > 0 beyond a cap
+    outside_side = torch.relu(side)
+    outside_cap = torch.relu(cap)
+    outside_length = torch.sqrt(outside_side * outside_side + outside_cap * outside_cap)
+    distance = outside_length + torch.clamp(torch.max(side, cap), max=0.0)
+    x_axis = torch.zeros([W - 1], dtype=points.dtype, device=points.device)
+    x_axis[0] = 1.0
+    radial_direction = unit_or(across, radial, x_axis)                # (N, K, W - 1)
+    axial_direction = sign_of(along)                                  # (N, K)
+    safe_length = torch.where(outside_length > 0.0, outside_length, torch.ones_like(outside_length))
+    radial_weight = torch.where(outside_length > 0.0, outside_side / safe_length, (side >= cap).to(points.dtype))
+    axial_weight = torch.where(outside_length > 0.0, outside_cap / safe_length, (side < cap).to(points.dtype))
+    direction = torch.cat([radial_direction * radial_weight.unsqueeze(-1),
+                           (axial_direction * axial_weight).unsqueeze(-1)], -1)
+    return distance, to_world(direction, rotations)

@@ -1,0 +1,97 @@
+# TorchScript (compiled by flowplan at run time, jit/library.h): a scene is a
+# Dict[str, Tensor] from obstacle kind to its rows, in world units, e.g.
+# {"spheres": (K1, W + 1), "boxes": (K2, 10)}; a kind with no obstacles is
+# absent. Obstacles are numbered in the dict's order (the kinds' order below:
+# spheres, boxes, cylinders, capsules), row by row.
+#
+# The shapes: one line per shape in each of the three functions below.
+
+
+def shape_kinds() -> List[str]:
+    return ["spheres", "boxes", "cylinders", "capsules"]
+
+
+def shape_columns(kind: str, W: int) -> int:
+    if kind == "spheres":
+        return sphere_columns(W)
+    if kind == "boxes":
+        return box_columns(W)
+    if kind == "cylinders":
+        return cylinder_columns(W)
+    if kind == "capsules":
+        return capsule_columns(W)
+    raise Exception("unknown obstacle kind " + kind)
+
+
+def shape_problem(kind: str, params: Tensor, W: int) -> str:
+    if kind == "spheres":
+        return sphere_problem(params, W)
+    if kind == "boxes":
+        return box_problem(params, W)
+    if kind == "cylinders":
+        return cylinder_problem(params, W)
+    if kind == "capsules":
+        return capsule_problem(params, W)
+    raise Exception("unknown obstacle kind " + kind)
+
+
+def shape_distance(kind: str, points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
+    if kind == "spheres":
+        return sphere_distance(points, params)
+    if kind == "boxes":
+        return box_distance(points, params)
+    if kind == "cylinders":
+        return cylinder_distance(points, params)
+    if kind == "capsules":
+        return capsule_distance(points, params)
+    raise Exception("unknown obstacle kind " + kind)
+
+
+def add_obstacles(scene: Dict[str, Tensor], kind: str, params: Optional[Tensor], W: int, where: str):
+    """Checks the rows `params` of one kind (an argument named `where` in
+    messages) and adds them to `scene`, after any rows of that kind already there."""
+    if params is None:
+        return
+    problem = check_rows(params, shape_columns(kind, W), kind)
+    if problem == "":
+        problem = shape_problem(kind, params.double(), W)
+    assert problem == "", where + ": " + problem
+    if params.size(0) == 0:
+        return
+    if kind in scene:
+        scene[kind] = torch.cat([scene[kind], params.to(scene[kind].dtype)], 0)
+    else:
+        scene[kind] = params
+
+
+def ordered_scene(scene: Dict[str, Tensor]) -> Dict[str, Tensor]:
+    """The same obstacles with the kinds in their canonical order."""
+    out: Dict[str, Tensor] = {}
+    for kind in shape_kinds():
+        if kind in scene:
+            out[kind] = scene[kind]
+    return out
+
+
+def scene_size(scene: Dict[str, Tensor]) -> int:
+    """K: the number of obstacles."""
+    total = 0
+    for kind, params in scene.items():
+        total += params.size(0)
+    return total
+
+
+def scene_distance(points: Tensor, scene: Dict[str, Tensor]) -> Tuple[Tensor, Tensor]:
+    """Signed distance from points (N, W) to every obstacle (negative inside):
+    (N, K), and its gradient with respect to the points (N, K, W)."""
+    distances: List[Tensor] = []
+    gradients: List[Tensor] = []
+    for kind, params in scene.items():
+        distance, gradient = shape_distance(kind, points, params.to(points.dtype))
+        distances.append(distance)
+        gradients.append(gradient)
+    if len(distances) == 0:
+        N = points.size(0)
+        W = points.size(1)
+        return torch.zeros([N, 0], dtype=points.dtype, device=points.device), torch.zeros([N, 0, W], dtype=points.dtype, device=points.device)
+    return torch.cat(distances, 1), torch.cat(gradients, 1)

@@ -1,0 +1,21 @@
+# TorchScript (compiled by flowplan at run time, jit/library.h): spherical
+# obstacles (discs in 2-D). Row layout (K, W + 1): centre (W), radius.
+
+
+def sphere_columns(W: int) -> int:
+    return W + 1
+
+
+def sphere_problem(params: Tensor, W: int) -> str:
+    """'' if the rows (K, W + 1) describe spheres, else what is wrong with which row."""
+    return check_non_negative(params[:, W], "radius")
+
+
+def sphere_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
+    """Signed distance from points (N, W) to spheres (K, W + 1) (negative inside):
+    (N, K), and its gradient with respect to the points (N, K, W). At a centre
+    the gradient is 0."""
+    W = points.size(1)
+    offset = points.unsqueeze(1) - params[:, 0:W].unsqueeze(0)
+    length = torch.norm(offset, 2, -1)
+    return length - params[:, W].unsqueeze(0), unit_or(offset, length, torch.zeros([W], dtype=points.dtype, device=points.device))

@@ -1,0 +1,26 @@
+# TorchScript (compiled by flowplan at run time, jit/library.h): helpers of
+# guidance (SPEC section 2). Settings travel as a Dict[str, float] `opts`
+# keyed by their config names ("guidance.scale", "guidance.clip", ...).
+
+
+def guidance_schedules() -> List[str]:
+    return ["one_minus_t", "ratio", "rising"]
+
+
+def schedule_factor(schedule: str, t: float) -> float:
+    """b_t, the factor on the cost gradient after the step that reached flow time t (0 noise, 1 data)."""
+    if schedule == "one_minus_t":
+        return 1.0 - t
+    if schedule == "ratio":
+        return (1.0 - t) / max(t, 1e-3)
+    if schedule == "rising":
+        return t
+    raise Exception("guidance.schedule: unknown schedule " + schedule + " (expected one_minus_t, ratio or rising)")
+
+
+def clip_states(gradient_q: Tensor, gradient_qd: Tensor, clip: float) -> Tuple[Tensor, Tensor]:
+    """Caps the norm of each state's gradient [g_q, g_qd] (B, T, 2J) at `clip` (raw units); 0: no cap."""
+    if clip <= 0.0:
+        return gradient_q, gradient_qd
+    divisor = torch.norm(torch.cat([gradient_q, gradient_qd], -1), 2, -1, True).clamp_min(clip) / clip
+    return gradient_q / divisor, gradient_qd / divisor

@@ -1,0 +1,42 @@
+# TorchScript (compiled by flowplan at run time, jit/library.h): the class
+# Guide, guidance of a sampler towards low cost (SPEC section 2). Costs see
+# raw (de-normalized) states x = [q, qd] (D = 2J); a guidance step moves the
+# normalized trajectories against
+#   sum_k w_k clip(dC_k/dx) * (hi - lo) / 2,
+# the chain rule through the normalizer. Submodules normalizer and costs (a
+# CostChain); attribute num_joints.
+
+
+def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
+    """Whether guidance runs: a non-zero scale and a term with something to do."""
+    return opts["guidance.scale"] != 0.0 and self.costs.active(scene, opts)
+
+
+def split(self, x: Tensor) -> Tuple[Tensor, Tensor]:
+    J = self.num_joints
+    return x[:, :, 0:J], x[:, :, J:2 * J]
+
+
+def value(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tensor:
+    """sum_k w_k C_k (B,) of raw trajectories x (B, T, D)."""
+    q, qd = self.split(x)
+    return self.costs.value(q, qd, scene, opts)
+
+
+def raw_gradient(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tensor:
+    """sum_k w_k clip(dC_k/dx) (B, T, D) at raw trajectories x (B, T, D)."""
+    q, qd = self.split(x)
+    grad_q, grad_qd = self.costs.gradient(q, qd, scene, opts)
+    return torch.cat([grad_q, grad_qd], 2)
+
+
+def gradient(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tensor:
+    """The guidance gradient (B, T, D) with respect to normalized trajectories x (B, T, D)."""
+    raw = self.normalizer.denormalize_unclamped(x)
+    return self.raw_gradient(raw, scene, opts) * self.normalizer.raw_per_normalized().to(x.dtype)
+
+
+def step(self, x: Tensor, t: float, scene: Dict[str, Tensor], opts: Dict[str, float], schedule: str) -> Tensor:
+    """One guidance step after the sampler step that reached flow time t:
+    x - scale * b_t * gradient(x), x (B, T, D) normalized."""
+    return x - (opts["guidance.scale"] * schedule_factor(schedule, t)) * self.gradient(x, scene, opts)

@@ -1,0 +1,14 @@
+# TorchScript (compiled by flowplan at run time, jit/library.h): the class
+# NoCost, the end of a CostChain.
+
+
+def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
+    return False
+
+
+def value(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tensor:
+    return torch.zeros([q.size(0)], dtype=q.dtype, device=q.device)
+
+
+def gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tuple[Tensor, Tensor]:
+    return torch.zeros_like(q), torch.zeros_like(qd)

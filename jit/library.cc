@@ -1,0 +1,180 @@
+#include "jit/library.h"
+
+#include <torch/csrc/jit/api/compilation_unit.h>
+#include <torch/csrc/jit/frontend/sugared_value.h>
+
+#include <map>
+#include <memory>
+
+#include "core/error.h"
+#include "core/format.h"
+
+namespace flowplan::jit {
+
+const char* const kScriptNamespace = "__torch__.flowplan";
+
+namespace {
+
+/// Resolves `torch` to the ATen builtins, `Exception` (for `raise`) and any
+/// other name to a function of `unit`.
+class FunctionResolver : public torch::jit::Resolver {
+ public:
+  explicit FunctionResolver(std::shared_ptr<torch::jit::CompilationUnit> unit) : unit_(std::move(unit)) {}
+
+  std::shared_ptr<torch::jit::SugaredValue> resolveValue(const std::string& name, torch::jit::GraphFunction&,
+                                                         const torch::jit::SourceRange&) override {
+    if (name == "torch") return std::make_shared<torch::jit::BuiltinModule>("aten");
+    if (name == "Exception") return std::make_shared<torch::jit::ExceptionValue>("Exception");
+    if (torch::jit::Function* function = unit_->find_function(c10::QualifiedName(std::string(kScriptNamespace) + "." + name))) {
+      return std::make_shared<torch::jit::FunctionValue>(function);
+    }
+    return nullptr;
+  }
+
+  c10::TypePtr resolveType(const std::string&, const torch::jit::SourceRange&) override { return nullptr; }
+
+ private:
+  std::shared_ptr<torch::jit::CompilationUnit> unit_;
+};
+
+struct Library {
+  std::shared_ptr<torch::jit::CompilationUnit> unit = std::make_shared<torch::jit::CompilationUnit>();
+  torch::jit::ResolverPtr resolver = std::make_shared<FunctionResolver>(unit);
+
+  Library() {
+    for (const EmbeddedScript& script : EmbeddedScripts()) {
+      if (!script.functions) continue;
+      try {
+        unit->define(c10::QualifiedName(kScriptNamespace), script.text, resolver, nullptr);
+      } catch (const std::exception& e) {
+        throw InternalError(std::string(script.path) + ": does not compile: " + e.what());
+      }
+    }
+  }
+};
+
+const Library& TheLibrary() {
+  static const Library library;  // never destroyed before the modules that call into it
+  return library;
+}
+
+std::string StripPrefix(std::string line) {
+  for (const char* prefix : {"RuntimeError: ", "AssertionError: ", "Exception: ", "builtins.", "RuntimeError: "}) {
+    const std::string p = prefix;
+    if (line.rfind(p, 0) == 0) line = line.substr(p.size());
+  }
+  return line;
+}
+
+}  // namespace
+
+const std::string& ScriptText(const std::string& path) {
+  static const std::map<std::string, std::string> texts = [] {
+    std::map<std::string, std::string> out;
+    for (const EmbeddedScript& script : EmbeddedScripts()) out.emplace(script.path, script.text);
+    return out;
+  }();
+  const auto found = texts.find(path);
+  if (found == texts.end()) throw InternalError("no embedded TorchScript file " + path);
+  return found->second;
+}
+
+torch::jit::ResolverPtr LibraryResolver() { return TheLibrary().resolver; }
+
+ModuleBuilder::ModuleBuilder(const std::string& class_name)
+    : module_(c10::QualifiedName(std::string(kScriptNamespace) + "." + class_name)) {}
+
+ModuleBuilder& ModuleBuilder::Buffer(const std::string& name, const torch::Tensor& value) {
+  module_.register_buffer(name, value.detach().clone());
+  return *this;
+}
+
+ModuleBuilder& ModuleBuilder::Attribute(const std::string& name, const c10::IValue& value) {
+  module_.register_attribute(name, value.type(), value);
+  return *this;
+}
+
+ModuleBuilder& ModuleBuilder::Attribute(const std::string& name, const c10::TypePtr& type,
+                                        const c10::IValue& value) {
+  module_.register_attribute(name, type, value);
+  return *this;
+}
+
+ModuleBuilder& ModuleBuilder::Submodule(const std::string& name, const torch::jit::Module& module) {
+  module_.register_module(name, module);
+  return *this;
+}
+
+ModuleBuilder& ModuleBuilder::Methods(const std::string& path) {
+  sources_.emplace_back(path, ScriptText(path));
+  user_.push_back(false);
+  return *this;
+}
+
+ModuleBuilder& ModuleBuilder::MethodsFromText(const std::string& text, const std::string& where) {
+  sources_.emplace_back(where, text);
+  user_.push_back(true);
+  return *this;
+}
+
+ModuleBuilder& ModuleBuilder::GeneratedMethods(const std::string& text, const std::string& where) {
+  sources_.emplace_back(where, text);
+  user_.push_back(false);
+  return *this;
+}
+
+torch::jit::Module ModuleBuilder::Build() {
+  FLOWPLAN_DEMAND(!built_);
+  built_ = true;
+  // One compilation of all sources, so that their methods may call each other in any order.
+  std::string all;
+  for (const auto& [where, text] : sources_) all += text + "\n";
+  try {
+    module_.define(all, LibraryResolver());
+  } catch (const std::exception& e) {
+    // A user's text is the likely culprit; otherwise the fault is flowplan's.
+    std::string users;
+    for (size_t i = 0; i < sources_.size(); ++i) {
+      if (user_[i]) users += (users.empty() ? "" : ", ") + sources_[i].first;
+    }
+    const std::string message = e.what();
+    if (!users.empty()) throw Error(users + ": does not compile as TorchScript: " + FirstLine(message));
+    std::string files;
+    for (const auto& source : sources_) files += (files.empty() ? "" : ", ") + source.first;
+    throw InternalError(module_.type()->name()->qualifiedName() + " (" + files + "): does not compile: " + message);
+  }
+  return module_;
+}
+
+std::string ScriptErrorMessage(const std::exception& e) {
+  std::string text = e.what();
+  // c10::Error carries a backtrace after the message; JITException the script's traceback before it.
+  if (const auto* c10_error = dynamic_cast<const c10::Error*>(&e)) text = c10_error->what_without_backtrace();
+  while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+  return StripPrefix(LastLine(text));
+}
+
+c10::IValue Call(const torch::jit::Module& module, const std::string& method, std::vector<c10::IValue> args,
+                 const torch::jit::Kwargs& kwargs) {
+  try {
+    return module.get_method(method)(std::move(args), kwargs);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(ScriptErrorMessage(e));
+  }
+}
+
+c10::IValue CallFunction(const std::string& name, std::vector<c10::IValue> args) {
+  const Library& library = TheLibrary();
+  torch::jit::Function* function =
+      library.unit->find_function(c10::QualifiedName(std::string(kScriptNamespace) + "." + name));
+  if (function == nullptr) throw InternalError("no TorchScript library function " + name);
+  try {
+    return (*function)(std::move(args));
+  } catch (const std::exception& e) {
+    throw Error(ScriptErrorMessage(e));
+  }
+}
+
+}  // namespace flowplan::jit

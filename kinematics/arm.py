@@ -1,0 +1,165 @@
+# TorchScript (compiled by flowplan at run time, jit/library.h): the class
+# Arm, batched kinematics of a tree of hinge joints (the Franka), built by
+# kinematics/robot.cc from a RobotDescription. Shapes: N configurations,
+# J joints, L links, S collision spheres, W = 3. The dtype and device of the
+# results follow q; the tables are float64 buffers.
+#
+# Buffers: fixed (L, 4, 4) link poses in their parents at q = 0; cross,
+# cross_sq (L, 4, 4) [a]x and [a]x^2 of each link's hinge axis; tcp_pose
+# (4, 4) the TCP in its link; sphere_links (S,) int64; sphere_local (S, 3);
+# sphere_radii (S,); joint_links (J,) int64; joint_axes (J, 3); ancestors
+# (J, S) 1 where joint j moves sphere s; tcp_ancestors (J,); home, lower,
+# upper (J,). Attributes: parents, joints (List[int], per link), tcp_link,
+# num_links, num_joints, workspace_dim, num_spheres, ik_* solver settings.
+
+
+def link_frames(self, q: Tensor) -> List[Tensor]:
+    """Link poses in the world, L tensors (N, 4, 4), for q (N, J)."""
+    fixed = self.fixed.to(q.dtype)
+    cross = self.cross.to(q.dtype)
+    cross_sq = self.cross_sq.to(q.dtype)
+    identity = torch.eye(4, dtype=q.dtype, device=q.device)
+    sin_q = torch.sin(q).unsqueeze(-1).unsqueeze(-1)
+    one_minus_cos = (1.0 - torch.cos(q)).unsqueeze(-1).unsqueeze(-1)
+    frames: List[Tensor] = []
+    for link in range(self.num_links):
+        joint = self.joints[link]
+        if joint >= 0:
+            # Rodrigues: R = I + sin(q) [a]x + (1 - cos(q)) [a]x^2, as a 4 x 4 pose.
+            local = torch.matmul(fixed[link], identity + sin_q[:, joint] * cross[link] + one_minus_cos[:, joint] * cross_sq[link])
+        else:
+            local = fixed[link].expand(q.size(0), 4, 4)
+        parent = self.parents[link]
+        frames.append(local if parent < 0 else torch.matmul(frames[parent], local))
+    return frames
+
+
+def tcp_frame(self, frames: List[Tensor]) -> Tensor:
+    """The TCP pose (N, 4, 4) from the link frames."""
+    carrier = frames[self.tcp_link]
+    return torch.matmul(carrier, self.tcp_pose.to(carrier.dtype))
+
+
+def hinges(self, frames: List[Tensor]) -> Tuple[Tensor, Tensor]:
+    """Unit hinge axes (N, J, 3) and points on them (N, J, 3) in the world."""
+    turned = torch.stack(frames, 1).index_select(1, self.joint_links.to(frames[0].device))
+    axes = torch.matmul(turned[:, :, 0:3, 0:3], self.joint_axes.to(turned.dtype).unsqueeze(-1)).squeeze(-1)
+    return axes, turned[:, :, 0:3, 3]
+
+
+def tcp(self, q: Tensor) -> Tensor:
+    """TCP positions (..., 3), m, of joint angles q (..., J), rad."""
+    assert q.dim() >= 1 and q.size(-1) == self.num_joints, "tcp: q: expected (..., " + str(self.num_joints) + "), got " + str(q.shape)
+    shape = q.shape[:-1]
+    flat = q.reshape(-1, self.num_joints)
+    return self.tcp_frame(self.link_frames(flat))[:, 0:3, 3].reshape(shape + [3])
+
+
+def spheres(self, q: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
+    """Collision sphere centres (N, S, 3) of q (N, J), with the hinge axes and
+    points (N, J, 3) that spheres_vjp needs."""
+    frames = self.link_frames(q)
+    carriers = torch.stack(frames, 1).index_select(1, self.sphere_links.to(q.device))
+    centres = torch.matmul(carriers[:, :, 0:3, 0:3], self.sphere_local.to(q.dtype).unsqueeze(-1)).squeeze(-1) + carriers[:, :, 0:3, 3]
+    axes, origins = self.hinges(frames)
+    return centres, axes, origins
+
+
+def spheres_vjp(self, centres: Tensor, axes: Tensor, origins: Tensor, g: Tensor) -> Tensor:
+    """d/dq of sum <g, centres(q)>, g (N, S, 3) -> (N, J), written out: with
+    dc_s/dq_j = A[j, s] a_j x (c_s - p_j) the product is
+    a_j . (sum_s A[j, s] c_s x g_s - p_j x sum_s A[j, s] g_s)."""
+    ancestors = self.ancestors.to(g.dtype)
+    moments = torch.matmul(ancestors, torch.cross(centres, g, -1))
+    forces = torch.matmul(ancestors, g)
+    return (axes * (moments - torch.cross(origins, forces, -1))).sum(-1)
+
+
+def tcp_vjp(self, q: Tensor, g: Tensor) -> Tensor:
+    """d/dq of sum <g, tcp(q)>: q (N, J), g (N, 3) -> (N, J), written out
+    (dp/dq_j = a_j x (p - o_j) for the joints that move the TCP)."""
+    frames = self.link_frames(q)
+    position = self.tcp_frame(frames)[:, 0:3, 3]
+    axes, origins = self.hinges(frames)
+    arm = position.unsqueeze(1) - origins
+    return (axes * torch.cross(arm, g.unsqueeze(1).expand_as(arm), -1)).sum(-1) * self.tcp_ancestors.to(q.dtype).unsqueeze(0)
+
+
+def sphere_centres(self, q: Tensor) -> Tensor:
+    """Collision sphere centres (..., S, 3) of q (..., J)."""
+    assert q.dim() >= 1 and q.size(-1) == self.num_joints, "sphere_centres: q: expected (..., " + str(self.num_joints) + "), got " + str(q.shape)
+    shape = q.shape[:-1]
+    centres, axes, origins = self.spheres(q.reshape(-1, self.num_joints))
+    return centres.reshape(shape + [self.num_spheres, 3])
+
+
+def collision_spheres(self, q: Tensor) -> Tensor:
+    """Centre and radius (..., S, 4) of every collision sphere of q (..., J)."""
+    centres = self.sphere_centres(q)
+    radii = self.sphere_radii.to(centres.dtype).expand(centres.shape[:-1]).unsqueeze(-1)
+    return torch.cat([centres, radii], -1)
+
+
+def ik_solve(self, targets: Tensor, seed: Tensor) -> Tuple[Tensor, Tensor, Tensor, Tensor]:
+    """Joint angles that put the TCP at targets (N, 3), m, with the TCP's
+    orientation at the home posture (the Franka's: the gripper pointing down),
+    from seed (N, J): damped least squares (steps of at most ik_max_step rad,
+    joints ik_limit_margin inside their limits) with a pull towards home in the
+    task's null space; converged configurations stop moving. float64.
+    Returns q (N, J), position error (N,) m, orientation error (N,) rad and
+    converged (N,) bool."""
+    target = targets.double()
+    N = target.size(0)
+    J = self.num_joints
+    home = self.home.view(1, J)
+    lower = self.lower.view(1, J) + self.ik_limit_margin
+    upper = self.upper.view(1, J) - self.ik_limit_margin
+    goal_rotation = self.tcp_frame(self.link_frames(home))[:, 0:3, 0:3]
+    moves_tcp = self.tcp_ancestors.view(1, J, 1)
+    identity = torch.eye(J, dtype=target.dtype).unsqueeze(0)
+    damping = self.ik_damping * self.ik_damping * torch.eye(6, dtype=target.dtype).unsqueeze(0)
+    q = torch.max(torch.min(seed.double(), upper), lower)
+    position_error = torch.zeros([N], dtype=target.dtype)
+    orientation_error = torch.zeros([N], dtype=target.dtype)
+    converged = position_error > 0.0
+    for iteration in range(self.ik_iterations + 1):
+        frames = self.link_frames(q)
+        tcp = self.tcp_frame(frames)
+        position = tcp[:, 0:3, 3]
+        error = torch.cat([target - position, rotation_vector(torch.matmul(goal_rotation, tcp[:, 0:3, 0:3].transpose(1, 2)))], 1)
+        position_error = torch.norm(error[:, 0:3], 2, 1)
+        orientation_error = torch.norm(error[:, 3:6], 2, 1)
+        converged = (position_error < self.ik_position_tolerance) & (orientation_error < self.ik_orientation_tolerance)
+        if iteration == self.ik_iterations or bool(converged.all()):
+            break
+        # Geometric Jacobian (N, 6, J): a_j x (p - o_j) and a_j for the joints that move the TCP.
+        axes, origins = self.hinges(frames)
+        axes = axes * moves_tcp
+        jacobian = torch.cat([torch.cross(axes, position.unsqueeze(1) - origins, -1), axes], 2).transpose(1, 2)
+        jt = jacobian.transpose(1, 2)
+        step = torch.matmul(jt, torch.linalg_solve(torch.matmul(jacobian, jt) + damping, error.unsqueeze(-1))).squeeze(-1)
+        null_space = identity - torch.matmul(torch.linalg_pinv(jacobian), jacobian)
+        step = step + self.ik_posture_gain * torch.matmul(null_space, (home - q).unsqueeze(-1)).squeeze(-1)
+        largest = step.abs().amax(1, True)
+        step = step * (self.ik_max_step / largest.clamp_min(self.ik_max_step))
+        step = step * torch.logical_not(converged).double().unsqueeze(1)
+        q = torch.max(torch.min(q + step, upper), lower)
+    return q, position_error, orientation_error, converged
+
+
+def ik(self, tcp: Tensor, seed: Optional[Tensor] = None) -> Tensor:
+    """Joint angles (..., J) that put the TCP at tcp (..., 3), m, with its
+    orientation at the home posture, solved from seed (..., J) if given and, for
+    targets that fails for, from home. Raises if a target is out of reach."""
+    assert tcp.dim() >= 1 and tcp.size(-1) == 3, "ik: tcp: expected (..., 3), TCP positions in m, got " + str(tcp.shape)
+    shape = tcp.shape[:-1]
+    target = tcp.reshape(-1, 3)
+    home = self.home.view(1, self.num_joints).expand(target.size(0), self.num_joints)
+    q, position_error, orientation_error, converged = self.ik_solve(target, home if seed is None else seed.reshape(-1, self.num_joints))
+    if seed is not None and not bool(converged.all()):
+        again, position_error2, orientation_error2, converged2 = self.ik_solve(target, home)
+        retry = torch.logical_not(converged).unsqueeze(1)
+        q = torch.where(retry, again, q)
+        converged = torch.where(retry.squeeze(1), converged2, converged)
+    assert bool(converged.all()), "ik: a target is out of reach with the TCP orientation of the home posture"
+    return q.reshape(shape + [self.num_joints]).to(tcp.dtype)

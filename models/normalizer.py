@@ -1,0 +1,23 @@
+# TorchScript (compiled by flowplan at run time, jit/library.h): the class
+# Normalizer, per-dimension min-max normalization to [-1, 1] (SPEC section 2).
+# Buffers lo, hi (D,) in raw units, float32. x: (..., D).
+
+
+def normalize(self, x: Tensor) -> Tensor:
+    """raw -> [-1, 1]."""
+    return (x - self.lo.to(x.dtype)) / (self.hi.to(x.dtype) - self.lo.to(x.dtype)) * 2.0 - 1.0
+
+
+def denormalize_unclamped(self, x: Tensor) -> Tensor:
+    """[-1, 1] -> raw, without clamping (for gradients through it)."""
+    return (x + 1.0) * 0.5 * (self.hi.to(x.dtype) - self.lo.to(x.dtype)) + self.lo.to(x.dtype)
+
+
+def denormalize(self, x: Tensor) -> Tensor:
+    """[-1, 1] -> raw, clamping to [-1, 1] first."""
+    return self.denormalize_unclamped(torch.clamp(x, -1.0, 1.0))
+
+
+def raw_per_normalized(self) -> Tensor:
+    """d(raw)/d(normalized) per dimension (D,): (hi - lo) / 2."""
+    return 0.5 * (self.hi - self.lo)

@@ -1,0 +1,83 @@
+#pragma once
+
+// Random planning problems whose straight path is blocked: reach start/goal
+// pairs for an arm, with 1 to K spheres of which the first sits on the
+// straight TCP segment between them (beyond the paper's single sphere).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "geometry/scene.h"
+#include "kinematics/robot.h"
+
+namespace flowplan::problems {
+
+/// How the problems are drawn.
+struct BlockedProblemsConfig {
+  int count = 100;                                     // problems
+  int min_spheres = 1;                                 // spheres per problem, uniform in [min, max]
+  int max_spheres = 8;
+  double min_radius = 0.05;                            // m, uniform in [min, max]
+  double max_radius = 0.12;
+  std::vector<double> lower = {0.35, -0.5, 0.15};      // (3,) m: start and goal TCP uniform in this box
+  std::vector<double> upper = {0.75, 0.5, 0.75};       // (the reach data set's box)
+  double min_length = 0.3;                             // m between start and goal TCP
+  double clearance = 0.02;                             // m between the start/goal arm's spheres and every obstacle
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("count", count, "number of problems", config::Positive());
+    v.Field("min_spheres", min_spheres, "fewest spheres per problem", config::Positive());
+    v.Field("max_spheres", max_spheres, "most spheres per problem", config::Positive());
+    v.Field("min_radius", min_radius, "smallest sphere radius (m)", config::Positive());
+    v.Field("max_radius", max_radius, "largest sphere radius (m)", config::Positive());
+    v.Field("lower", lower, "lower corner of the box start and goal TCP are drawn in (m)");
+    v.Field("upper", upper, "upper corner of that box (m)");
+    v.Field("min_length", min_length, "shortest start-goal TCP distance (m)", config::NonNegative());
+    v.Field("clearance", clearance, "gap between the start/goal arm and every sphere (m)", config::NonNegative());
+  }
+};
+
+/// One problem: joint start and goal (IK with the home posture's TCP
+/// orientation) and the spheres; the first sphere's centre is on the segment
+/// start_tcp–goal_tcp.
+struct BlockedProblem {
+  std::vector<double> start_tcp, goal_tcp;  // (3,) m
+  std::vector<double> start_q, goal_q;      // (J,) rad
+  geometry::Scene scene;                    // 1..max_spheres spheres
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("start_tcp", start_tcp, "start TCP (m)");
+    v.Field("goal_tcp", goal_tcp, "goal TCP (m)");
+    v.Field("start_q", start_q, "start joints (rad)");
+    v.Field("goal_q", goal_q, "goal joints (rad)");
+    v.Field("scene", scene, "the obstacles");
+  }
+};
+
+/// A file of problems (YAML), with what drew them.
+struct BlockedProblemSet {
+  int64_t seed = 0;
+  BlockedProblemsConfig drawn;
+  std::vector<BlockedProblem> problems;
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("seed", seed, "seed the problems were drawn from", config::NonNegative());
+    v.Field("drawn", drawn, "how they were drawn");
+    v.Field("problems", problems, "the problems");
+  }
+};
+
+/// Draws `config.count` problems; problem i depends only on (seed, i). Every
+/// start and goal is reachable, at least `min_length` apart, and its arm (all
+/// collision spheres) is `clearance` clear of every obstacle.
+/// @throws flowplan::Error naming the key for an inconsistent config, or if a
+///   problem cannot be drawn in 10,000 attempts (the box is unreachable).
+BlockedProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProblemsConfig& config,
+                                      uint64_t seed);
+
+}  // namespace flowplan::problems

@@ -1,0 +1,137 @@
+// The DDPM (MPD) sampler (planning/ddpm_sampler.py) with exact noise
+// predictors: sampling reaches the data, the chain's Gaussian moments match
+// closed form, and guidance acts where MPD's scheme says.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/error.h"
+#include "objectives/ddpm_schedule.h"
+#include "planning/assemble.h"
+#include "tests/support/planners.h"
+
+namespace flowplan::planning {
+namespace {
+
+/// The ideal noise predictor for data that is always `target` (T, D):
+/// ε(x_k, k) = (x_k − sqrt(ᾱ_k) target) / sqrt(1 − ᾱ_k).
+std::shared_ptr<models::TrajectoryNet> OracleNoise(const torch::Tensor& target, const objectives::DdpmSchedule& schedule) {
+  return std::make_shared<testing::ScriptedNet>(
+      target.size(1),
+      std::vector<std::string>{"a = self.p_alpha_bars.to(x.dtype).index_select(0, t.long()).view(-1, 1, 1)",
+                               "out = (x - torch.sqrt(a) * self.p_target) / torch.sqrt(1.0 - a)"},
+      std::vector<std::pair<std::string, torch::Tensor>>{{"alpha_bars", schedule.alpha_bars}, {"target", target}});
+}
+
+/// The ideal noise predictor for data whose every entry is N(mu, sigma²), independent:
+/// E[ε | x_k] = sqrt(1 − ᾱ) (x_k − sqrt(ᾱ) mu) / (ᾱ sigma² + 1 − ᾱ).
+std::shared_ptr<models::TrajectoryNet> GaussianNoise(double mu, double sigma, const objectives::DdpmSchedule& schedule,
+                                                     int64_t D) {
+  const std::string m = std::to_string(mu), v = std::to_string(sigma * sigma);
+  return std::make_shared<testing::ScriptedNet>(
+      D,
+      std::vector<std::string>{"a = self.p_alpha_bars.to(x.dtype).index_select(0, t.long()).view(-1, 1, 1)",
+                               "out = torch.sqrt(1.0 - a) * (x - torch.sqrt(a) * " + m + ") / (a * " + v + " + 1.0 - a)"},
+      std::vector<std::pair<std::string, torch::Tensor>>{{"alpha_bars", schedule.alpha_bars}});
+}
+
+std::unique_ptr<LearnedPlanner> Ddpm(models::NetworkPtr net, int64_t horizon, DdpmSamplerConfig sampler = {},
+                                     guidance::GuidanceConfig guidance = {}) {
+  PlannerParts parts = testing::Parts(std::move(net), testing::DiscTrajectory(horizon), testing::UnitNormalizer(4));
+  parts.objective.name = objectives::ObjectiveKind::kDdpm;
+  parts.sampler.ddpm = sampler;
+  parts.guidance = guidance;
+  return AssemblePlanner(parts);
+}
+
+TEST(DdpmSamplerTest, AnIdealNoisePredictorSamplesTheDataFromPureNoise) {
+  objectives::DdpmConfig config;  // MPD's 25 steps
+  const objectives::DdpmSchedule schedule(config);
+  const torch::Tensor target = 0.5 * torch::sin(torch::linspace(0, 3, 16)).view({16, 1}).expand({16, 4}).contiguous();
+  const auto planner = Ddpm(OracleNoise(target, schedule), 16);
+  torch::manual_seed(2);
+  const torch::Tensor start = target[0].expand({3, 4}), goal = target[15].expand({3, 4});
+  const torch::Tensor plans =
+      planner->PlanWithNoise(start, goal, torch::randn({3, 16, 4}), torch::randn({3, 24, 16, 4}));
+  EXPECT_LT((plans - target.unsqueeze(0)).abs().max().item<float>(), 1e-4);
+  // The first step already starts from (nearly) pure noise: ᾱ_{N−1} < 1e-3.
+  EXPECT_LT(schedule.alpha_bar(24), 1e-3);
+  EXPECT_THAT([&] { planner->PlanWithNoise(start, goal, torch::randn({3, 16, 4}), torch::randn({3, 16, 4})); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("plan: renoise: expected [3, 24, 16, 4], got [3, 16, 4]")));
+}
+
+TEST(DdpmSamplerTest, AncestralSamplingOfAGaussianMatchesItsMeanAndVariance) {
+  // Data N(0.2, 0.3²) per entry and its exact noise predictor: every step of
+  // the sampler is then linear-Gaussian, and the mean m and variance v of its
+  // samples follow in closed form from the schedule (DDPM's posterior
+  // q(x_{k−1} | x_k, x0) with variance β̃_k; derived here, not taken from the
+  // planner). 25 large steps with β̃ give a standard deviation below the
+  // data's (about 0.27): the chain, not the data, is the reference.
+  const double mu = 0.2, sigma = 0.3;
+  objectives::DdpmConfig config;
+  const objectives::DdpmSchedule schedule(config);
+  const auto planner = Ddpm(GaussianNoise(mu, sigma, schedule, 4), 8);
+  double m = 0.0, v = 1.0;  // x_{N−1}: pure noise
+  auto step = [&](int k, bool noisy) {
+    const double a = schedule.alpha_bar(k), a_before = schedule.alpha_bar_before(k), beta = schedule.beta(k);
+    const double s = std::sqrt(1 - a) / (a * sigma * sigma + 1 - a);            // ε̂ = s (x − sqrt(a) mu)
+    const double gain_x0 = 1 / std::sqrt(a) - std::sqrt(1 / a - 1) * s;          // x̂0 = gain_x0 x + shift_x0
+    const double shift_x0 = std::sqrt(1 / a - 1) * s * std::sqrt(a) * mu;
+    const double c1 = beta * std::sqrt(a_before) / (1 - a), c2 = (1 - a_before) * std::sqrt(1 - beta) / (1 - a);
+    m = (c1 * gain_x0 + c2) * m + c1 * shift_x0;
+    v = (c1 * gain_x0 + c2) * (c1 * gain_x0 + c2) * v + (noisy ? beta * (1 - a_before) / (1 - a) : 0.0);
+  };
+  for (int k = 24; k >= 0; --k) step(k, k > 0);
+  for (int e = 0; e < DdpmSamplerConfig{}.extra_steps; ++e) step(0, false);
+  torch::manual_seed(8);
+  const int64_t B = 2048;
+  const torch::Tensor ends = torch::full({B, 4}, 0.2f);
+  const torch::Tensor plans =
+      planner->PlanWithNoise(ends, ends, torch::randn({B, 8, 4}), torch::randn({B, 24, 8, 4}));
+  const torch::Tensor interior = plans.slice(1, 1, 7).to(torch::kFloat64);  // 49,152 samples
+  EXPECT_NEAR(interior.mean().item<double>(), m, 0.004);
+  EXPECT_NEAR(interior.std().item<double>(), std::sqrt(v), 0.01 * std::sqrt(v));
+  EXPECT_NEAR(m, mu, 0.01);
+  EXPECT_NEAR(std::sqrt(v), sigma, 0.15 * sigma);
+}
+
+TEST(DdpmSamplerTest, GuidanceInTheGuidedStepsAndTheExtraStepsPushesOutOfAnObstacle) {
+  // With the guided window empty (fraction 0) and no extra steps the oracle's plan is untouched;
+  // the last quarter of the steps alone, or the extra steps alone, push it out.
+  objectives::DdpmConfig config;
+  const objectives::DdpmSchedule schedule(config);
+  const torch::Tensor target = torch::zeros({16, 4});
+  guidance::GuidanceConfig guidance;
+  guidance.collision_weight = 1.0;
+  guidance.smoothness_weight = 0.0;
+  const auto planner = Ddpm(OracleNoise(target, schedule), 16, DdpmSamplerConfig{}, guidance);
+  const torch::Tensor start = torch::tensor({{-0.9f, 0.0f, 0.0f, 0.0f}}), goal = torch::tensor({{0.9f, 0.0f, 0.0f, 0.0f}});
+  torch::manual_seed(4);
+  const torch::Tensor noise = torch::randn({1, 16, 4}), renoise = torch::randn({1, 24, 16, 4});
+  // Off centre: a defined push direction.
+  const geometry::SceneRows obstacle = testing::Spheres(torch::tensor({{0.0f, -0.03f, 0.2f}}));
+  // The window and the extra steps are per-call settings of one planner.
+  auto plan = [&](double fraction, int extra) {
+    PlanSettings settings;
+    settings.values["sampler.ddpm.guide_fraction"] = fraction;
+    settings.values["sampler.ddpm.extra_steps"] = extra;
+    return planner->PlanWithNoise(start, goal, noise, renoise, obstacle, settings);
+  };
+  const torch::Tensor free = plan(0.0, 0);
+  // The oracle puts every interior state at the origin, inside the obstacle;
+  // guidance in the last steps pushes them out.
+  EXPECT_LT(free.slice(1, 1, 15).slice(2, 0, 2).norm(2, -1).max().item<float>(), 1e-4);
+  for (const auto& [fraction, extra] : {std::pair{0.25, 0}, std::pair{0.0, 5}, std::pair{0.25, 5}}) {
+    const torch::Tensor guided = plan(fraction, extra);
+    EXPECT_GT(guided.slice(1, 1, 15).slice(2, 0, 2).norm(2, -1).min().item<float>(), 0.01) << fraction << " " << extra;
+  }
+  PlanSettings fractional;
+  fractional.values["sampler.ddpm.extra_steps"] = 1.5;
+  EXPECT_THAT([&] { planner->PlanWithNoise(start, goal, noise, renoise, obstacle, fractional); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("sampler.ddpm.extra_steps: expected a whole number, got 1.5")));
+}
+
+}  // namespace
+}  // namespace flowplan::planning

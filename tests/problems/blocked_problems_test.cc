@@ -1,0 +1,110 @@
+// Random blocked problems, checked with plain geometry.
+
+#include "problems/blocked_problems.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/error.h"
+#include "sim/franka_model.h"
+
+namespace flowplan::problems {
+namespace {
+
+const kinematics::Robot& Franka() {
+  static const kinematics::Robot arm(sim::LoadFrankaModel().description());
+  return arm;
+}
+
+/// Distance from point c to the segment [a, b], by plain geometry.
+double DistanceToSegment(const std::vector<double>& a, const std::vector<double>& b, const std::vector<double>& c) {
+  double ab2 = 0.0, t = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    ab2 += (b[k] - a[k]) * (b[k] - a[k]);
+    t += (c[k] - a[k]) * (b[k] - a[k]);
+  }
+  t = std::clamp(t / ab2, 0.0, 1.0);
+  double d2 = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double p = a[k] + t * (b[k] - a[k]);
+    d2 += (c[k] - p) * (c[k] - p);
+  }
+  return std::sqrt(d2);
+}
+
+double Distance(const std::vector<double>& a, const std::vector<double>& b) {
+  double d2 = 0.0;
+  for (int k = 0; k < 3; ++k) d2 += (a[k] - b[k]) * (a[k] - b[k]);
+  return std::sqrt(d2);
+}
+
+TEST(BlockedProblemsTest, TheStraightPathIsBlockedAndStartAndGoalAreFreeAndReached) {
+  BlockedProblemsConfig config;
+  config.count = 6;
+  const BlockedProblemSet set = MakeBlockedProblems(Franka(), config, 3);
+  ASSERT_EQ(set.problems.size(), 6u);
+  size_t many = 0;
+  for (const BlockedProblem& p : set.problems) {
+    const auto& spheres = p.scene.spheres;
+    ASSERT_GE(spheres.size(), 1u);
+    ASSERT_LE(spheres.size(), 8u);
+    many += spheres.size() > 1;
+    EXPECT_GE(Distance(p.start_tcp, p.goal_tcp), config.min_length);
+    EXPECT_LT(DistanceToSegment(p.start_tcp, p.goal_tcp, spheres[0].centre), spheres[0].radius);
+    for (const geometry::SphereObstacle& s : spheres) {
+      EXPECT_GE(s.radius, config.min_radius);
+      EXPECT_LE(s.radius, config.max_radius);
+      EXPECT_GE(Distance(p.start_tcp, s.centre), s.radius + config.clearance);
+      EXPECT_GE(Distance(p.goal_tcp, s.centre), s.radius + config.clearance);
+    }
+    // The joints reach the TCP points (IK), and every collision sphere of both postures is clear.
+    const torch::Tensor q = torch::tensor(p.start_q, torch::kFloat64).view({1, 7});
+    const torch::Tensor both = torch::cat({q, torch::tensor(p.goal_q, torch::kFloat64).view({1, 7})});
+    const torch::Tensor tcp = Franka().Tcp(both);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(tcp[0][k].item<double>(), p.start_tcp[k], 1e-4);
+      EXPECT_NEAR(tcp[1][k].item<double>(), p.goal_tcp[k], 1e-4);
+    }
+    const torch::Tensor centres = Franka().SphereCentres(both), radii = Franka().SphereRadii();
+    for (const geometry::SphereObstacle& s : spheres) {
+      const torch::Tensor gap = (centres - torch::tensor(s.centre, torch::kFloat64)).norm(2, -1) - radii - s.radius;
+      EXPECT_GE(gap.min().item<double>(), config.clearance - 1e-9);
+    }
+  }
+  EXPECT_GT(many, 0u);  // 1 to 8 spheres: not all single ones
+}
+
+TEST(BlockedProblemsTest, ProblemIDependsOnlyOnTheSeedAndI) {
+  BlockedProblemsConfig config;
+  config.count = 3;
+  const std::string three = config::ToYaml(MakeBlockedProblems(Franka(), config, 9).problems);
+  config.count = 4;
+  BlockedProblemSet four = MakeBlockedProblems(Franka(), config, 9);
+  four.problems.pop_back();
+  EXPECT_EQ(config::ToYaml(four.problems), three);
+  EXPECT_NE(config::ToYaml(MakeBlockedProblems(Franka(), config, 10).problems.front()),
+            config::ToYaml(four.problems.front()));
+}
+
+TEST(BlockedProblemsTest, InconsistentSettingsAreNamed) {
+  BlockedProblemsConfig config;
+  config.min_spheres = 3;
+  config.max_spheres = 2;
+  EXPECT_THAT([&] { MakeBlockedProblems(Franka(), config, 0); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("min_spheres")));
+  config = BlockedProblemsConfig{};
+  config.lower = {0.35, -0.5};
+  EXPECT_THAT([&] { MakeBlockedProblems(Franka(), config, 0); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("lower")));
+  config = BlockedProblemsConfig{};
+  config.lower = {2.0, 2.0, 2.0};  // out of reach
+  config.upper = {2.1, 2.1, 2.1};
+  config.count = 1;
+  EXPECT_THAT([&] { MakeBlockedProblems(Franka(), config, 0); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("no problem 0")));
+}
+
+}  // namespace
+}  // namespace flowplan::problems
