@@ -1,6 +1,8 @@
 // `flowplan plan`: scores of the plans, the files it writes (HDF5 and JSON),
 // and the figure.
 
+#include <spdlog/spdlog.h>
+
 #include <cstdlib>
 #include <filesystem>
 
@@ -202,6 +204,7 @@ std::string DrawPlanFigure(const std::string& prefix) {
   }
   const std::string png = prefix + ".png";
   if (script.empty()) return "not drawn (no plot.py next to the binary or in the source tree)";
+  spdlog::debug("drawing {} with {}", png, script.string());
   const std::string call =
       std::string(FLOWPLAN_PYTHON) + " '" + script.string() + "' scene '" + prefix + ".h5' --out '" + png + "'";
   if (std::system(call.c_str()) != 0) return "not drawn (" + call + " failed)";

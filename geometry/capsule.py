@@ -24,4 +24,5 @@ def capsule_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
     along = torch.clamp(along, 0.0, 1.0)                              # (N, K), 0 for a point capsule
     away = offset - along.unsqueeze(-1) * segment.unsqueeze(0)        # from the nearest point of the segment
     length = torch.norm(away, 2, -1)
-    return length - params[:, 2 * W].unsqueeze(0), unit_or(away, length, torch.zeros([W], dtype=points.dtype, device=points.device))
+    # On the segment away is 0 and so is the quotient.
+    return length - params[:, 2 * W].unsqueeze(0), away / length.clamp_min(1e-30).unsqueeze(-1)

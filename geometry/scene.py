@@ -84,6 +84,9 @@ def scene_size(scene: Dict[str, Tensor]) -> int:
 def scene_distance(points: Tensor, scene: Dict[str, Tensor]) -> Tuple[Tensor, Tensor]:
     """Signed distance from points (N, W) to every obstacle (negative inside):
     (N, K), and its gradient with respect to the points (N, K, W)."""
+    if len(scene) == 1:
+        for kind, params in scene.items():
+            return shape_distance(kind, points, params.to(points.dtype))
     distances: List[Tensor] = []
     gradients: List[Tensor] = []
     for kind, params in scene.items():

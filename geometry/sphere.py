@@ -18,4 +18,5 @@ def sphere_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
     W = points.size(1)
     offset = points.unsqueeze(1) - params[:, 0:W].unsqueeze(0)
     length = torch.norm(offset, 2, -1)
-    return length - params[:, W].unsqueeze(0), unit_or(offset, length, torch.zeros([W], dtype=points.dtype, device=points.device))
+    # At a centre offset is 0 and so is the quotient.
+    return length - params[:, W].unsqueeze(0), offset / length.clamp_min(1e-30).unsqueeze(-1)

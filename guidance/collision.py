@@ -12,6 +12,10 @@ def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
     return opts[self.weight_key] != 0.0 and scene_size(scene) > 0
 
 
+def autograd_source(self, opts: Dict[str, float]) -> str:
+    return ""
+
+
 def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tuple[Tensor, Tensor, Tensor]:
     """q, qd (B, T, J) raw -> C (B,), dC/dq (B, T, J), dC/dqd (B, T, J), the
     gradient written out (through the robot's vector-Jacobian product)."""

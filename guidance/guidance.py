@@ -18,9 +18,8 @@ def schedule_factor(schedule: str, t: float) -> float:
     raise Exception("guidance.schedule: unknown schedule " + schedule + " (expected one_minus_t, ratio or rising)")
 
 
-def clip_states(gradient_q: Tensor, gradient_qd: Tensor, clip: float) -> Tuple[Tensor, Tensor]:
-    """Caps the norm of each state's gradient [g_q, g_qd] (B, T, 2J) at `clip` (raw units); 0: no cap."""
+def clip_states(gradient: Tensor, clip: float) -> Tensor:
+    """Caps the norm of each state's gradient (B, T, D) at `clip` (raw units); 0: no cap."""
     if clip <= 0.0:
-        return gradient_q, gradient_qd
-    divisor = torch.norm(torch.cat([gradient_q, gradient_qd], -1), 2, -1, True).clamp_min(clip) / clip
-    return gradient_q / divisor, gradient_qd / divisor
+        return gradient
+    return gradient / (torch.norm(gradient, 2, -1, True).clamp_min(clip) / clip)

@@ -12,6 +12,15 @@ def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
     return opts["guidance.scale"] != 0.0 and self.costs.active(scene, opts)
 
 
+def check_grad_mode(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]):
+    """Fails with one clear line if guidance would need autograd (a user's cost)
+    and the caller runs under torch.inference_mode(), where a new tensor (from
+    x, any tensor of the call) is an inference tensor."""
+    if self.active(scene, opts):
+        source = self.costs.autograd_source(opts)
+        assert source == "" or not (x * 0.0).is_inference(), source + ": a user cost takes its gradient by autograd, which cannot run under torch.inference_mode(); plan under torch.no_grad() instead"
+
+
 def split(self, x: Tensor) -> Tuple[Tensor, Tensor]:
     J = self.num_joints
     return x[:, :, 0:J], x[:, :, J:2 * J]
@@ -26,14 +35,13 @@ def value(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> 
 def raw_gradient(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tensor:
     """sum_k w_k clip(dC_k/dx) (B, T, D) at raw trajectories x (B, T, D)."""
     q, qd = self.split(x)
-    grad_q, grad_qd = self.costs.gradient(q, qd, scene, opts)
-    return torch.cat([grad_q, grad_qd], 2)
+    return self.costs.gradient(q, qd, scene, opts)
 
 
 def gradient(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tensor:
     """The guidance gradient (B, T, D) with respect to normalized trajectories x (B, T, D)."""
     raw = self.normalizer.denormalize_unclamped(x)
-    return self.raw_gradient(raw, scene, opts) * self.normalizer.raw_per_normalized().to(x.dtype)
+    return self.raw_gradient(raw, scene, opts) * self.normalizer.raw_per_normalized()
 
 
 def step(self, x: Tensor, t: float, scene: Dict[str, Tensor], opts: Dict[str, float], schedule: str) -> Tensor:

@@ -9,6 +9,10 @@ def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
     return opts[self.weight_key] != 0.0
 
 
+def autograd_source(self, opts: Dict[str, float]) -> str:
+    return ""
+
+
 def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tuple[Tensor, Tensor, Tensor]:
     """q, qd (B, T, J) raw -> C (B,), dC/dq, dC/dqd (B, T, J), written out."""
     margin = opts["guidance.joint_limit_margin"]

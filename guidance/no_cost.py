@@ -6,9 +6,13 @@ def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
     return False
 
 
+def autograd_source(self, opts: Dict[str, float]) -> str:
+    return ""
+
+
 def value(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tensor:
     return torch.zeros([q.size(0)], dtype=q.dtype, device=q.device)
 
 
-def gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tuple[Tensor, Tensor]:
-    return torch.zeros_like(q), torch.zeros_like(qd)
+def gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tensor:
+    return torch.zeros([q.size(0), q.size(1), q.size(2) + qd.size(2)], dtype=q.dtype, device=q.device)

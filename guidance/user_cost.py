@@ -12,6 +12,11 @@ def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
     return opts[self.weight_key] != 0.0
 
 
+def autograd_source(self, opts: Dict[str, float]) -> str:
+    """The file of this cost when it takes part (its gradient needs autograd), else ''."""
+    return self.source if opts[self.weight_key] != 0.0 else ""
+
+
 def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tuple[Tensor, Tensor, Tensor]:
     """q, qd (B, T, J) raw -> C (B,), dC/dq, dC/dqd (B, T, J), by autograd."""
     assert not q.is_inference(), self.source + ": a user cost takes its gradient by autograd, which cannot run under torch.inference_mode(); plan under torch.no_grad() instead"

@@ -2,6 +2,7 @@
 
 #include <torch/csrc/jit/api/compilation_unit.h>
 #include <torch/csrc/jit/frontend/sugared_value.h>
+#include <torch/csrc/jit/runtime/graph_executor.h>
 
 #include <map>
 #include <memory>
@@ -42,6 +43,11 @@ struct Library {
   torch::jit::ResolverPtr resolver = std::make_shared<FunctionResolver>(unit);
 
   Library() {
+    // Every call of a script runs the graph as compiled: the profiling executor would rewrite it after its
+    // first runs, so that a planner's first call and its later ones, on whichever thread, would not run the
+    // same ops (and it wraps autograd regions in differentiable graphs whose inputs break under inference
+    // mode). Measured on the Franka planner: the same speed either way.
+    torch::jit::setGraphExecutorOptimize(false);
     for (const EmbeddedScript& script : EmbeddedScripts()) {
       if (!script.functions) continue;
       try {

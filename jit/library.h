@@ -43,7 +43,10 @@ const std::string& ScriptText(const std::string& path);
 extern const char* const kScriptNamespace;
 
 /// Resolves `torch` and every library function by its bare name. The first
-/// call compiles the function files (thread-safe; later calls are free).
+/// call compiles the function files (thread-safe; later calls are free) and
+/// turns off the graph executor's rewrites for the process, so that every call
+/// of a script runs the same ops (results do not depend on which call or
+/// thread came first).
 /// @throws flowplan::InternalError with the compiler's message if a file does not compile.
 torch::jit::ResolverPtr LibraryResolver();
 

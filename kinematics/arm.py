@@ -5,7 +5,9 @@
 # results follow q; the tables are float64 buffers.
 #
 # Buffers: fixed (L, 4, 4) link poses in their parents at q = 0; cross,
-# cross_sq (L, 4, 4) [a]x and [a]x^2 of each link's hinge axis; tcp_pose
+# cross_sq (L, 4, 4) [a]x and [a]x^2 of each link's hinge axis; link_joint
+# (L,) int64 the joint turning each link (0 for a welded one) and link_turns
+# (L,) 1 for a turned link, 0 for a welded one; tcp_pose
 # (4, 4) the TCP in its link; sphere_links (S,) int64; sphere_local (S, 3);
 # sphere_radii (S,); joint_links (J,) int64; joint_axes (J, 3); ancestors
 # (J, S) 1 where joint j moves sphere s; tcp_ancestors (J,); home, lower,
@@ -15,22 +17,17 @@
 
 def link_frames(self, q: Tensor) -> List[Tensor]:
     """Link poses in the world, L tensors (N, 4, 4), for q (N, J)."""
-    fixed = self.fixed.to(q.dtype)
-    cross = self.cross.to(q.dtype)
-    cross_sq = self.cross_sq.to(q.dtype)
-    identity = torch.eye(4, dtype=q.dtype, device=q.device)
-    sin_q = torch.sin(q).unsqueeze(-1).unsqueeze(-1)
-    one_minus_cos = (1.0 - torch.cos(q)).unsqueeze(-1).unsqueeze(-1)
+    N = q.size(0)
+    angles = (q.index_select(1, self.link_joint.to(q.device)) * self.link_turns.to(q.dtype)).view(N, -1, 1, 1)
+    # Every link's pose in its parent at once (Rodrigues: R = I + sin [a]x + (1 - cos) [a]x^2; a welded link
+    # turns by 0), then the tree from the root outwards.
+    rotation = torch.eye(4, dtype=q.dtype, device=q.device) + torch.sin(angles) * self.cross.to(q.dtype) + \
+        (1.0 - torch.cos(angles)) * self.cross_sq.to(q.dtype)
+    local = torch.matmul(self.fixed.to(q.dtype), rotation)  # (N, L, 4, 4)
     frames: List[Tensor] = []
     for link in range(self.num_links):
-        joint = self.joints[link]
-        if joint >= 0:
-            # Rodrigues: R = I + sin(q) [a]x + (1 - cos(q)) [a]x^2, as a 4 x 4 pose.
-            local = torch.matmul(fixed[link], identity + sin_q[:, joint] * cross[link] + one_minus_cos[:, joint] * cross_sq[link])
-        else:
-            local = fixed[link].expand(q.size(0), 4, 4)
         parent = self.parents[link]
-        frames.append(local if parent < 0 else torch.matmul(frames[parent], local))
+        frames.append(local[:, link] if parent < 0 else torch.matmul(frames[parent], local[:, link]))
     return frames
 
 
@@ -40,9 +37,10 @@ def tcp_frame(self, frames: List[Tensor]) -> Tensor:
     return torch.matmul(carrier, self.tcp_pose.to(carrier.dtype))
 
 
-def hinges(self, frames: List[Tensor]) -> Tuple[Tensor, Tensor]:
-    """Unit hinge axes (N, J, 3) and points on them (N, J, 3) in the world."""
-    turned = torch.stack(frames, 1).index_select(1, self.joint_links.to(frames[0].device))
+def hinges(self, stacked: Tensor) -> Tuple[Tensor, Tensor]:
+    """Unit hinge axes (N, J, 3) and points on them (N, J, 3) in the world, from
+    the link frames stacked (N, L, 4, 4)."""
+    turned = stacked.index_select(1, self.joint_links.to(stacked.device))
     axes = torch.matmul(turned[:, :, 0:3, 0:3], self.joint_axes.to(turned.dtype).unsqueeze(-1)).squeeze(-1)
     return axes, turned[:, :, 0:3, 3]
 
@@ -58,10 +56,10 @@ def tcp(self, q: Tensor) -> Tensor:
 def spheres(self, q: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
     """Collision sphere centres (N, S, 3) of q (N, J), with the hinge axes and
     points (N, J, 3) that spheres_vjp needs."""
-    frames = self.link_frames(q)
-    carriers = torch.stack(frames, 1).index_select(1, self.sphere_links.to(q.device))
+    stacked = torch.stack(self.link_frames(q), 1)
+    carriers = stacked.index_select(1, self.sphere_links.to(q.device))
     centres = torch.matmul(carriers[:, :, 0:3, 0:3], self.sphere_local.to(q.dtype).unsqueeze(-1)).squeeze(-1) + carriers[:, :, 0:3, 3]
-    axes, origins = self.hinges(frames)
+    axes, origins = self.hinges(stacked)
     return centres, axes, origins
 
 
@@ -80,7 +78,7 @@ def tcp_vjp(self, q: Tensor, g: Tensor) -> Tensor:
     (dp/dq_j = a_j x (p - o_j) for the joints that move the TCP)."""
     frames = self.link_frames(q)
     position = self.tcp_frame(frames)[:, 0:3, 3]
-    axes, origins = self.hinges(frames)
+    axes, origins = self.hinges(torch.stack(frames, 1))
     arm = position.unsqueeze(1) - origins
     return (axes * torch.cross(arm, g.unsqueeze(1).expand_as(arm), -1)).sum(-1) * self.tcp_ancestors.to(q.dtype).unsqueeze(0)
 
@@ -133,7 +131,7 @@ def ik_solve(self, targets: Tensor, seed: Tensor) -> Tuple[Tensor, Tensor, Tenso
         if iteration == self.ik_iterations or bool(converged.all()):
             break
         # Geometric Jacobian (N, 6, J): a_j x (p - o_j) and a_j for the joints that move the TCP.
-        axes, origins = self.hinges(frames)
+        axes, origins = self.hinges(torch.stack(frames, 1))
         axes = axes * moves_tcp
         jacobian = torch.cat([torch.cross(axes, position.unsqueeze(1) - origins, -1), axes], 2).transpose(1, 2)
         jt = jacobian.transpose(1, 2)

@@ -62,6 +62,7 @@ torch::jit::Module BuildArm(const RobotDescription& d) {
   torch::Tensor positions = torch::empty({L + 1, 3}, torch::kFloat64), quaternions = torch::empty({L + 1, 4}, torch::kFloat64);
   std::vector<torch::Tensor> cross, cross_sq;
   c10::List<int64_t> parents, joints;
+  torch::Tensor link_joint = torch::zeros({L}, torch::kInt64), link_turns = torch::zeros({L}, torch::kFloat64);
   torch::Tensor joint_links = torch::zeros({J}, torch::kInt64), joint_axes = torch::zeros({J, 3}, torch::kFloat64);
   for (int64_t l = 0; l < L; ++l) {
     const RobotLink& link = d.links[static_cast<size_t>(l)];
@@ -73,6 +74,8 @@ torch::jit::Module BuildArm(const RobotDescription& d) {
     parents.push_back(link.parent);
     joints.push_back(link.joint);
     if (link.joint >= 0) {
+      link_joint[l] = static_cast<int64_t>(link.joint);
+      link_turns[l] = 1.0;
       joint_links[link.joint] = l;
       joint_axes[link.joint] = UnitAxis(link.axis);
     }
@@ -99,6 +102,8 @@ torch::jit::Module BuildArm(const RobotDescription& d) {
   builder.Buffer("fixed", poses.slice(0, 0, L))
       .Buffer("cross", torch::stack(cross))
       .Buffer("cross_sq", torch::stack(cross_sq))
+      .Buffer("link_joint", link_joint)
+      .Buffer("link_turns", link_turns)
       .Buffer("tcp_pose", poses[L])
       .Buffer("sphere_links", sphere_links)
       .Buffer("sphere_local", sphere_local)

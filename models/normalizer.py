@@ -4,13 +4,13 @@
 
 
 def normalize(self, x: Tensor) -> Tensor:
-    """raw -> [-1, 1]."""
-    return (x - self.lo.to(x.dtype)) / (self.hi.to(x.dtype) - self.lo.to(x.dtype)) * 2.0 - 1.0
+    """raw -> [-1, 1] (float64 x stays float64: the float32 statistics promote)."""
+    return (x - self.lo) / (self.hi - self.lo) * 2.0 - 1.0
 
 
 def denormalize_unclamped(self, x: Tensor) -> Tensor:
     """[-1, 1] -> raw, without clamping (for gradients through it)."""
-    return (x + 1.0) * 0.5 * (self.hi.to(x.dtype) - self.lo.to(x.dtype)) + self.lo.to(x.dtype)
+    return (x + 1.0) * 0.5 * (self.hi - self.lo) + self.lo
 
 
 def denormalize(self, x: Tensor) -> Tensor:

@@ -61,6 +61,7 @@ def plan(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Ten
     chosen = self.schedule if schedule is None else schedule
     assert chosen in guidance_schedules(), "plan: schedule: expected one of " + ", ".join(guidance_schedules()) + ", got " + chosen
     scene = self.call_scene(obstacles, spheres, boxes, cylinders, capsules)
+    self.sampler.guide.check_grad_mode(start, scene, opts)
     device = self.normalizer.lo.device
     for kind, params in scene.items():
         scene[kind] = params.to(device)

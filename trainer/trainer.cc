@@ -397,6 +397,7 @@ class TrainingRun {
 
   /// Validation loss and the evaluator's scores of the EMA weights into result_.
   void Evaluate() {
+    spdlog::info("evaluating the EMA weights at step {}", step_);
     ema_->eval();
     result_.val_loss = ValidationLoss(*objective_, *ema_, val_n_, setup_.objective.conditioning, config_.val_batch_size,
                                       StreamSeed(setup_.seed, kValidationStream));

@@ -14,6 +14,7 @@
 
 #include "checkpoints/checkpoint.h"
 #include "models/model_config.h"
+#include "tests/support/command.h"
 #include "tests/support/scratch_dir.h"
 
 namespace flowplan {
@@ -23,20 +24,11 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-struct Outcome {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-Outcome Flowplan(const std::string& arguments) {
-  const std::string command = std::string(FLOWPLAN_BINARY) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
+using flowplan::testing::ExpectCleanFailure;
+using flowplan::testing::ExpectOk;
+using flowplan::testing::Flowplan;
+using flowplan::testing::FlowplanInterruptedWhen;
+using flowplan::testing::Outcome;
 
 std::string Tiny() { return std::string(FLOWPLAN_SOURCE_DIR) + "/tests/cli/tiny.yaml"; }
 
@@ -53,21 +45,6 @@ class CliTest : public ::testing::Test {
 
   fs::path dir_;
 };
-
-void ExpectOk(const Outcome& outcome) { ASSERT_EQ(outcome.exit_code, 0) << outcome.output; }
-
-/// One clear line naming the problem, exit status 1, no stack dump.
-void ExpectCleanFailure(const Outcome& outcome, const std::string& names) {
-  EXPECT_EQ(outcome.exit_code, 1) << outcome.output;
-  std::vector<std::string> errors;  // lines that are not progress (info) lines
-  std::istringstream lines(outcome.output);
-  for (std::string line; std::getline(lines, line);) {
-    if (line.find("] [info] ") == std::string::npos) errors.push_back(line);
-  }
-  ASSERT_EQ(errors.size(), 1u) << outcome.output;
-  EXPECT_THAT(errors[0], HasSubstr("] [error] "));
-  EXPECT_THAT(errors[0], HasSubstr(names));
-}
 
 TEST_F(CliTest, ConfigsWithTheOlderModelArchitectureKeyStillLoad) {
   // Run folders and checkpoints written before model.architecture became model.name.
@@ -160,10 +137,10 @@ TEST_F(CliTest, TrainedNetworkCannotBeChangedByOverridesOrRetrainedInPlace) {
 
 TEST_F(CliTest, CtrlCDuringTrainingWritesACheckpointToResumeFrom) {
   ExpectOk(Generate());
-  // Long enough to be interrupted: SIGINT after 3 s.
-  const Outcome stopped =
-      Flowplan("train --config " + Tiny() + Paths() + " train.steps=100000 train.eval_every=0 --log-level info & "
-               "pid=$!; sleep 3; kill -INT $pid; wait $pid");
+  // SIGINT once it has logged step 2 of 100,000.
+  const Outcome stopped = FlowplanInterruptedWhen(
+      "train --config " + Tiny() + Paths() + " train.steps=100000 train.eval_every=0 --log-level info", "step 2/100000",
+      Path("train.log"));
   EXPECT_NE(stopped.exit_code, 0) << stopped.output;
   EXPECT_THAT(stopped.output, HasSubstr("interrupted at step"));
   EXPECT_THAT(stopped.output, HasSubstr("flowplan train --resume"));
@@ -173,10 +150,11 @@ TEST_F(CliTest, CtrlCDuringTrainingWritesACheckpointToResumeFrom) {
 
 TEST_F(CliTest, CtrlCDuringAnEvaluationStillLeavesTheStepsCheckpoint) {
   ExpectOk(Generate());
-  // The evaluation after step 1 plans 400,000 times (many seconds); SIGINT arrives during it.
-  const Outcome stopped =
-      Flowplan("train --config " + Tiny() + Paths() + " train.steps=100000 train.eval_every=1 "
-               "train.checkpoint_every=100000 eval.num_plans=400000 & pid=$!; sleep 3; kill -INT $pid; wait $pid");
+  // The evaluation after step 1 plans 400,000 times (many seconds); SIGINT once it has started.
+  const Outcome stopped = FlowplanInterruptedWhen(
+      "train --config " + Tiny() + Paths() + " train.steps=100000 train.eval_every=1 train.checkpoint_every=100000 "
+      "eval.num_plans=400000",
+      "evaluating the EMA weights at step 1", Path("train.log"));
   EXPECT_NE(stopped.exit_code, 0) << stopped.output;
   EXPECT_THAT(stopped.output, HasSubstr("interrupted at step 1; checkpoint "));
   EXPECT_TRUE(fs::exists(Path("run/checkpoints/step_00000001.pt"))) << stopped.output;

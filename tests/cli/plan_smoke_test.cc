@@ -14,6 +14,7 @@
 
 #include <unistd.h>
 
+#include "tests/support/command.h"
 #include "tests/support/scratch_dir.h"
 
 namespace flowplan {
@@ -22,44 +23,13 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-struct Outcome {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-Outcome RunCommand(const std::string& command_line) {
-  FILE* pipe = popen((command_line + " 2>&1").c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
-
-Outcome Flowplan(const std::string& arguments) { return RunCommand(std::string(FLOWPLAN_BINARY) + " " + arguments); }
-
-void ExpectOk(const Outcome& outcome) { ASSERT_EQ(outcome.exit_code, 0) << outcome.output; }
-
-void ExpectCleanFailure(const Outcome& outcome, const std::string& names) {
-  EXPECT_EQ(outcome.exit_code, 1) << outcome.output;
-  std::vector<std::string> errors;
-  std::istringstream lines(outcome.output);
-  for (std::string line; std::getline(lines, line);) {
-    if (line.find("] [info] ") == std::string::npos) errors.push_back(line);
-  }
-  ASSERT_EQ(errors.size(), 1u) << outcome.output;
-  EXPECT_THAT(errors[0], HasSubstr("] [error] "));
-  EXPECT_THAT(errors[0], HasSubstr(names));
-}
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-std::string Source(const std::string& path) { return std::string(FLOWPLAN_SOURCE_DIR) + "/" + path; }
+using flowplan::testing::ExpectCleanFailure;
+using flowplan::testing::ExpectOk;
+using flowplan::testing::Flowplan;
+using flowplan::testing::Outcome;
+using flowplan::testing::ReadText;
+using flowplan::testing::RunCommand;
+using flowplan::testing::Source;
 
 std::string CheckPlan(const std::string& prefix) {
   return std::string(FLOWPLAN_PYTHON) + " " + Source("tests/cli/check_plan.py") + " " + prefix + ".h5 " + prefix +
@@ -174,6 +144,47 @@ TEST_F(ParticlePlanTest, BadInputsEndInOneClearLine) {
   ExpectCleanFailure(Flowplan("plan --planner " + Path("run/planner.pt") + " --start 0,0 --goal 1,0 model.unet.groups=4"),
                      "model.unet.groups: the network was trained with");
   EXPECT_FALSE(fs::exists(Path("run/plan.h5")));  // nothing half-written by the failures
+}
+
+TEST(EagerReferenceTest, TheNetworkAndThePlansMatchAPlainPyTorchImplementation) {
+  // bench/eager_reference.py: the UNet, normalizer, Franka kinematics, costs and sampler written in plain PyTorch
+  // (torch.nn, autograd), loading a checkpoint's weights, against the planner flowplan exports from it.
+  const fs::path dir = flowplan::testing::ScratchDir();
+  auto path = [&](const std::string& name) { return (dir / name).string(); };
+  const std::string config = " --config " + Source("configs/franka_reach.yaml") + " generate.out=" + path("data.h5") +
+                             " data.path=" + path("data.h5") + " run_dir=" + path("run") +
+                             " generate.episodes=16 generate.franka.horizon=16 model.unet.down_dims=[8,16,32]"
+                             " train.steps=3 train.batch_size=4 train.eval_every=0 --log-level warn";
+  ExpectOk(Flowplan("generate" + config));
+  ExpectOk(Flowplan("train" + config));
+  ExpectOk(Flowplan("export --ckpt " + path("run") + " --out " + path("split.pt") + " sampler.splitting=midpoint --log-level warn"));
+  const Outcome check = RunCommand(std::string(FLOWPLAN_PYTHON) + " " + Source("bench/eager_reference.py") +
+                                   " --checkpoint " + path("run/checkpoints/step_00000003.pt") + " --export " +
+                                   path("split.pt") + " --threads 1 --json " + path("eager.json") + " --check-only");
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_THAT(check.output, HasSubstr("guided_shapes_split_plan"));
+}
+
+TEST(InstalledPlanTest, AnInstalledBinaryPlansAndDrawsFromAnotherFolder) {
+  // cmake --install into a fresh prefix, then everything from a folder that is neither the source nor the build
+  // tree, with a config the test writes there.
+  const fs::path dir = flowplan::testing::ScratchDir();
+  const std::string prefix = (dir / "prefix").string(), work = (dir / "work").string();
+  ExpectOk(RunCommand("cmake --install " + std::string(FLOWPLAN_BUILD_DIR) + " --prefix " + prefix));
+  fs::create_directories(work);
+  fs::copy_file(Source("tests/cli/tiny.yaml"), work + "/tiny.yaml");
+  const std::string binary = prefix + "/bin/flowplan";
+  auto installed = [&](const std::string& arguments) { return RunCommand("cd " + work + " && " + binary + " " + arguments); };
+  ExpectOk(installed("generate --config tiny.yaml generate.out=data.h5 data.path=data.h5 run_dir=run --log-level warn"));
+  ExpectOk(installed("train --config tiny.yaml generate.out=data.h5 data.path=data.h5 run_dir=run --log-level warn"));
+  const Outcome plan = installed("plan --ckpt run --start 0,0 --goal 1,0 --sphere 0.5,0.3,0.1 --box 0.3,0.7,0.1,0.1 "
+                                 "-n 4 --out p --log-level debug");
+  ExpectOk(plan);
+  EXPECT_THAT(plan.output, HasSubstr("with " + prefix + "/share/flowplan/plot.py"));
+  EXPECT_TRUE(fs::exists(work + "/p.png") && fs::exists(work + "/p.json") && fs::exists(work + "/p.h5"));
+  ExpectOk(installed("export --ckpt run --log-level warn"));
+  ExpectOk(installed("plan --planner run/planner.pt --start 0,0 --goal 1,0 --capsule 0.4,0.2,0.6,0.2,0.05 -n 2 --no-plot "
+                     "--out q --log-level warn"));
 }
 
 /// A Franka reach model trained for two steps: enough to exercise IK, FK, guidance and execution.

@@ -20,6 +20,7 @@
 #include <string>
 #include <thread>
 
+#include "tests/support/command.h"
 #include "tests/support/scratch_dir.h"
 
 namespace flowplan {
@@ -29,21 +30,12 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
 std::string Shell(const std::string& command, int* exit_code) {
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
-  const int status = pclose(pipe);
-  *exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return output;
+  const flowplan::testing::Outcome outcome = flowplan::testing::RunCommand(command);
+  *exit_code = outcome.exit_code;
+  return outcome.output;
 }
 
-std::string ReadText(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+std::string ReadText(const fs::path& path) { return flowplan::testing::ReadText(path.string()); }
 
 /// A TCP port nobody listens on right now.
 int FreePort() {
