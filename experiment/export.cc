@@ -4,6 +4,8 @@
 #include <spdlog/spdlog.h>
 
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "experiment/commands.h"
 #include "experiment/trained_planner.h"
@@ -30,9 +32,17 @@ Command AddExportCommand(CLI::App& app) {
                 args->out.empty() ? trainer::RunDir(RunFolderOf(loaded.checkpoint)).planner() : args->out;
             EnsureParentFolder(out);
             loaded.planner->Save(out);
-            const int64_t D = loaded.planner->state_dim(), T = loaded.planner->horizon();
-            spdlog::info("exported {} (step {}) to {}: plan(start (B, {}), goal (B, {}), noise (B, {}, {})) -> (B, {}, {})",
-                         loaded.checkpoint, loaded.step, out, D, D, T, D, T, D);
+            const planning::LearnedPlanner& planner = *loaded.planner;
+            const int64_t D = planner.state_dim(), T = planner.horizon();
+            auto batch_shape = [](const std::vector<int64_t>& shape) {
+              std::string text = "(B";
+              for (const int64_t n : shape) text += ", " + std::to_string(n);
+              return text + ")";
+            };
+            const std::string renoise =
+                planner.renoise_shape().empty() ? "" : ", renoise " + batch_shape(planner.renoise_shape());
+            spdlog::info("exported {} (step {}) to {}: plan(start (B, {}), goal (B, {}), noise {}{}, scene...) -> (B, {}, {})",
+                         loaded.checkpoint, loaded.step, out, D, D, batch_shape(planner.noise_shape()), renoise, T, D);
           }};
 }
 

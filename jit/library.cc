@@ -43,11 +43,6 @@ struct Library {
   torch::jit::ResolverPtr resolver = std::make_shared<FunctionResolver>(unit);
 
   Library() {
-    // Every call of a script runs the graph as compiled: the profiling executor would rewrite it after its
-    // first runs, so that a planner's first call and its later ones, on whichever thread, would not run the
-    // same ops (and it wraps autograd regions in differentiable graphs whose inputs break under inference
-    // mode). Measured on the Franka planner: the same speed either way.
-    torch::jit::setGraphExecutorOptimize(false);
     for (const EmbeddedScript& script : EmbeddedScripts()) {
       if (!script.functions) continue;
       try {
@@ -162,6 +157,7 @@ std::string ScriptErrorMessage(const std::exception& e) {
 
 c10::IValue Call(const torch::jit::Module& module, const std::string& method, std::vector<c10::IValue> args,
                  const torch::jit::Kwargs& kwargs) {
+  const torch::jit::GraphOptimizerEnabledGuard as_compiled(false);
   try {
     return module.get_method(method)(std::move(args), kwargs);
   } catch (const Error&) {
@@ -176,6 +172,7 @@ c10::IValue CallFunction(const std::string& name, std::vector<c10::IValue> args)
   torch::jit::Function* function =
       library.unit->find_function(c10::QualifiedName(std::string(kScriptNamespace) + "." + name));
   if (function == nullptr) throw InternalError("no TorchScript library function " + name);
+  const torch::jit::GraphOptimizerEnabledGuard as_compiled(false);
   try {
     return (*function)(std::move(args));
   } catch (const std::exception& e) {

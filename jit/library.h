@@ -43,10 +43,7 @@ const std::string& ScriptText(const std::string& path);
 extern const char* const kScriptNamespace;
 
 /// Resolves `torch` and every library function by its bare name. The first
-/// call compiles the function files (thread-safe; later calls are free) and
-/// turns off the graph executor's rewrites for the process, so that every call
-/// of a script runs the same ops (results do not depend on which call or
-/// thread came first).
+/// call compiles the function files (thread-safe; later calls are free).
 /// @throws flowplan::InternalError with the compiler's message if a file does not compile.
 torch::jit::ResolverPtr LibraryResolver();
 
@@ -84,7 +81,13 @@ class ModuleBuilder {
   bool built_ = false;
 };
 
-/// Runs `module.method(args..., kwargs)`. A failed assertion inside the script
+/// Runs `module.method(args..., kwargs)` with the graph executor's rewrites
+/// off for the call (LibTorch keeps that switch per thread): every call runs the
+/// graph as compiled, so results and speed do not depend on which call or
+/// thread came first. The profiling executor would instead spend its first
+/// calls on every thread profiling, and would wrap autograd regions in
+/// differentiable graphs whose inputs break under inference mode.
+/// A failed assertion inside the script
 /// becomes flowplan::Error carrying the assertion's message (its last line,
 /// e.g. "plan: start: expected (B, 14)"), so that scripts can check their
 /// arguments with one clear line.
@@ -92,7 +95,7 @@ c10::IValue Call(const torch::jit::Module& module, const std::string& method, st
                  const torch::jit::Kwargs& kwargs = {});
 
 /// Runs the library function `name` (e.g. "scene_distance") on `args`, with
-/// errors as Call.
+/// the executor and errors as Call.
 c10::IValue CallFunction(const std::string& name, std::vector<c10::IValue> args);
 
 /// The message a TorchScript failure carries, without its traceback: the last
