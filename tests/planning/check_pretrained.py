@@ -44,7 +44,7 @@ def frames(q):
 
 
 planner = torch.jit.load(sys.argv[1])
-robot = yaml.safe_load(planner.robot)
+robot = yaml.safe_load(planner.robot_description)
 links = np.array([s["link"] for s in robot["spheres"]])
 local = np.array([s["centre"] + [1.0] for s in robot["spheres"]])  # (S, 4)
 radii = np.array([s["radius"] for s in robot["spheres"]])
