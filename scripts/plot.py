@@ -114,7 +114,7 @@ def rotation(turn):
 
 
 def surface_points(kind, row, W, inflate=0.0):
-    """Points (M, W) on the surface of an obstacle (grown by `inflate`), for drawing its outline."""
+    """Points (N, W) on the surface of an obstacle (grown by `inflate`), for drawing its outline."""
     angles = np.linspace(0, 2 * np.pi, 48, endpoint=False)
     if W == 2:
         circle = np.stack([np.cos(angles), np.sin(angles)], 1)
@@ -201,10 +201,10 @@ def command_scene(args):
             if other is not None:
                 for i in range(len(other)):
                     ax.plot(other[i, :, a], other[i, :, b], color="0.6", lw=0.8, alpha=0.6,
-                            label="unguided" if i == 0 else None)
+                            label=args.compare_label if i == 0 else None)
             for i in range(len(tcp)):
                 ax.plot(tcp[i, :, a], tcp[i, :, b], color="tab:blue", lw=0.9, alpha=0.7,
-                        label=f"plans (scale {scale:g})" if i == 0 else None)
+                        label=(args.label or f"plans (scale {scale:g})") if i == 0 else None)
             if executed is not None:
                 for i in range(len(executed)):
                     ax.plot(executed[i, :, a], executed[i, :, b], color="tab:orange", lw=0.8, ls="--", alpha=0.8,
@@ -253,6 +253,8 @@ def main():
     p.add_argument("--data", help="particle: draw this dataset faintly underneath")
     p.add_argument("--episodes", type=int, default=200)
     p.add_argument("--compare", help="another plan file (e.g. unguided) drawn in grey")
+    p.add_argument("--compare-label", default="unguided", help="the legend's name of the --compare plans")
+    p.add_argument("--label", help="the legend's name of the plans (default: plans (scale S))")
     p.add_argument("--title")
     p.set_defaults(run=command_scene)
     for p in sub.choices.values():

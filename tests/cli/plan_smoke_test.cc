@@ -105,6 +105,26 @@ TEST_F(ParticlePlanTest, AnExportedFileTakesEveryGuidanceSettingPerCall) {
   EXPECT_EQ(std::system(compare.c_str()), 0);
 }
 
+TEST_F(ParticlePlanTest, AUserCostFileChangesThePlansInProcessAndFromTheExportedFile) {
+  // Keep the disc above y = 0.2 between start and goal (both at y = 0).
+  std::ofstream(Path("above.py")) << "def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
+                                     "    return (torch.relu(0.2 - self.robot.tcp(q)[:, :, 1]) ** 2).sum(1)\n";
+  const std::string common = " --start 0,0 --goal 1,0 --sphere 0.5,0.8,0.05 -n 16 --seed 5 --no-plot";
+  const std::string cost = " guidance.user_cost=" + Path("above.py") + " guidance.user_cost_weight=5";
+  ExpectOk(Flowplan("plan --ckpt " + Path("run") + common + " --out " + Path("no_cost")));
+  ExpectOk(Flowplan("plan --ckpt " + Path("run") + common + cost + " --out " + Path("cost_run")));
+  ExpectOk(Flowplan("export --ckpt " + Path("run") + cost + " --out " + Path("cost.pt") + " --log-level warn"));
+  ExpectOk(Flowplan("plan --planner " + Path("cost.pt") + common + " --out " + Path("cost_file")));
+  // The cost of every plan's interior states falls, in all to less than half; the exported file plans what the
+  // run folder plans.
+  const std::string compare =
+      std::string(FLOWPLAN_PYTHON) + " -c \"import h5py, numpy as np; p = lambda n: h5py.File('" + Path("") +
+      "' + n + '.h5')['plans'][...]; c = lambda n: (np.maximum(0.2 - p(n)[:, 1:-1, 1], 0) ** 2).sum(1); "
+      "assert np.all(c('cost_run') < c('no_cost')) and c('cost_run').sum() < 0.5 * c('no_cost').sum(), "
+      "(c('no_cost'), c('cost_run')); d = np.abs(p('cost_run') - p('cost_file')).max(); assert d < 1e-5, d\"";
+  EXPECT_EQ(std::system(compare.c_str()), 0);
+}
+
 TEST_F(ParticlePlanTest, SameSeedSameBytesForAnyThreadCountAndFromTheExportedFile) {
   const std::string common = " --start 0,0 --goal 1,0 --sphere 0.5,0.3,0.1 -n 40 --seed 9 --no-plot";
   ExpectOk(Flowplan("plan --ckpt " + Path("run") + common + " threads=1 --out " + Path("one")));

@@ -242,6 +242,22 @@ def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:
   }
 }
 
+TEST(UserCostTest, TheShippedExampleKeepsTheFrankaTcpAbove25Centimetres) {
+  // configs/costs/tcp_above.py (docs/planning.md): Σ_t relu(0.25 − z_t)² of the TCP height z.
+  GuidanceConfig config;
+  config.user_cost = std::string(FLOWPLAN_SOURCE_DIR) + "/configs/costs/tcp_above.py";
+  const torch::jit::Module user = Term(Guide(config, Franka()), 3);
+  const auto [q, qd] = FrankaStates(2, 4, 7);
+  const torch::Tensor z = Franka().Tcp(q.reshape({-1, 7})).select(1, 2).reshape({2, 4});
+  ASSERT_TRUE((z < 0.25).any().item<bool>() && (z > 0.25).any().item<bool>()) << "states on both sides of 0.25 m";
+  torch::NoGradGuard no_grad;
+  const Evaluated r = Evaluate(user, q, qd, geometry::SceneRows(), Opts(config));
+  EXPECT_TRUE(torch::allclose(r.value, torch::relu(0.25 - z).pow(2).sum(1), 0, 1e-12));
+  const auto [numeric_q, numeric_qd] = Numeric(user, q, qd, geometry::SceneRows(), Opts(config));
+  EXPECT_TRUE(torch::allclose(r.grad_q, numeric_q, 1e-6, 1e-7)) << (r.grad_q - numeric_q).abs().max();
+  EXPECT_TRUE(torch::allclose(r.grad_qd, torch::zeros_like(qd)));
+}
+
 TEST(UserCostTest, BadFilesAreOneClearError) {
   GuidanceConfig config;
   config.user_cost = WriteFile("typo.py", "def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
