@@ -256,9 +256,9 @@ class ArmKinematics(nn.Module):
         self.parents = [link["parent"] for link in links]
         self.joints = [link["joint"] for link in links]
         cross = [cross_matrix(link["axis"]) for link in links]
-        self.register_buffer("fixed", torch.stack([pose(l["pos"], l["quat"]) for l in links]).float())  # (L, 4, 4)
-        self.register_buffer("cross", torch.stack(cross).float())                                       # (L, 4, 4)
-        self.register_buffer("cross_sq", torch.stack([k @ k for k in cross]).float())                   # (L, 4, 4)
+        self.register_buffer("fixed", torch.stack([pose(l["pos"], l["quat"]) for l in links]).float())  # (links, 4, 4)
+        self.register_buffer("cross", torch.stack(cross).float())                                       # (links, 4, 4)
+        self.register_buffer("cross_sq", torch.stack([k @ k for k in cross]).float())                   # (links, 4, 4)
         self.register_buffer("sphere_links", torch.tensor([s["link"] for s in robot["spheres"]]))        # (S,)
         self.register_buffer("sphere_local", torch.tensor([s["centre"] for s in robot["spheres"]],
                                                           dtype=torch.float64).float())                  # (S, 3)

@@ -110,7 +110,7 @@ CheckpointHeader ReadCheckpointHeader(const std::string& path) {
                                                  ReadTensor(archive, path, "normalizer_hi"));
     c10::IValue parts;
     if (archive.try_read("rng_state_parts", parts)) {
-      if (!parts.isTensor() || parts.toTensor().dim() != 2) throw Error("\"rng_state_parts\" is not a (P, S) tensor");
+      if (!parts.isTensor() || parts.toTensor().dim() != 2) throw Error("\"rng_state_parts\" is not a 2-D tensor (a generator state per data part)");
       header.rng_states = parts.toTensor().unbind(0);
     } else {
       header.rng_states = {ReadTensor(archive, path, "rng_state")};

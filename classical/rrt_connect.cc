@@ -111,7 +111,7 @@ void Shortcut(og::PathGeometric& path, const ob::SpaceInformationPtr& si) {
   states = reduced;
 }
 
-/// T states along the joint-space polyline `points` (M, J), timed s(τ) = 3τ² − 2τ³ over (T − 1)·dt:
+/// T states along the joint-space polyline `points` (N, J), timed s(τ) = 3τ² − 2τ³ over (T − 1)·dt:
 /// (T, J) positions and (T, J) velocities.
 std::pair<torch::Tensor, torch::Tensor> TimeParametrize(const torch::Tensor& points, int64_t T, double dt) {
   const int64_t M = points.size(0), J = points.size(1);

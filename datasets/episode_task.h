@@ -17,23 +17,23 @@ namespace flowplan::datasets {
 /// What a task records, identical for every episode.
 struct EpisodeLayout {
   kinematics::TrajectoryInfo info;         // env (the file's "env" attribute), dt, T, state labels, robot
-  int64_t point_dim = 0;                   // P: size of a commanded start/goal point
+  int64_t point_dim = 0;                   // W: size of a commanded start/goal point
   std::map<std::string, int64_t> extras;   // name -> k for per-episode (T, k) arrays
 };
 
 /// A commanded start/goal pair that a family of training episodes shares.
 struct Family {
   std::string name;           // e.g. "(0,0)->(1,1)"
-  std::vector<double> start;  // (P,)
-  std::vector<double> goal;   // (P,)
+  std::vector<double> start;  // (W,)
+  std::vector<double> goal;   // (W,)
 };
 
 /// One rolled-out episode.
 struct EpisodeRecord {
   std::vector<double> states;                        // (T, D)
   std::map<std::string, std::vector<double>> extras;  // name -> (T, k)
-  std::vector<double> commanded_start;               // (P,)
-  std::vector<double> commanded_goal;                // (P,)
+  std::vector<double> commanded_start;               // (W,)
+  std::vector<double> commanded_goal;                // (W,)
   int32_t family = -1;                               // index into Families(), -1 if none
   int64_t simulator_warnings = 0;
   bool rejected = false;       // unstable or failed: counted, not kept

@@ -37,8 +37,8 @@ struct TrajectoryDataset {
   int64_t num_episodes = 0;               // N
   std::vector<float> states;              // (N, T, D)
   int64_t point_dim = 0;                  // P: size of a commanded start/goal point
-  std::vector<double> commanded_start;    // (N, P)
-  std::vector<double> commanded_goal;     // (N, P)
+  std::vector<double> commanded_start;    // (N, W)
+  std::vector<double> commanded_goal;     // (N, W)
   std::vector<int32_t> family;            // (N,) index of the start/goal family, -1 if none
   std::map<std::string, FloatArray> extras;  // per-episode arrays, (N, ...) each
   EvalPairs train_pairs;                  // pairs that training episodes connect

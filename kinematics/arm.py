@@ -1,13 +1,13 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): the class
 # Arm, batched kinematics of a tree of hinge joints (the Franka), built by
 # kinematics/robot.cc from a RobotDescription. Shapes: N configurations,
-# J joints, L links, S collision spheres, W = 3. The dtype and device of the
+# J joints, S collision spheres, W = 3 (a link count is written "links"). The dtype and device of the
 # results follow q; the tables are float64 buffers.
 #
-# Buffers: fixed (L, 4, 4) link poses in their parents at q = 0; cross,
-# cross_sq (L, 4, 4) [a]x and [a]x^2 of each link's hinge axis; link_joint
-# (L,) int64 the joint turning each link (0 for a welded one) and link_turns
-# (L,) 1 for a turned link, 0 for a welded one; tcp_pose
+# Buffers: fixed (links, 4, 4) link poses in their parents at q = 0; cross,
+# cross_sq (links, 4, 4) [a]x and [a]x^2 of each link's hinge axis; link_joint
+# (links,) int64 the joint turning each link (0 for a welded one) and link_turns
+# (links,) 1 for a turned link, 0 for a welded one; tcp_pose
 # (4, 4) the TCP in its link; sphere_links (S,) int64; sphere_local (S, 3);
 # sphere_radii (S,); joint_links (J,) int64; joint_axes (J, 3); ancestors
 # (J, S) 1 where joint j moves sphere s; tcp_ancestors (J,); home, lower,
@@ -16,14 +16,14 @@
 
 
 def link_frames(self, q: Tensor) -> List[Tensor]:
-    """Link poses in the world, L tensors (N, 4, 4), for q (N, J)."""
+    """Link poses in the world, one tensor (N, 4, 4) per link, for q (N, J)."""
     N = q.size(0)
     angles = (q.index_select(1, self.link_joint.to(q.device)) * self.link_turns.to(q.dtype)).view(N, -1, 1, 1)
     # Every link's pose in its parent at once (Rodrigues: R = I + sin [a]x + (1 - cos) [a]x^2; a welded link
     # turns by 0), then the tree from the root outwards.
     rotation = torch.eye(4, dtype=q.dtype, device=q.device) + torch.sin(angles) * self.cross.to(q.dtype) + \
         (1.0 - torch.cos(angles)) * self.cross_sq.to(q.dtype)
-    local = torch.matmul(self.fixed.to(q.dtype), rotation)  # (N, L, 4, 4)
+    local = torch.matmul(self.fixed.to(q.dtype), rotation)  # (N, links, 4, 4)
     frames: List[Tensor] = []
     for link in range(self.num_links):
         parent = self.parents[link]
@@ -39,7 +39,7 @@ def tcp_frame(self, frames: List[Tensor]) -> Tensor:
 
 def hinges(self, stacked: Tensor) -> Tuple[Tensor, Tensor]:
     """Unit hinge axes (N, J, 3) and points on them (N, J, 3) in the world, from
-    the link frames stacked (N, L, 4, 4)."""
+    the link frames stacked (N, links, 4, 4)."""
     turned = stacked.index_select(1, self.joint_links.to(stacked.device))
     axes = torch.matmul(turned[:, :, 0:3, 0:3], self.joint_axes.to(turned.dtype).unsqueeze(-1)).squeeze(-1)
     return axes, turned[:, :, 0:3, 3]

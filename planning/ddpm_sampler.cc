@@ -18,11 +18,11 @@ torch::jit::Module BuildDdpmSampler(const SamplerContext& context) {
   // The posterior q(x_{k-1} | x_k, x0) of the schedule: mean = mean_x0 x0 + mean_x x_k, std noise_std;
   // x0 = x0_from_x x_k - x0_from_eps eps.
   const objectives::DdpmSchedule schedule(parts.objective.ddpm);
-  const int N = schedule.steps;
-  torch::Tensor x0_from_x = torch::empty({N}, torch::kFloat64), x0_from_eps = torch::empty({N}, torch::kFloat64);
-  torch::Tensor mean_x0 = torch::empty({N}, torch::kFloat64), mean_x = torch::empty({N}, torch::kFloat64);
-  torch::Tensor noise_std = torch::empty({N}, torch::kFloat64);
-  for (int k = 0; k < N; ++k) {
+  const int steps = schedule.steps;
+  torch::Tensor x0_from_x = torch::empty({steps}, torch::kFloat64), x0_from_eps = torch::empty({steps}, torch::kFloat64);
+  torch::Tensor mean_x0 = torch::empty({steps}, torch::kFloat64), mean_x = torch::empty({steps}, torch::kFloat64);
+  torch::Tensor noise_std = torch::empty({steps}, torch::kFloat64);
+  for (int k = 0; k < steps; ++k) {
     const double a = schedule.alpha_bar(k), a_before = schedule.alpha_bar_before(k), beta = schedule.beta(k);
     x0_from_x[k] = 1.0 / std::sqrt(a);
     x0_from_eps[k] = std::sqrt(1.0 / a - 1.0);
@@ -40,7 +40,7 @@ torch::jit::Module BuildDdpmSampler(const SamplerContext& context) {
       .Buffer("mean_x", mean_x)
       .Buffer("noise_std", noise_std)
       .Attribute("conditioning", std::string(config::EnumName(parts.objective.conditioning)))
-      .Attribute("diffusion_steps", static_cast<int64_t>(N))
+      .Attribute("diffusion_steps", static_cast<int64_t>(steps))
       .Methods("planning/ddpm_sampler.py")
       .Build();
 }

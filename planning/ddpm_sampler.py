@@ -1,10 +1,10 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): the class
-# DdpmSampler, Motion Planning Diffusion's sampler: N ancestral DDPM steps of
+# DdpmSampler, Motion Planning Diffusion's sampler: diffusion_steps ancestral DDPM steps of
 # an epsilon-predicting network, guidance on the posterior mean (several
-# gradient steps) in the last ceil(guide_fraction N) steps, then extra
+# gradient steps) in the last ceil(guide_fraction · diffusion_steps) steps, then extra
 # noise-free guided steps. Submodules network, normalizer and guide; buffers
-# x0_from_x, x0_from_eps, mean_x0, mean_x, noise_std (N,) float64 (the
-# schedule's coefficients); attributes conditioning, diffusion_steps (N).
+# x0_from_x, x0_from_eps, mean_x0, mean_x, noise_std (diffusion_steps,)
+# float64 (the schedule's coefficients); attributes conditioning, diffusion_steps.
 # Settings: sampler.ddpm.* and the guide's.
 
 
@@ -24,19 +24,19 @@ def denoise(self, x: Tensor, k: int, start: Tensor, goal: Tensor, guided: bool,
 
 def sample(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Tensor],
            scene: Dict[str, Tensor], opts: Dict[str, float], schedule: str) -> Tensor:
-    """start, goal (B, D) raw; noise (B, T, D); renoise (B, N - 1, T, D), the
+    """start, goal (B, D) raw; noise (B, T, D); renoise (B, diffusion_steps - 1, T, D), the
     noise of the ancestral steps -> plans (B, T, D) raw."""
     assert renoise is not None, "plan: renoise: expected the noise of the DDPM steps"
     inpainting = self.conditioning == "inpaint"
     s = self.normalizer.normalize(start)
     g = self.normalizer.normalize(goal)
     guided = self.guide.active(scene, opts)
-    N = self.diffusion_steps
-    guided_steps = ceil_int(opts["sampler.ddpm.guide_fraction"] * N - 1e-9)
+    steps = self.diffusion_steps
+    guided_steps = ceil_int(opts["sampler.ddpm.guide_fraction"] * steps - 1e-9)
     noise_scale = opts["sampler.ddpm.noise_scale"]
     x = conditioned(noise, s, g, inpainting)
-    for j in range(N):
-        k = N - 1 - j
+    for j in range(steps):
+        k = steps - 1 - j
         x = self.denoise(x, k, s, g, guided and k < guided_steps, scene, opts)
         if k > 0:
             x = x + (noise_scale * float(self.noise_std[k])) * renoise[:, j]

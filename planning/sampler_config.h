@@ -22,14 +22,14 @@ inline const config::EnumNames<Splitting>& EnumEntries(Splitting) {
 
 /// How the DDPM planner samples and guides (Motion Planning Diffusion's scheme).
 struct DdpmSamplerConfig {
-  double guide_fraction = 0.25;  // guidance in the last ceil(fraction · N) denoising steps
+  double guide_fraction = 0.25;  // guidance in the last ceil(fraction · steps) denoising steps
   int guide_iterations = 5;      // gradient steps on the posterior mean per guided step
   int extra_steps = 5;           // noise-free denoising steps at k = 0 after the chain, guided
   double noise_scale = 1.0;      // factor on the standard deviation of the noise each step adds
 
   template <class V>
   void Visit(V& v) {
-    v.Field("guide_fraction", guide_fraction, "guide the last ceil(fraction * N) denoising steps",
+    v.Field("guide_fraction", guide_fraction, "guide the last ceil(fraction * steps) denoising steps",
             config::Probability());
     v.Field("guide_iterations", guide_iterations, "gradient steps per guided denoising step", config::NonNegative());
     v.Field("extra_steps", extra_steps, "noise-free guided steps at the end", config::NonNegative());
