@@ -82,7 +82,12 @@ void BM_Plan(benchmark::State& state) {
   const torch::Tensor goal = (lo + (hi - lo) * 0.6).expand({c.B, 14}).contiguous();
   const torch::Tensor noise = torch::randn({c.B, 64, 14}), renoise = torch::randn({c.B, 64, 14});
   const torch::Tensor obstacles = c.spheres > 0 ? Obstacles(c.spheres) : torch::Tensor();
+  // Two calls before timing: a script's first call compiles its graphs, and under LibTorch's default executor
+  // (what a caller of the exported file gets) the first two calls also profile them (docs/export.md).
   if (!c.exported) {
+    for (int warm = 0; warm < 2; ++warm) {
+      planner->PlanWithNoise(start, goal, noise, c.split ? renoise : torch::Tensor(), geometry::SphereRows(obstacles));
+    }
     for (auto _ : state) {
       benchmark::DoNotOptimize(planner->PlanWithNoise(start, goal, noise, c.split ? renoise : torch::Tensor(),
                                                       geometry::SphereRows(obstacles)));
@@ -96,6 +101,7 @@ void BM_Plan(benchmark::State& state) {
     const torch::jit::IValue re = c.split ? torch::jit::IValue(renoise) : torch::jit::IValue();
     const torch::jit::IValue ob = c.spheres > 0 ? torch::jit::IValue(obstacles) : torch::jit::IValue();
     torch::NoGradGuard no_grad;
+    for (int warm = 0; warm < 2; ++warm) module.run_method("plan", start, goal, noise, re, ob);
     for (auto _ : state) benchmark::DoNotOptimize(module.run_method("plan", start, goal, noise, re, ob));
   }
   state.counters["plans/s"] =

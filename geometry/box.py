@@ -19,17 +19,17 @@ def box_problem(params: Tensor, W: int) -> str:
 
 
 def box_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
-    """Signed distance from points (N, W) to boxes (K, box_columns(W)) (negative
-    inside): (N, K), and its gradient with respect to the points (N, K, W):
+    """Signed distance from points (M, W) to boxes (K, box_columns(W)) (negative
+    inside): (M, K), and its gradient with respect to the points (M, K, W):
     outside, the direction from the nearest surface point; inside, the normal of
     the nearest face."""
     W = points.size(1)
     rotations = rotation_matrices(params[:, 2 * W:])
-    local = to_local(points, params[:, 0:W], rotations)               # (N, K, W)
+    local = to_local(points, params[:, 0:W], rotations)               # (M, K, W)
     gap = local.abs() - 0.5 * params[:, W:2 * W].unsqueeze(0)       # per axis, > 0 outside that slab
     outside = torch.relu(gap)
-    outside_length = torch.norm(outside, 2, -1)                        # (N, K)
-    deepest, face = torch.max(gap, -1)                                 # (N, K)
+    outside_length = lengths(outside)                                 # (M, K)
+    deepest, face = torch.max(gap, -1)                                 # (M, K)
     distance = outside_length + torch.clamp(deepest, max=0.0)
     towards_outside = outside / torch.where(outside_length > 0.0, outside_length, torch.ones_like(outside_length)).unsqueeze(-1)
     face_normal = torch.zeros_like(gap).scatter_(-1, face.unsqueeze(-1), 1.0)

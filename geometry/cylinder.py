@@ -23,15 +23,15 @@ def cylinder_problem(params: Tensor, W: int) -> str:
 
 
 def cylinder_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
-    """Signed distance from points (N, W) to cylinders (K, cylinder_columns(W))
-    (negative inside): (N, K), and its gradient with respect to the points
-    (N, K, W). On the axis the radial direction is taken along local x."""
+    """Signed distance from points (M, W) to cylinders (K, cylinder_columns(W))
+    (negative inside): (M, K), and its gradient with respect to the points
+    (M, K, W). On the axis the radial direction is taken along local x."""
     W = points.size(1)
     rotations = rotation_matrices(params[:, W + 2:])
-    local = to_local(points, params[:, 0:W], rotations)               # (N, K, W)
-    across = local[:, :, 0:W - 1]                                     # (N, K, W - 1)
-    along = local[:, :, W - 1]                                        # (N, K)
-    radial = torch.norm(across, 2, -1)                                # (N, K)
+    local = to_local(points, params[:, 0:W], rotations)               # (M, K, W)
+    across = local[:, :, 0:W - 1]                                     # (M, K, W - 1)
+    along = local[:, :, W - 1]                                        # (M, K)
+    radial = lengths(across)                                          # (M, K)
     side = radial - params[:, W].unsqueeze(0)                         # > 0 outside the mantle
     cap = along.abs() - 0.5 * params[:, W + 1].unsqueeze(0)          # > 0 beyond a cap
     outside_side = torch.relu(side)
@@ -40,8 +40,8 @@ def cylinder_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
     distance = outside_length + torch.clamp(torch.max(side, cap), max=0.0)
     x_axis = torch.zeros([W - 1], dtype=points.dtype, device=points.device)
     x_axis[0] = 1.0
-    radial_direction = unit_or(across, radial, x_axis)                # (N, K, W - 1)
-    axial_direction = sign_of(along)                                  # (N, K)
+    radial_direction = unit_or(across, radial, x_axis)                # (M, K, W - 1)
+    axial_direction = sign_of(along)                                  # (M, K)
     safe_length = torch.where(outside_length > 0.0, outside_length, torch.ones_like(outside_length))
     radial_weight = torch.where(outside_length > 0.0, outside_side / safe_length, (side >= cap).to(points.dtype))
     axial_weight = torch.where(outside_length > 0.0, outside_cap / safe_length, (side < cap).to(points.dtype))

@@ -21,15 +21,25 @@ def rotation_matrices(rotation: Tensor) -> Tensor:
 
 
 def to_local(points: Tensor, centres: Tensor, rotations: Tensor) -> Tensor:
-    """points (N, W), centres (K, W), rotations (K, W, W) -> (N, K, W): each point
+    """points (M, W), centres (K, W), rotations (K, W, W) -> (M, K, W): each point
     in each shape's frame, R_k^T (p - c_k)."""
-    offset = points.unsqueeze(1) - centres.unsqueeze(0)
-    return (offset.unsqueeze(3) * rotations.unsqueeze(0)).sum(2)
+    offset = points.unsqueeze(0) - centres.unsqueeze(1)                     # (K, M, W)
+    return torch.bmm(offset, rotations).transpose(0, 1)                      # rows times R_k
 
 
 def to_world(vectors: Tensor, rotations: Tensor) -> Tensor:
-    """vectors (N, K, W) in the shapes' frames, rotations (K, W, W) -> (N, K, W): R_k v."""
-    return (rotations.unsqueeze(0) * vectors.unsqueeze(2)).sum(3)
+    """vectors (M, K, W) in the shapes' frames, rotations (K, W, W) -> (M, K, W): R_k v."""
+    return torch.bmm(vectors.transpose(0, 1), rotations.transpose(1, 2)).transpose(0, 1)
+
+
+def lengths(vectors: Tensor) -> Tensor:
+    """Euclidean lengths (...) of vectors (..., W), summed coordinate by
+    coordinate (a reduction over a last dimension of 2 or 3 is slow in ATen)."""
+    squares = vectors * vectors
+    total = squares.select(-1, 0)
+    for i in range(1, vectors.size(-1)):
+        total = total + squares.select(-1, i)
+    return torch.sqrt(total)
 
 
 def sign_of(x: Tensor) -> Tensor:

@@ -82,8 +82,8 @@ def scene_size(scene: Dict[str, Tensor]) -> int:
 
 
 def scene_distance(points: Tensor, scene: Dict[str, Tensor]) -> Tuple[Tensor, Tensor]:
-    """Signed distance from points (N, W) to every obstacle (negative inside):
-    (N, K), and its gradient with respect to the points (N, K, W)."""
+    """Signed distance from points (M, W) to every obstacle (negative inside):
+    (M, K), and its gradient with respect to the points (M, K, W)."""
     if len(scene) == 1:
         for kind, params in scene.items():
             return shape_distance(kind, points, params.to(points.dtype))
@@ -94,7 +94,7 @@ def scene_distance(points: Tensor, scene: Dict[str, Tensor]) -> Tuple[Tensor, Te
         distances.append(distance)
         gradients.append(gradient)
     if len(distances) == 0:
-        N = points.size(0)
+        M = points.size(0)
         W = points.size(1)
-        return torch.zeros([N, 0], dtype=points.dtype, device=points.device), torch.zeros([N, 0, W], dtype=points.dtype, device=points.device)
+        return torch.zeros([M, 0], dtype=points.dtype, device=points.device), torch.zeros([M, 0, W], dtype=points.dtype, device=points.device)
     return torch.cat(distances, 1), torch.cat(gradients, 1)

@@ -12,11 +12,11 @@ def sphere_problem(params: Tensor, W: int) -> str:
 
 
 def sphere_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
-    """Signed distance from points (N, W) to spheres (K, W + 1) (negative inside):
-    (N, K), and its gradient with respect to the points (N, K, W). At a centre
+    """Signed distance from points (M, W) to spheres (K, W + 1) (negative inside):
+    (M, K), and its gradient with respect to the points (M, K, W). At a centre
     the gradient is 0."""
     W = points.size(1)
     offset = points.unsqueeze(1) - params[:, 0:W].unsqueeze(0)
-    length = torch.norm(offset, 2, -1)
+    length = lengths(offset)
     # At a centre offset is 0 and so is the quotient.
-    return length - params[:, W].unsqueeze(0), offset / length.clamp_min(1e-30).unsqueeze(-1)
+    return length - params[:, W].unsqueeze(0), offset * torch.reciprocal(length.clamp_min(1e-30)).unsqueeze(-1)

@@ -25,14 +25,15 @@ def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], op
     if scene_size(scene) == 0:
         return torch.zeros([B], dtype=q.dtype, device=q.device), torch.zeros_like(q), torch.zeros_like(qd)
     centres, axes, origins = self.robot.spheres(q.reshape(B * T, J))
-    N = centres.size(0)
+    M = centres.size(0)
     S = centres.size(1)
     W = centres.size(2)
-    distance, normal = scene_distance(centres.reshape(N * S, W), scene)
+    distance, normal = scene_distance(centres.reshape(M * S, W), scene)
     K = distance.size(1)
     reach = opts["guidance.margin"] + self.robot.sphere_radii.to(q.dtype).view(1, S, 1)
-    penetration = torch.relu(reach - distance.view(N, S, K))
-    # d/dc_s of sum_k relu(reach - d_k(c_s)) = -sum_k [active] grad d_k(c_s).
-    grad_centres = -((penetration > 0).to(q.dtype).unsqueeze(-1) * normal.view(N, S, K, W)).sum(2)
+    penetration = torch.relu(reach - distance.view(M, S, K))
+    # d/dc_s of sum_k relu(reach - d_k(c_s)) = -sum_k [active] grad d_k(c_s), as one batched product.
+    active = (penetration > 0).to(q.dtype).view(M * S, 1, K)
+    grad_centres = -torch.bmm(active, normal).view(M, S, W)
     grad_q = self.robot.spheres_vjp(centres, axes, origins, grad_centres).view(B, T, J)
     return penetration.sum([1, 2]).view(B, T).sum(1), grad_q, torch.zeros_like(qd)
