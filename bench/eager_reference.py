@@ -3,18 +3,20 @@
 
 The speed reference that bench/speed_bench.cc sets beside the C++ planner and
 trainer: the UNet1D (models/unet1d.cc) as torch.nn modules holding a
-checkpoint's EMA weights, the min-max normalizer (models/normalizer.cc), the
+checkpoint's EMA weights, the min-max normalizer (models/normalizer.py), the
 Franka's forward kinematics and collision spheres from the checkpoint's robot
-description (kinematics/arm_kinematics.cc), the collision and smoothness
-guidance costs (guidance/) with their gradient taken by autograd, the Euler
-sampler with inpainting, guidance and midpoint splitting
-(planning/flow_planner.cc, planning/euler.cc) and a flow-matching training
-step with AdamW (objectives/flow_matching.cc, objectives/trajectory_loss.cc).
+description (kinematics/arm.py), signed distances to spheres, boxes,
+cylinders and capsules (geometry/), the collision and smoothness guidance
+costs (guidance/) with their gradient taken by autograd, the Euler sampler
+with inpainting, guidance and midpoint splitting (planning/flow_sampler.py)
+and a flow-matching training step with AdamW (objectives/flow_matching.cc,
+objectives/trajectory_loss.cc). The files named are what each part
+reimplements, not what it reads.
 Nothing here is imported from flowplan or read from the exported planner's
 code: the exported planner only serves as the reference the results are
 checked against (and its ik() gives the checks' start and goal joints).
 
-usage: eager_reference.py --checkpoint CKPT --export PLANNER.pt --threads N
+usage: eager_reference.py --checkpoint CKPT --export PLANNER.pt --threads THREADS
                           --json OUT.json [--repeats R] [--check-only]
 
 Checks (max abs differences, written to the JSON under "checks"):
@@ -109,8 +111,8 @@ class UNet1D(nn.Module):
     """Velocity network: x (B, T, D) normalized, t (B,) flow time, cond (B, C)
     or None -> (B, T, D).
 
-    Levels i = 0 .. N-1 of widths down_dims[i]; T halves after every level but
-    the last. The up path has N-1 levels, each concatenating the skip of the
+    Levels i = 0 .. len(down_dims) - 1 of widths down_dims[i]; T halves after every level but
+    the last. The up path has len(down_dims) - 1 levels, each concatenating the skip of the
     matching down level (deepest first; the shallowest skip is not used) and
     doubling T with a transposed convolution."""
 
@@ -266,14 +268,14 @@ class ArmKinematics(nn.Module):
                                                           dtype=torch.float64).float())                  # (S,)
 
     def link_frames(self, q):
-        """q (N, J) rad -> link poses in the world (N, L, 4, 4)."""
+        """q (M, J) rad -> link poses in the world (M, links, 4, 4)."""
         identity = torch.eye(4, dtype=q.dtype)
-        sin_q = torch.sin(q).unsqueeze(-1).unsqueeze(-1)             # (N, J, 1, 1)
+        sin_q = torch.sin(q).unsqueeze(-1).unsqueeze(-1)             # (M, J, 1, 1)
         one_minus_cos = (1.0 - torch.cos(q)).unsqueeze(-1).unsqueeze(-1)
         frames = []
         for l, (parent, j) in enumerate(zip(self.parents, self.joints)):
             if j >= 0:
-                rotation = identity + sin_q[:, j] * self.cross[l] + one_minus_cos[:, j] * self.cross_sq[l]  # (N, 4, 4)
+                rotation = identity + sin_q[:, j] * self.cross[l] + one_minus_cos[:, j] * self.cross_sq[l]  # (M, 4, 4)
                 local = torch.matmul(self.fixed[l], rotation)
             else:
                 local = self.fixed[l].expand(q.size(0), 4, 4)
@@ -281,8 +283,8 @@ class ArmKinematics(nn.Module):
         return torch.stack(frames, 1)
 
     def sphere_centres(self, q):
-        """q (N, J) -> collision sphere centres (N, S, 3) in the world."""
-        carriers = self.link_frames(q).index_select(1, self.sphere_links)  # (N, S, 4, 4)
+        """q (M, J) -> collision sphere centres (M, S, 3) in the world."""
+        carriers = self.link_frames(q).index_select(1, self.sphere_links)  # (M, S, 4, 4)
         return torch.matmul(carriers[:, :, 0:3, 0:3], self.sphere_local.unsqueeze(-1)).squeeze(-1) + carriers[:, :, 0:3, 3]
 
 
@@ -303,7 +305,7 @@ def quaternion_rotation(quaternion):
 
 
 def in_frame(points, centres, rotations):
-    """points (N, 3) in the frames of K shapes: (N, K, 3) = R_k^T (p - c_k)."""
+    """points (M, 3) in the frames of K shapes: (M, K, 3) = R_k^T (p - c_k)."""
     return torch.einsum("kji,nkj->nki", rotations, points.unsqueeze(1) - centres.unsqueeze(0))
 
 
@@ -317,7 +319,7 @@ def rectangle_distance(p, half):
 
 
 def scene_distance(points, scene):
-    """Signed distance (N, K) of points (N, 3) to every obstacle of a scene {kind: rows}."""
+    """Signed distance (M, K) of points (M, 3) to every obstacle of a scene {kind: rows}."""
     columns = []
     for kind, rows in scene.items():
         rows = rows.to(points.dtype)
@@ -353,10 +355,10 @@ class CollisionCost:
     def __call__(self, x, scene):
         B, T = x.shape[:2]
         J = self.kinematics.num_joints
-        q = x[:, :, 0:J].reshape(B * T, J)                                    # (N, J), N = B T
-        centres = self.kinematics.sphere_centres(q)                           # (N, S, 3)
-        N, S = centres.shape[:2]
-        distance = scene_distance(centres.reshape(N * S, 3), scene).view(N, S, -1)  # (N, S, K)
+        q = x[:, :, 0:J].reshape(B * T, J)                                    # (M, J), M = B T
+        centres = self.kinematics.sphere_centres(q)                           # (M, S, 3)
+        M, S = centres.shape[:2]
+        distance = scene_distance(centres.reshape(M * S, 3), scene).view(M, S, -1)  # (M, S, K)
         penetration = torch.relu(self.margin + self.kinematics.sphere_radii.view(1, -1, 1) - distance)
         return penetration.sum([1, 2]).view(B, T).sum(1)
 

@@ -47,7 +47,7 @@ torch::Tensor ToTensor(const ob::State* state, int64_t J) {
 /// Checks a whole motion with one batched validity call over its interpolated states.
 class BatchedMotionValidator : public ob::MotionValidator {
  public:
-  using ValidFn = std::function<torch::Tensor(const torch::Tensor&)>;  // (N, J) float64 -> (N,) bool
+  using ValidFn = std::function<torch::Tensor(const torch::Tensor&)>;  // (M, J) float64 -> (M,) bool
   BatchedMotionValidator(ob::SpaceInformation* si, ValidFn check) : ob::MotionValidator(si), check_(std::move(check)) {}
 
   bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
@@ -111,7 +111,7 @@ void Shortcut(og::PathGeometric& path, const ob::SpaceInformationPtr& si) {
   states = reduced;
 }
 
-/// T states along the joint-space polyline `points` (N, J), timed s(τ) = 3τ² − 2τ³ over (T − 1)·dt:
+/// T states along the joint-space polyline `points` (M, J), timed s(τ) = 3τ² − 2τ³ over (T − 1)·dt:
 /// (T, J) positions and (T, J) velocities.
 std::pair<torch::Tensor, torch::Tensor> TimeParametrize(const torch::Tensor& points, int64_t T, double dt) {
   const int64_t M = points.size(0), J = points.size(1);
@@ -167,8 +167,8 @@ RrtConnectPlanner::RrtConnectPlanner(const kinematics::TrajectoryInfo& trajector
 }
 
 torch::Tensor RrtConnectPlanner::Valid(const torch::Tensor& q, const geometry::SceneRows& scene) const {
-  const int64_t N = q.size(0);
-  if (geometry::CountObstacles(scene) == 0) return torch::ones({N}, torch::kBool);
+  const int64_t M = q.size(0);
+  if (geometry::CountObstacles(scene) == 0) return torch::ones({M}, torch::kBool);
   return (robot_->Clearance(q, scene) >= config_.margin).all(1);
 }
 

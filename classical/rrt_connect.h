@@ -56,8 +56,8 @@ class RrtConnectPlanner : public planning::Planner {
 
   planning::PlanResult Plan(const planning::PlanRequest& request) const override;
 
-  /// Whether configurations q (N, J) keep every sphere `margin` away from every obstacle of `scene`:
-  /// the robot's clearance (kinematics::Robot::Clearance), (N,) bool.
+  /// Whether configurations q (M, J) keep every sphere `margin` away from every obstacle of `scene`:
+  /// the robot's clearance (kinematics::Robot::Clearance), (M,) bool.
   torch::Tensor Valid(const torch::Tensor& q, const geometry::SceneRows& scene) const;
 
   int64_t horizon() const override { return horizon_; }

@@ -6,7 +6,7 @@
 namespace flowplan::datasets {
 
 /// The 2-D particle "X" dataset (SPEC section 3): episode i belongs to family
-/// i mod 2, (0,0) -> (1,1) or (0,1) -> (1,0). State [x, y, vx, vy], P = 2.
+/// i mod 2, (0,0) -> (1,1) or (0,1) -> (1,0). State [x, y, vx, vy], W = 2.
 class ParticleCrossTask : public EpisodeTask {
  public:
   explicit ParticleCrossTask(const sim::ParticleConfig& config) : config_(config) {}

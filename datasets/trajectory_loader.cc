@@ -108,7 +108,7 @@ TrajectorySplits LoadTrajectorySplits(const DataConfig& config, uint64_t seed, c
     }
     return splits;
   }
-  // Only this process's episodes are read: part p holds split positions p, p + P, ...
+  // Only this process's episodes are read: part p holds split positions p, p + Q, ... (Q data parts)
   std::vector<int64_t> rows;
   for (int64_t i = 0; i < splits.num_train; ++i) {
     if (std::find(parts.mine.begin(), parts.mine.end(), static_cast<int>(i % parts.count)) != parts.mine.end()) {
@@ -120,10 +120,10 @@ TrajectorySplits LoadTrajectorySplits(const DataConfig& config, uint64_t seed, c
                                               {dataset.num_episodes, dataset.info.horizon, dataset.info.state_dim()},
                                               torch::kFloat32);
   // rows are ascending in split order, so part p's episodes are every k-th row of `kept`, from p's first.
-  const int64_t K = static_cast<int64_t>(parts.mine.size());
-  for (int64_t k = 0; k < K; ++k) {
+  const int64_t mine = static_cast<int64_t>(parts.mine.size());
+  for (int64_t k = 0; k < mine; ++k) {
     splits.parts.push_back(parts.mine[static_cast<size_t>(k)]);
-    splits.train_parts.push_back(kept.slice(0, k, kept.size(0), K).clone());
+    splits.train_parts.push_back(kept.slice(0, k, kept.size(0), mine).clone());
   }
   splits.val = torch::empty({0, dataset.info.horizon, dataset.info.state_dim()});
   CopyDescription(dataset, splits);

@@ -42,14 +42,14 @@ struct TrajectorySplits {
   std::string fingerprint;                // DatasetFingerprint() of the file; empty when loaded by parts
   int64_t num_train = 0;                  // N_train of the whole split
   std::vector<int> parts;                 // the data parts train_parts holds (ascending); empty: none split off
-  std::vector<torch::Tensor> train_parts;  // (N_p, T, D) per part: training episodes p, p + P, ... in split order
+  std::vector<torch::Tensor> train_parts;  // (N_p, T, D) per part: training episodes p, p + Q, ... in split order (Q data parts)
   int64_t horizon() const { return info.horizon; }        // T
   int64_t state_dim() const { return info.state_dim(); }  // D
 };
 
 /// Which training episodes a process of a data-parallel job keeps.
 struct PartSelection {
-  int count = 1;          // P: the i-th training episode (in split order) is in part i mod P
+  int count = 1;          // Q: the i-th training episode (in split order) is in part i mod Q
   std::vector<int> mine;  // the parts to keep, ascending
   bool everything = true;  // also the whole training split, the validation episodes and the fingerprint
 };

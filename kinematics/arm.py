@@ -1,6 +1,6 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): the class
 # Arm, batched kinematics of a tree of hinge joints (the Franka), built by
-# kinematics/robot.cc from a RobotDescription. Shapes: N configurations,
+# kinematics/robot.cc from a RobotDescription. Shapes: M configurations,
 # J joints, S collision spheres, W = 3 (a link count is written "links"). The dtype and device of the
 # results follow q; the tables are float64 buffers.
 #
@@ -16,14 +16,14 @@
 
 
 def link_frames(self, q: Tensor) -> List[Tensor]:
-    """Link poses in the world, one tensor (N, 4, 4) per link, for q (N, J)."""
-    N = q.size(0)
-    angles = (q.index_select(1, self.link_joint.to(q.device)) * self.link_turns.to(q.dtype)).view(N, -1, 1, 1)
+    """Link poses in the world, one tensor (M, 4, 4) per link, for q (M, J)."""
+    M = q.size(0)
+    angles = (q.index_select(1, self.link_joint.to(q.device)) * self.link_turns.to(q.dtype)).view(M, -1, 1, 1)
     # Every link's pose in its parent at once (Rodrigues: R = I + sin [a]x + (1 - cos) [a]x^2; a welded link
     # turns by 0), then the tree from the root outwards.
     rotation = torch.eye(4, dtype=q.dtype, device=q.device) + torch.sin(angles) * self.cross.to(q.dtype) + \
         (1.0 - torch.cos(angles)) * self.cross_sq.to(q.dtype)
-    local = torch.matmul(self.fixed.to(q.dtype), rotation)  # (N, links, 4, 4)
+    local = torch.matmul(self.fixed.to(q.dtype), rotation)  # (M, links, 4, 4)
     frames: List[Tensor] = []
     for link in range(self.num_links):
         parent = self.parents[link]
@@ -32,14 +32,14 @@ def link_frames(self, q: Tensor) -> List[Tensor]:
 
 
 def tcp_frame(self, frames: List[Tensor]) -> Tensor:
-    """The TCP pose (N, 4, 4) from the link frames."""
+    """The TCP pose (M, 4, 4) from the link frames."""
     carrier = frames[self.tcp_link]
     return torch.matmul(carrier, self.tcp_pose.to(carrier.dtype))
 
 
 def hinges(self, stacked: Tensor) -> Tuple[Tensor, Tensor]:
-    """Unit hinge axes (N, J, 3) and points on them (N, J, 3) in the world, from
-    the link frames stacked (N, links, 4, 4)."""
+    """Unit hinge axes (M, J, 3) and points on them (M, J, 3) in the world, from
+    the link frames stacked (M, links, 4, 4)."""
     turned = stacked.index_select(1, self.joint_links.to(stacked.device))
     axes = torch.matmul(turned[:, :, 0:3, 0:3], self.joint_axes.to(turned.dtype).unsqueeze(-1)).squeeze(-1)
     return axes, turned[:, :, 0:3, 3]
@@ -54,8 +54,8 @@ def tcp(self, q: Tensor) -> Tensor:
 
 
 def spheres(self, q: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
-    """Collision sphere centres (N, S, 3) of q (N, J), with the hinge axes and
-    points (N, J, 3) that spheres_vjp needs."""
+    """Collision sphere centres (M, S, 3) of q (M, J), with the hinge axes and
+    points (M, J, 3) that spheres_vjp needs."""
     stacked = torch.stack(self.link_frames(q), 1)
     carriers = stacked.index_select(1, self.sphere_links.to(q.device))
     centres = torch.matmul(carriers[:, :, 0:3, 0:3], self.sphere_local.to(q.dtype).unsqueeze(-1)).squeeze(-1) + carriers[:, :, 0:3, 3]
@@ -64,7 +64,7 @@ def spheres(self, q: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
 
 
 def spheres_vjp(self, centres: Tensor, axes: Tensor, origins: Tensor, g: Tensor) -> Tensor:
-    """d/dq of sum <g, centres(q)>, g (N, S, 3) -> (N, J), written out: with
+    """d/dq of sum <g, centres(q)>, g (M, S, 3) -> (M, J), written out: with
     dc_s/dq_j = A[j, s] a_j x (c_s - p_j) the product is
     a_j . (sum_s A[j, s] c_s x g_s - p_j x sum_s A[j, s] g_s)."""
     ancestors = self.ancestors.to(g.dtype)
@@ -74,7 +74,7 @@ def spheres_vjp(self, centres: Tensor, axes: Tensor, origins: Tensor, g: Tensor)
 
 
 def tcp_vjp(self, q: Tensor, g: Tensor) -> Tensor:
-    """d/dq of sum <g, tcp(q)>: q (N, J), g (N, 3) -> (N, J), written out
+    """d/dq of sum <g, tcp(q)>: q (M, J), g (M, 3) -> (M, J), written out
     (dp/dq_j = a_j x (p - o_j) for the joints that move the TCP)."""
     frames = self.link_frames(q)
     position = self.tcp_frame(frames)[:, 0:3, 3]
@@ -99,15 +99,15 @@ def collision_spheres(self, q: Tensor) -> Tensor:
 
 
 def ik_solve(self, targets: Tensor, seed: Tensor) -> Tuple[Tensor, Tensor, Tensor, Tensor]:
-    """Joint angles that put the TCP at targets (N, 3), m, with the TCP's
+    """Joint angles that put the TCP at targets (M, 3), m, with the TCP's
     orientation at the home posture (the Franka's: the gripper pointing down),
-    from seed (N, J): damped least squares (steps of at most ik_max_step rad,
+    from seed (M, J): damped least squares (steps of at most ik_max_step rad,
     joints ik_limit_margin inside their limits) with a pull towards home in the
     task's null space; converged configurations stop moving. float64.
-    Returns q (N, J), position error (N,) m, orientation error (N,) rad and
-    converged (N,) bool."""
+    Returns q (M, J), position error (M,) m, orientation error (M,) rad and
+    converged (M,) bool."""
     target = targets.double()
-    N = target.size(0)
+    M = target.size(0)
     J = self.num_joints
     home = self.home.view(1, J)
     lower = self.lower.view(1, J) + self.ik_limit_margin
@@ -117,8 +117,8 @@ def ik_solve(self, targets: Tensor, seed: Tensor) -> Tuple[Tensor, Tensor, Tenso
     identity = torch.eye(J, dtype=target.dtype).unsqueeze(0)
     damping = self.ik_damping * self.ik_damping * torch.eye(6, dtype=target.dtype).unsqueeze(0)
     q = torch.max(torch.min(seed.double(), upper), lower)
-    position_error = torch.zeros([N], dtype=target.dtype)
-    orientation_error = torch.zeros([N], dtype=target.dtype)
+    position_error = torch.zeros([M], dtype=target.dtype)
+    orientation_error = torch.zeros([M], dtype=target.dtype)
     converged = position_error > 0.0
     for iteration in range(self.ik_iterations + 1):
         frames = self.link_frames(q)
@@ -130,7 +130,7 @@ def ik_solve(self, targets: Tensor, seed: Tensor) -> Tuple[Tensor, Tensor, Tenso
         converged = (position_error < self.ik_position_tolerance) & (orientation_error < self.ik_orientation_tolerance)
         if iteration == self.ik_iterations or bool(converged.all()):
             break
-        # Geometric Jacobian (N, 6, J): a_j x (p - o_j) and a_j for the joints that move the TCP.
+        # Geometric Jacobian (M, 6, J): a_j x (p - o_j) and a_j for the joints that move the TCP.
         axes, origins = self.hinges(torch.stack(frames, 1))
         axes = axes * moves_tcp
         jacobian = torch.cat([torch.cross(axes, position.unsqueeze(1) - origins, -1), axes], 2).transpose(1, 2)

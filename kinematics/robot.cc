@@ -162,7 +162,7 @@ torch::Tensor Robot::PointClearance(const torch::Tensor& points, const geometry:
 IkSolution Robot::InverseTcp(const torch::Tensor& targets, const torch::Tensor& seed) const {
   const int64_t W = workspace_dim(), J = num_joints();
   if (!targets.defined() || targets.dim() != 2 || targets.size(1) != W) {
-    throw Error("IK: targets: expected (N, " + std::to_string(W) + "), got " +
+    throw Error("IK: targets: expected (M, " + std::to_string(W) + "), got " +
                 (targets.defined() ? ShapeText(targets.sizes().vec()) : "(undefined)"));
   }
   if (is_arm() && description_.home.empty()) {

@@ -9,7 +9,7 @@
 // vector–Jacobian products guidance uses (so that exported planners plan under
 // torch.inference_mode(), where autograd cannot run).
 //
-// Shapes: N configurations, J joints, S collision spheres, W workspace dims, K obstacles.
+// Shapes: M configurations, J joints, S collision spheres, W workspace dims, K obstacles.
 
 #include <torch/script.h>
 #include <torch/torch.h>
@@ -24,10 +24,10 @@ namespace flowplan::kinematics {
 
 /// Joint configurations that put the TCP at targets, with what was reached.
 struct IkSolution {
-  torch::Tensor q;                  // (N, J) rad, float64
-  torch::Tensor position_error;     // (N,) m
-  torch::Tensor orientation_error;  // (N,) rad
-  torch::Tensor converged;          // (N,) bool: within kIkPositionTolerance and kIkOrientationTolerance
+  torch::Tensor q;                  // (M, J) rad, float64
+  torch::Tensor position_error;     // (M,) m
+  torch::Tensor orientation_error;  // (M,) rad
+  torch::Tensor converged;          // (M,) bool: within kIkPositionTolerance and kIkOrientationTolerance
 };
 
 inline constexpr double kIkPositionTolerance = 1e-5;     // m
@@ -70,16 +70,16 @@ class Robot {
   /// Collision sphere centres (..., S, W) of q (..., J).
   torch::Tensor SphereCentres(const torch::Tensor& q) const;
 
-  /// Whole-robot clearance (N, K) of q (N, J) from every obstacle of `scene`:
+  /// Whole-robot clearance (M, K) of q (M, J) from every obstacle of `scene`:
   /// the smallest signed distance between a collision sphere and the obstacle
   /// (negative: they overlap). float64.
   torch::Tensor Clearance(const torch::Tensor& q, const geometry::SceneRows& scene) const;
 
-  /// Signed distance (N, K) of points (N, W) to every obstacle of `scene`. float64.
+  /// Signed distance (M, K) of points (M, W) to every obstacle of `scene`. float64.
   static torch::Tensor PointClearance(const torch::Tensor& points, const geometry::SceneRows& scene);
 
-  /// Inverse kinematics of TCP positions `targets` (N, W), with the TCP
-  /// orientation of the home posture, from `seed` (N, J) (default: home). A
+  /// Inverse kinematics of TCP positions `targets` (M, W), with the TCP
+  /// orientation of the home posture, from `seed` (M, J) (default: home). A
   /// point robot's solution is the target itself. float64.
   /// @throws flowplan::Error if an arm has no home posture.
   IkSolution InverseTcp(const torch::Tensor& targets, const torch::Tensor& seed = torch::Tensor()) const;

@@ -17,7 +17,7 @@ MinMaxNormalizer::MinMaxNormalizer(torch::Tensor lo, torch::Tensor hi)
 
 MinMaxNormalizer MinMaxNormalizer::Fit(const torch::Tensor& states) {
   if (states.dim() < 2 || states.numel() == 0) {
-    throw Error("normalizer: expected a non-empty (N, T, D) or (N, D) tensor");
+    throw Error("normalizer: expected a non-empty (N, T, D) or (M, D) tensor");
   }
   const torch::Tensor flat = states.reshape({-1, states.size(-1)}).to(torch::kFloat32);
   torch::Tensor lo = std::get<0>(flat.min(0));

@@ -15,7 +15,7 @@ class MinMaxNormalizer {
   /// `lo`, `hi`: (D,) per-dimension minimum and maximum in raw units.
   MinMaxNormalizer(torch::Tensor lo, torch::Tensor hi);
 
-  /// Statistics of `states`, (N, T, D) or (N, D), in raw units. A dimension that
+  /// Statistics of `states`, (N, T, D) or (M, D), in raw units. A dimension that
   /// never changes gets a unit range so that it maps to a finite value.
   static MinMaxNormalizer Fit(const torch::Tensor& states);
 

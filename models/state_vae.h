@@ -31,12 +31,12 @@ class StateVae : public Network {
   StateVae(const StateVaeConfig& config, int64_t state_dim);
 
   struct Encoding {
-    torch::Tensor mean;     // (N, L)
-    torch::Tensor log_var;  // (N, L)
+    torch::Tensor mean;     // (M, L)
+    torch::Tensor log_var;  // (M, L)
   };
-  /// x: (N, D) normalized states.
+  /// x: (M, D) normalized states.
   Encoding Encode(const torch::Tensor& x);
-  /// z: (N, L) -> (N, D) normalized states.
+  /// z: (M, L) -> (M, D) normalized states.
   torch::Tensor Decode(const torch::Tensor& z);
 
   /// The VAE as a TorchScript module: encode(x) -> (mean, log_var), decode(z)

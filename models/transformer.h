@@ -50,7 +50,7 @@ class Transformer : public TrajectoryNet {
     torch::nn::LayerNorm norm1{nullptr}, norm2{nullptr};
     torch::nn::Linear qkv{nullptr}, out{nullptr}, up{nullptr}, down{nullptr};
   };
-  /// Sinusoidal features of `values` (N,) -> (N, d_model).
+  /// Sinusoidal features of `values` (M,) -> (M, d_model).
   torch::Tensor Sinusoid(const torch::Tensor& values) const;
 
   TransformerConfig config_;

@@ -114,7 +114,7 @@ def rotation(turn):
 
 
 def surface_points(kind, row, W, inflate=0.0):
-    """Points (N, W) on the surface of an obstacle (grown by `inflate`), for drawing its outline."""
+    """Points (M, W) on the surface of an obstacle (grown by `inflate`), for drawing its outline."""
     angles = np.linspace(0, 2 * np.pi, 48, endpoint=False)
     if W == 2:
         circle = np.stack([np.cos(angles), np.sin(angles)], 1)

@@ -147,7 +147,7 @@ namespace {
 /// The part of the training episodes one generator draws from.
 struct DataPart {
   int index;               // p in [0, train.data_parts)
-  torch::Tensor data;      // (N_p, T, D) normalized: training episodes p, p + P, ...
+  torch::Tensor data;      // (N_p, T, D) normalized: training episodes p, p + Q, ... (Q data parts)
   at::Generator generator;  // seeded by PartSeed(seed, p)
 };
 
@@ -185,7 +185,7 @@ class TrainingRun {
         models::CheckHalfHorizon(*trajectory_net, T_, "objective.split_prob > 0 trains on");
       }
     }
-    // This process's parts: p = rank, rank + W, ...; episode i of the training split is in part i mod P.
+    // This process's parts: p = rank, rank + R, ... (R processes); episode i of the training split is in part i mod Q.
     // The loader may have split them off already (a process that read only its own episodes).
     std::vector<int> mine;
     for (int part = communicator_.rank(); part < parts; part += ranks) mine.push_back(part);
@@ -341,16 +341,16 @@ class TrainingRun {
   }
 
   /// The gradient of the whole batch's mean loss into net_'s .grad (every part
-  /// draws B * (p + 1) / P - B * p / P trajectories; their losses are weighted by
+  /// draws B * (p + 1) / Q - B * p / Q trajectories (Q data parts); their losses are weighted by
   /// that share and summed over the parts of every process); returns the loss.
   double BatchGradient() {
-    const int64_t B = config_.batch_size, P = config_.data_parts;
-    if (P == 1) return PartGradient(parts_[0], B);
+    const int64_t B = config_.batch_size, Q = config_.data_parts;
+    if (Q == 1) return PartGradient(parts_[0], B);
     double loss = 0.0;
     std::vector<torch::Tensor> sum;
     auto params = net_->parameters();
     for (DataPart& part : parts_) {
-      const int64_t share = B * (part.index + 1) / P - B * part.index / P;
+      const int64_t share = B * (part.index + 1) / Q - B * part.index / Q;
       const double weight = static_cast<double>(share) / static_cast<double>(B);
       loss += PartGradient(part, share) * weight;
       torch::NoGradGuard no_grad;
@@ -420,12 +420,12 @@ class TrainingRun {
     std::vector<torch::Tensor> states;
     for (const DataPart& part : parts_) states.push_back(part.generator.get_state());
     if (communicator_.size() > 1) {
-      // (W, K * S): rank r's K parts are r, r + W, ...; part p is row p mod W, block p / W.
+      // (R, parts per process * state bytes): rank r's parts are r, r + R, ...; part p is row p mod R, block p / R.
       const torch::Tensor gathered = communicator_.AllGather(torch::cat(states));
-      const int64_t S = states[0].numel(), W = communicator_.size();
+      const int64_t bytes = states[0].numel(), R = communicator_.size();
       states.clear();
       for (int64_t p = 0; p < config_.data_parts; ++p) {
-        states.push_back(gathered[p % W].slice(0, (p / W) * S, (p / W + 1) * S).clone());
+        states.push_back(gathered[p % R].slice(0, (p / R) * bytes, (p / R + 1) * bytes).clone());
       }
     }
     if (!lead_) return path;

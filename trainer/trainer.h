@@ -37,8 +37,8 @@ struct TrainingSetup {
   TrainerConfig train;
   Evaluator evaluate;  // null: the validation loss only
   int64_t stop_at_step = 0;  // > 0: stop there with a checkpoint (the schedule still spans train.steps)
-  /// The job this process belongs to; null: a single process. In a job of W
-  /// processes each trains train.data_parts / W parts of the data, gradients
+  /// The job this process belongs to; null: a single process. In a job of R
+  /// processes each trains train.data_parts / R parts of the data, gradients
   /// are summed over all of them, and rank 0 alone writes the run folder and
   /// evaluates.
   distributed::Communicator* communicator = nullptr;

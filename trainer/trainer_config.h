@@ -41,8 +41,8 @@ struct TrainerConfig {
             "not on the thread count",
             config::Positive());
     v.Field("data_parts", data_parts,
-            "disjoint parts of the training episodes (episode i in part i mod P), each drawing its share of "
-            "every batch with its own generator; a data-parallel job of W processes gives each P/W parts, so "
+            "disjoint parts of the training episodes (episode i in part i mod Q), each drawing its share of "
+            "every batch with its own generator; a data-parallel job of R processes gives each Q/R parts, so "
             "results depend on this, not on the number of processes",
             config::Positive());
   }

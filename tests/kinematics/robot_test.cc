@@ -180,28 +180,36 @@ TEST(PointRobot, IsItsOwnTcpAndSphere) {
 }
 
 TEST_F(ForwardKinematicsTest, InverseTcpReachesTargetsAsTheMujocoSolverDoes) {
-  // Targets in the inner part of the reach box, where every point is reachable with the gripper down.
+  // Targets over the whole box the reach data set draws its points from, reachable or not. The planner's IK
+  // (the script's) and the data generator's (MuJoCo's Jacobians) run the same damped least squares from home;
+  // they must agree on which targets they reach and on the configurations they find.
   torch::manual_seed(6);
-  const torch::Tensor lo = torch::tensor({0.35, -0.3, 0.15}, torch::kFloat64);
-  const torch::Tensor hi = torch::tensor({0.55, 0.3, 0.55}, torch::kFloat64);
-  const torch::Tensor targets = lo + (hi - lo) * torch::rand({24, 3}, torch::kFloat64);
+  const torch::Tensor lo = torch::tensor({0.35, -0.5, 0.15}, torch::kFloat64);
+  const torch::Tensor hi = torch::tensor({0.75, 0.5, 0.75}, torch::kFloat64);
+  const torch::Tensor targets = lo + (hi - lo) * torch::rand({36, 3}, torch::kFloat64);
   const IkSolution solution = fk_.InverseTcp(targets);
-  ASSERT_TRUE(solution.converged.all().item<bool>());
   sim::MjDataPtr d = sim::MakeData(model_.mj());
+  int reached = 0;
   for (int64_t n = 0; n < targets.size(0); ++n) {
     const Eigen::Vector3d target(targets[n][0].item<double>(), targets[n][1].item<double>(), targets[n][2].item<double>());
+    const sim::IkResult reference = sim::SolveTcpIk(model_, *d, target, sim::FrankaReadyPose());
+    ASSERT_EQ(solution.converged[n].item<bool>(), reference.converged) << "target " << target.transpose();
+    if (!reference.converged) continue;
+    ++reached;
     sim::JointVector q;
     for (int j = 0; j < 7; ++j) q[j] = solution.q[n][j].item<double>();
+    EXPECT_LT((reference.q - q).cwiseAbs().maxCoeff(), 1e-9) << "target " << target.transpose();
     const sim::FrankaPose pose = sim::FrankaForwardKinematics(model_, *d, q);
-    EXPECT_LT((pose.tcp_position - target).norm(), 1e-5);
-    EXPECT_LT((pose.tcp_rotation - sim::DownwardTcpRotation()).norm(), 1e-3);  // gripper down, as at home
-    // The MuJoCo solver the data generator uses finds the same configuration.
-    const sim::JointVector reference = sim::SolveTcpIkOrThrow(model_, *d, target, sim::FrankaReadyPose());
-    EXPECT_LT((reference - q).cwiseAbs().maxCoeff(), 2e-3) << "target " << target.transpose();
+    EXPECT_LT((pose.tcp_position - target).norm(), 1e-5);  // the solvers' tolerance
+    EXPECT_LT((pose.tcp_rotation - sim::DownwardTcpRotation()).norm(), 2e-4);  // gripper down, as at home
   }
+  // Both kinds of target are compared (with this seed 23 of the 36 are reachable with the gripper down).
+  EXPECT_GE(reached, 18);
+  EXPECT_LT(reached, 36);
   // Seeded at its own solution, the solver stays there.
-  const IkSolution again = fk_.InverseTcp(targets, solution.q);
-  EXPECT_TRUE(torch::equal(again.q, solution.q));
+  const torch::Tensor ok = solution.converged;
+  const IkSolution again = fk_.InverseTcp(targets.index({ok}), solution.q.index({ok}));
+  EXPECT_TRUE(torch::equal(again.q, solution.q.index({ok})));
   const IkSolution far = fk_.InverseTcp(torch::tensor({{2.0, 0.0, 0.5}}, torch::kFloat64));
   EXPECT_FALSE(far.converged.any().item<bool>());
   EXPECT_GT(far.position_error[0].item<double>(), 1.0);
@@ -214,7 +222,7 @@ TEST_F(ForwardKinematicsTest, ShapesAreCheckedAtEntry) {
               ::testing::ThrowsMessage<Error>(HasSubstr("sphere_centres: q: expected (..., 7), got [6]")));
   EXPECT_EQ(fk_.Tcp(torch::zeros({4, 2, 7})).sizes(), torch::IntArrayRef({4, 2, 3}));
   EXPECT_THAT([&] { fk_.InverseTcp(torch::zeros({2, 2}, torch::kFloat64)); },
-              ::testing::ThrowsMessage<Error>(HasSubstr("IK: targets: expected (N, 3), got (2, 2)")));
+              ::testing::ThrowsMessage<Error>(HasSubstr("IK: targets: expected (M, 3), got (2, 2)")));
 }
 
 }  // namespace
