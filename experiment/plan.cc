@@ -47,6 +47,16 @@ void RunPlan(const PlanArgs& args) {
   const auto started = std::chrono::steady_clock::now();
   const planning::PlanResult result = planning::PlanInChunks(*subject.planner, request, threads);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  const int64_t lost = args.num_samples - result.found.sum().item<int64_t>();
+  if (lost > 0) {
+    spdlog::warn("{} of {} plans not found, each written as the straight line from start to goal{}", lost,
+                 args.num_samples,
+                 args.rrt_connect ? fmt::format(" (the start or goal keeps less than rrt_connect.margin {} from an "
+                                                "obstacle, or rrt_connect.max_iterations {} were not enough)",
+                                                subject.config.rrt_connect.margin,
+                                                subject.config.rrt_connect.max_iterations)
+                                  : std::string());
+  }
 
   const PlanScores scores = ScorePlans(result.plans, subject, inputs);
   const std::vector<sim::ExecutionResult> executed =
@@ -82,11 +92,15 @@ Command AddPlanCommand(CLI::App& app) {
   plan->add_option("--start-tcp", a.start_tcp, "start TCP point x,y,z (IK with the home posture's TCP orientation)");
   plan->add_option("--goal-tcp", a.goal_tcp, "goal TCP point x,y,z (IK with the home posture's TCP orientation)");
   plan->add_option("--scene", a.scene, "scene file (default: the config's scene section)")->check(CLI::ExistingFile);
-  plan->add_option("--sphere", a.spheres, "add a sphere x,y,z,r (x,y,r in 2-D); repeatable");
-  plan->add_option("--box", a.boxes, "add a box cx,cy,cz,lx,ly,lz[,qw,qx,qy,qz] (2-D: cx,cy,lx,ly[,angle]); repeatable");
-  plan->add_option("--cylinder", a.cylinders, "add a cylinder cx,cy,cz,r,h[,qw,qx,qy,qz] (2-D: cx,cy,r,h[,angle]); repeatable");
-  plan->add_option("--capsule", a.capsules, "add a capsule ax,ay,az,bx,by,bz,r (2-D: ax,ay,bx,by,r); repeatable");
-  plan->add_option("--radius", a.radii, "set every sphere's radius (R) or sphere K's (K=R); repeatable");
+  // One value per occurrence, so that `--sphere 0.5,0,0.2,0.1 guidance.scale=2` leaves the override alone.
+  auto repeatable = [&](const std::string& name, std::vector<std::string>& values, const std::string& help) {
+    plan->add_option(name, values, help)->allow_extra_args(false)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  };
+  repeatable("--sphere", a.spheres, "add a sphere x,y,z,r (x,y,r in 2-D); repeatable");
+  repeatable("--box", a.boxes, "add a box cx,cy,cz,lx,ly,lz[,qw,qx,qy,qz] (2-D: cx,cy,lx,ly[,angle]); repeatable");
+  repeatable("--cylinder", a.cylinders, "add a cylinder cx,cy,cz,r,h[,qw,qx,qy,qz] (2-D: cx,cy,r,h[,angle]); repeatable");
+  repeatable("--capsule", a.capsules, "add a capsule ax,ay,az,bx,by,bz,r (2-D: ax,ay,bx,by,r); repeatable");
+  repeatable("--radius", a.radii, "set every sphere's radius (R) or sphere K's (K=R); repeatable");
   plan->add_option("-n,--num-samples", a.num_samples, "number of plans")->check(CLI::PositiveNumber);
   plan->add_option("--seed", a.seed, "seed of the plans' noise")->check(CLI::NonNegativeNumber);
   plan->add_option("--out", a.out, "output prefix: PREFIX.h5, PREFIX.json, PREFIX.png (default RUN_DIR/plan)");

@@ -166,7 +166,8 @@ PlanCounts WritePlanFiles(const std::string& h5_temp, const std::string& prefix,
                     ", \"arm_collision\": " + Bool(o.arm_collision) + ", \"success_tcp\": " + Bool(o.success_tcp) +
                     ", \"success_arm\": " + Bool(o.success_arm) +
                     ", \"planning_time_s\": " + JsonNumber(result.call_seconds[static_cast<size_t>(i)]) +
-                    ", \"plans_in_call\": " + std::to_string(result.call_plans[static_cast<size_t>(i)]);
+                    ", \"plans_in_call\": " + std::to_string(result.call_plans[static_cast<size_t>(i)]) +
+                    ", \"found\": " + (result.found[i].item<bool>() ? "true" : "false");
     if (!executed.empty()) s += ", \"executed\": " + ExecutedJson(executed[i], o.success_executed);
     samples += (i ? ",\n    " : "    ") + s + "}";
   }

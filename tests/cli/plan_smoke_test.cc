@@ -75,13 +75,14 @@ TEST_F(ParticlePlanTest, EveryShapeFromTheCommandLineAndFromAFileIsPlannedAround
   std::ofstream(Path("shapes.yaml")) << "boxes: [{centre: [0.5, 0.25], size: [0.1, 0.2], angle: 0.3}]\n"
                                         "capsules: [{a: [0.2, 0.6], b: [0.3, 0.7], radius: 0.04}]\n";
   const Outcome outcome = Flowplan("plan --ckpt " + Path("run") + " --start 0,0 --goal 1,0 --scene " +
-                                   Path("shapes.yaml") + " --cylinder 0.75,0.4,0.05,0.2,1.2 --sphere 0.4,0.8,0.05 "
-                                   "-n 12 --seed 2 guidance.scale=2 --out " + Path("shapes"));
+                                   Path("shapes.yaml") + " --cylinder 0.75,0.4,0.05,0.2,1.2 guidance.scale=2 "
+                                   "--sphere 0.4,0.8,0.05 -n 12 --seed 2 --out " + Path("shapes"));
   ExpectOk(outcome);
   EXPECT_TRUE(fs::exists(Path("shapes.png")));
   const std::string report = ReadText(Path("shapes.json"));
   EXPECT_THAT(report, HasSubstr("\"obstacles\": [\"spheres[0]\", \"boxes[0]\", \"cylinders[0]\", \"capsules[0]\"]"));
   EXPECT_THAT(report, HasSubstr("\"boxes\": [[0.5, 0.25, 0.1, 0.2, 0.3]]"));
+  EXPECT_THAT(report, HasSubstr("scale: 2")) << "an override right after a shape's numbers is an override";
   const Outcome check = RunCommand(CheckPlan(Path("shapes")));
   EXPECT_EQ(check.exit_code, 0) << check.output;
   ExpectCleanFailure(Flowplan("plan --ckpt " + Path("run") + " --start 0,0 --goal 1,0 --box 0.5,0.3,0.1"),
