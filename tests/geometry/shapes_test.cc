@@ -226,6 +226,9 @@ struct ShapeCase {
   int W;
 };
 
+// Names the case in test listings ("boxes in 3-D") instead of its bytes.
+void PrintTo(const ShapeCase& c, std::ostream* os) { *os << c.kind << " in " << c.W << "-D"; }
+
 class ShapeTest : public ::testing::TestWithParam<ShapeCase> {};
 
 TEST_P(ShapeTest, DistanceMatchesTheReferenceAndItsGradientFiniteDifferencesAndAutograd) {
