@@ -37,8 +37,9 @@ timings (the test suite runs it so on a tiny network).
 
 Timings (median ms over R repeats after warm-up, the same work as
 bench/speed_bench.cc): forward_b1, forward_b64 (the network under
-torch.inference_mode()), train_step_b256 (loss, backward and AdamW step on a
-random normalized batch of 256 trajectories), plan_b1 (10 Euler steps,
+torch.inference_mode()), train_step_b256 and train_step_b256_bf16 (loss,
+backward and AdamW step on a random normalized batch of 256 trajectories; the
+second with the loss under bf16 autocast), plan_b1 (10 Euler steps,
 unguided, under torch.inference_mode()), plan_guided_split_b1 (guided around
 one sphere, with splitting; the network under torch.no_grad(), guidance with
 autograd). flops_b1 is the multiply-add count x 2 of the convolutions and
@@ -83,7 +84,7 @@ class ConvBlock(nn.Module):
         self.norm = nn.GroupNorm(groups, channels_out)
 
     def forward(self, x):
-        return F.mish(self.norm(self.conv(x)))
+        return F.mish(self.norm(self.conv(x).float()))   # float(): see Float32 in models/precision.h
 
 
 class ResidualBlock(nn.Module):
@@ -101,7 +102,7 @@ class ResidualBlock(nn.Module):
 
     def forward(self, x, cond):
         h = self.block0(x)                              # (B, out, T)
-        film = self.film(F.mish(cond)).unsqueeze(-1)    # (B, 2 out, 1): scale, then shift
+        film = self.film(F.mish(cond.float())).unsqueeze(-1)    # (B, 2 out, 1): scale, then shift
         h = film[:, 0:self.out] * h + film[:, self.out:2 * self.out]
         h = self.block1(h)
         return h + (self.residual(x) if self.residual is not None else x)
@@ -148,7 +149,7 @@ class UNet1D(nn.Module):
         """t (B,) -> (B, e)."""
         angles = (t * self.time_scale).unsqueeze(-1) * self.frequencies.unsqueeze(0)  # (B, half)
         embedding = torch.cat([torch.sin(angles), torch.cos(angles)], -1)            # (B, e)
-        return self.time_out(F.mish(self.time_in(embedding)))
+        return self.time_out(F.mish(self.time_in(embedding).float()))
 
     def forward(self, x, t, cond=None):
         feature = self.time_feature(t)                                   # (B, e)
@@ -169,7 +170,7 @@ class UNet1D(nn.Module):
             h = getattr(self, f"up{u}_block0")(h, feature)
             h = getattr(self, f"up{u}_block1")(h, feature)
             h = getattr(self, f"up{u}_up")(h)                            # T -> 2T
-        h = self.final_conv(self.final_block(h))                         # (B, D, T)
+        h = self.final_conv(self.final_block(h)).float()                 # (B, D, T)
         return h.transpose(1, 2)                                         # (B, T, D)
 
 
@@ -658,6 +659,14 @@ def main():
     x1 = torch.rand(256, T, D) * 2 - 1                         # (256, T, D) normalized
     ms["train_step_b256"] = median_ms(lambda: train_step(trainee, optimizer, x1, conditioning),
                                       max(5, args.repeats // 4), warmup=1)
+
+    def train_step_bf16():
+        with torch.autocast("cpu", dtype=torch.bfloat16):  # the loss; backward and AdamW outside, as PyTorch advises
+            optimizer.zero_grad(set_to_none=True)
+            loss = flow_matching_loss(trainee, x1, conditioning)
+        loss.backward()
+        optimizer.step()
+    ms["train_step_b256_bf16"] = median_ms(train_step_bf16, max(5, args.repeats // 4), warmup=1)
 
     plan_start = (normalizer.lo * 0.6 + normalizer.hi * 0.4).unsqueeze(0)   # (1, D) raw
     plan_goal = (normalizer.lo * 0.4 + normalizer.hi * 0.6).unsqueeze(0)

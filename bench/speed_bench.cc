@@ -1,5 +1,5 @@
 // flowplan beside PyTorch eager on the same weights, in one run: the Franka
-// UNet's forward pass at B = 1 and 64, a training step at B = 256, and a
+// UNet's forward pass at B = 1 and 64, a training step at B = 256 (fp32 and bf16), and a
 // 10-step plan at B = 1 (unguided, and guided around one sphere with
 // splitting), in-process and from the exported TorchScript file; then
 // bench/eager_reference.py runs the same work in plain PyTorch with the same
@@ -33,6 +33,7 @@
 #include "experiment/trained_planner.h"
 #include "geometry/scene_rows.h"
 #include "models/model_config.h"
+#include "models/precision.h"
 #include "objectives/objective.h"
 #include "sim/franka_model.h"
 #include "trainer/sharded_gradient.h"
@@ -157,8 +158,9 @@ int Main(int argc, char** argv) {
       ms["forward_b" + std::to_string(B)] = MedianMs(repeats, [&] { net->Forward(x, t, cond); });
     }
   }
-  // A training step: the trainer's sharded gradient (4 shards over the threads) and AdamW.
-  {
+  // A training step: the trainer's sharded gradient (4 shards over the threads) and AdamW, in
+  // float32 and under bf16 autocast (train.precision).
+  for (const models::Precision precision : {models::Precision::kFp32, models::Precision::kBf16}) {
     at::set_num_threads(1);  // the trainer runs LibTorch single-threaded, parallel over shards
     const int64_t C = models::ConditionDim(config.objective.conditioning, D);
     auto net = models::MakeNetwork(config.model, D, C);
@@ -170,8 +172,10 @@ int Main(int argc, char** argv) {
     auto generator = at::make_generator<at::CPUGeneratorImpl>(0);
     const torch::Tensor x1 = torch::rand({256, T, D}) * 2 - 1;
     const auto conditioning = config.objective.conditioning;
-    ms["train_step_b256"] = MedianMs(std::max(5, repeats / 4), [&] {
+    const std::string key = precision == models::Precision::kFp32 ? "train_step_b256" : "train_step_b256_bf16";
+    ms[key] = MedianMs(std::max(5, repeats / 4), [&] {
       gradient.Compute(objective->Draw(x1, generator), [&](models::Network& n, const objectives::ObjectiveBatch& b) {
+        const models::AutocastScope autocast(precision);
         return objective->Loss(n, b, conditioning);
       });
       optimizer.step();
@@ -220,7 +224,8 @@ int Main(int argc, char** argv) {
   }
 
   std::printf("\n%-26s %12s %12s %12s %9s\n", "", "flowplan", "exported", "eager", "eager/fp");
-  for (const std::string key : {"forward_b1", "forward_b64", "train_step_b256", "plan_b1", "plan_guided_split_b1"}) {
+  for (const std::string key : {"forward_b1", "forward_b64", "train_step_b256", "train_step_b256_bf16", "plan_b1",
+                                "plan_guided_split_b1"}) {
     const auto exported = ms.find(key + "_exported");
     const auto ref = reference.find(key);
     std::printf("%-26s %9.2f ms %9s    %9s    %8s\n", key.c_str(), ms[key],

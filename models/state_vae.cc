@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "jit/library.h"
+#include "models/precision.h"
 
 namespace flowplan::models {
 
@@ -28,13 +29,13 @@ StateVae::Encoding StateVae::Encode(const torch::Tensor& x) {
   }
   torch::Tensor h = x;
   for (auto& layer : encoder_) h = torch::relu(layer(h));
-  return {mean_(h), log_var_(h)};
+  return {Float32(mean_(h)), Float32(log_var_(h))};
 }
 
 torch::Tensor StateVae::Decode(const torch::Tensor& z) {
   torch::Tensor h = z;
   for (size_t i = 0; i + 1 < decoder_.size(); ++i) h = torch::relu(decoder_[i](h));
-  return decoder_.back()(h);
+  return Float32(decoder_.back()(h));
 }
 
 torch::jit::Module StateVae::ToScript() const {

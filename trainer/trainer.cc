@@ -170,6 +170,10 @@ class TrainingRun {
         lead_(communicator_.rank() == 0),
         normalizer_(SharedNormalizer(data)) {
     const int parts = config_.data_parts, ranks = communicator_.size();
+    if (config_.precision == models::Precision::kBf16 && !setup.device.is_cpu()) {
+      throw Error("train.precision=bf16 is CPU autocast; device " + setup.device.str() +
+                  " trains in fp32 (train.precision=fp32)");
+    }
     if (parts % ranks != 0) {
       throw Error("train.data_parts=" + std::to_string(parts) + " must be a multiple of the number of processes (" +
                   std::to_string(ranks) + "): every process trains the same number of data parts");
@@ -220,6 +224,10 @@ class TrainingRun {
     if (lead_) metrics_ = std::make_unique<MetricsLog>(run_.metrics());
     spdlog::info("model: {} parameters, horizon {}, state dim {}, {} training / {} validation episodes", 
                  models::CountParameters(*net_), T_, D_, data.num_train, data.val.size(0));
+    if (config_.precision == models::Precision::kBf16) {
+      spdlog::info("precision bf16: forward and backward under CPU autocast, weights and optimizer in float32; {}",
+                   models::DescribeBf16Kernels());
+    }
     if (ranks > 1 || parts > 1) {
       spdlog::info("{} data parts over {} process{}{}", parts, ranks, ranks == 1 ? "" : "es",
                    all_reduce_ ? ", gradients summed in " + std::to_string(all_reduce_->buckets()) + " bucket(s)"
@@ -336,6 +344,7 @@ class TrainingRun {
     const models::Conditioning conditioning = setup_.objective.conditioning;
     return gradient_->Compute(objective_->Draw(x1, part.generator).To(setup_.device),
                               [&](models::Network& net, const objectives::ObjectiveBatch& batch) {
+                                const models::AutocastScope autocast(config_.precision);  // on this worker's thread
                                 return objective_->Loss(net, batch, conditioning);
                               });
   }

@@ -3,6 +3,7 @@
 #include <cstdint>
 
 #include "core/config.h"
+#include "models/precision.h"
 
 namespace flowplan::trainer {
 
@@ -21,6 +22,7 @@ struct TrainerConfig {
   int val_batch_size = 256;
   int shards = 4;                 // gradient shards per batch, spread over the worker threads
   int data_parts = 1;             // disjoint parts of the training episodes, one generator each
+  models::Precision precision = models::Precision::kFp32;  // arithmetic of the forward and backward passes
 
   template <class V>
   void Visit(V& v) {
@@ -45,6 +47,10 @@ struct TrainerConfig {
             "every batch with its own generator; a data-parallel job of R processes gives each Q/R parts, so "
             "results depend on this, not on the number of processes",
             config::Positive());
+    v.Field("precision", precision,
+            "arithmetic of the training forward and backward passes: fp32, or bf16 (CPU autocast: convolutions, "
+            "linear layers and matrix products in bfloat16; weights, optimizer state, EMA, validation and "
+            "planning stay float32)");
   }
 };
 

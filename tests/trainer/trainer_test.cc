@@ -62,6 +62,7 @@ struct ZooCase {
   models::Architecture architecture;
   objectives::ObjectiveKind objective;
   models::Conditioning conditioning;
+  models::Precision precision = models::Precision::kFp32;
 };
 
 void PrintTo(const ZooCase& c, std::ostream* os) { *os << c.name; }
@@ -78,6 +79,7 @@ class ResumeTest : public ::testing::TestWithParam<ZooCase> {
     setup.objective.name = GetParam().objective;
     setup.objective.conditioning = GetParam().conditioning;
     setup.objective.ddpm.steps = 5;
+    setup.train.precision = GetParam().precision;
     return setup;
   }
 };
@@ -114,7 +116,15 @@ INSTANTIATE_TEST_SUITE_P(
         ZooCase{"FlowTransformerDirect", models::Architecture::kTransformer, objectives::ObjectiveKind::kFlowMatching,
                 models::Conditioning::kDirect},
         ZooCase{"Ddpm", models::Architecture::kUNet1D, objectives::ObjectiveKind::kDdpm, models::Conditioning::kInpaint},
-        ZooCase{"Vae", models::Architecture::kStateVae, objectives::ObjectiveKind::kVae, models::Conditioning::kInpaint}),
+        ZooCase{"Vae", models::Architecture::kStateVae, objectives::ObjectiveKind::kVae, models::Conditioning::kInpaint},
+        ZooCase{"FlowUNetBf16", models::Architecture::kUNet1D, objectives::ObjectiveKind::kFlowMatching,
+                models::Conditioning::kInpaint, models::Precision::kBf16},
+        ZooCase{"FlowTransformerDirectBf16", models::Architecture::kTransformer,
+                objectives::ObjectiveKind::kFlowMatching, models::Conditioning::kDirect, models::Precision::kBf16},
+        ZooCase{"DdpmBf16", models::Architecture::kUNet1D, objectives::ObjectiveKind::kDdpm,
+                models::Conditioning::kInpaint, models::Precision::kBf16},
+        ZooCase{"VaeBf16", models::Architecture::kStateVae, objectives::ObjectiveKind::kVae,
+                models::Conditioning::kInpaint, models::Precision::kBf16}),
     [](const auto& info) { return std::string(info.param.name); });
 
 TEST(TrainerTest, NormalizerIsFittedOnTheTrainingSplitOnly) {
@@ -177,13 +187,22 @@ TEST(TrainerTest, ForeignGeneratorStateIsNamed) {
                                                                ::testing::HasSubstr("rng_state"))));
 }
 
-TEST(TrainerTest, ThreadCountDoesNotChangeTheWeights) {
+class PrecisionTest : public ::testing::TestWithParam<models::Precision> {
+ protected:
+  TrainingSetup Setup(const std::string& name) const {
+    TrainingSetup setup = TinySetup(name + (GetParam() == models::Precision::kBf16 ? "_bf16" : "_fp32"));
+    setup.train.precision = GetParam();
+    return setup;
+  }
+};
+
+TEST_P(PrecisionTest, ThreadCountDoesNotChangeTheWeights) {
   const auto data = TinyData();
-  TrainingSetup one = TinySetup("one_thread");
+  TrainingSetup one = Setup("one_thread");
   one.threads = 1;
-  TrainingSetup two = TinySetup("two_threads");
+  TrainingSetup two = Setup("two_threads");
   two.threads = 2;
-  TrainingSetup three = TinySetup("three_threads");
+  TrainingSetup three = Setup("three_threads");
   three.threads = 3;
   const auto w1 = Weights(Train(one, data, TrainStart::kFresh).checkpoint, one);
   const auto w2 = Weights(Train(two, data, TrainStart::kFresh).checkpoint, two);
@@ -192,6 +211,26 @@ TEST(TrainerTest, ThreadCountDoesNotChangeTheWeights) {
     EXPECT_TRUE(torch::equal(w1[i], w2[i])) << "tensor " << i;
     EXPECT_TRUE(torch::equal(w1[i], w3[i])) << "tensor " << i;
   }
+}
+
+INSTANTIATE_TEST_SUITE_P(Fp32AndBf16, PrecisionTest,
+                         ::testing::Values(models::Precision::kFp32, models::Precision::kBf16),
+                         [](const auto& info) { return info.param == models::Precision::kBf16 ? "bf16" : "fp32"; });
+
+TEST(TrainerTest, Bf16TrainingTakesOtherStepsToANearValidationLoss) {
+  // Weights are no measure here: AdamW's first steps are about lr * sign(gradient), so
+  // parameters whose gradient is near zero step either way under bfloat16 rounding.
+  const auto data = TinyData();
+  TrainingSetup fp32 = TinySetup("near_fp32");
+  TrainingSetup bf16 = TinySetup("near_bf16");
+  bf16.train.precision = models::Precision::kBf16;
+  const TrainResult a = Train(fp32, data, TrainStart::kFresh), b = Train(bf16, data, TrainStart::kFresh);
+  const auto wa = Weights(a.checkpoint, fp32), wb = Weights(b.checkpoint, bf16);
+  double changed = 0.0;
+  for (size_t i = 0; i < wa.size(); ++i) changed = std::max(changed, (wa[i] - wb[i]).abs().max().item<double>());
+  EXPECT_GT(changed, 0.0) << "bf16 training should not be float32 training";
+  EXPECT_NEAR(b.val_loss, a.val_loss, 0.02 * a.val_loss);
+  EXPECT_NEAR(b.train_loss, a.train_loss, 0.05 * a.train_loss);
 }
 
 TEST(TrainerTest, ShardsSumToTheWholeBatchGradient) {
