@@ -45,8 +45,10 @@ std::set<std::string> CpuFlags() {
 std::string DescribeBf16Kernels() {
   const std::set<std::string> flags = CpuFlags();
   const auto has = [&](const char* flag) { return flags.count(flag) > 0; };
-  if (flags.empty()) return "CPU flags unknown (no /proc/cpuinfo): bfloat16 kernels depend on what oneDNN finds";
-  if (has("amx_bf16")) {
+  if (flags.empty()) {
+    return "CPU flags unknown (no x86 flags line in /proc/cpuinfo): bfloat16 kernels depend on what oneDNN finds";
+  }
+  if (has("amx_bf16") && has("avx512_bf16")) {
     return "AMX-BF16 and AVX512-BF16: oneDNN runs bfloat16 convolutions and matrix products on AMX tiles";
   }
   if (has("avx512_bf16")) return "AVX512-BF16: oneDNN runs bfloat16 convolutions and matrix products natively";

@@ -29,13 +29,13 @@ StateVae::Encoding StateVae::Encode(const torch::Tensor& x) {
   }
   torch::Tensor h = x;
   for (auto& layer : encoder_) h = torch::relu(layer(h));
-  return {Float32(mean_(h)), Float32(log_var_(h))};
+  return {WidenBfloat16(mean_(h)), WidenBfloat16(log_var_(h))};
 }
 
 torch::Tensor StateVae::Decode(const torch::Tensor& z) {
   torch::Tensor h = z;
   for (size_t i = 0; i + 1 < decoder_.size(); ++i) h = torch::relu(decoder_[i](h));
-  return Float32(decoder_.back()(h));
+  return WidenBfloat16(decoder_.back()(h));
 }
 
 torch::jit::Module StateVae::ToScript() const {

@@ -56,21 +56,21 @@ torch::Tensor Transformer::Forward(const torch::Tensor& x, const torch::Tensor& 
   CheckTrajectoryInputs(x, t, cond, state_dim_, cond_dim_);
   const int64_t B = x.size(0), T = x.size(1), d = config_.d_model, H = config_.heads, dh = d / H;
   const torch::Tensor positions = Sinusoid(torch::arange(T, x.options()));                      // (T, d)
-  torch::Tensor tokens = Float32(embed_(x)) + positions.unsqueeze(0);  // (B, T, d), float32 under autocast too
-  const torch::Tensor time = Float32(time_out_(torch::mish(Float32(time_in_(Sinusoid(t * config_.time_scale))))));  // (B, d)
+  torch::Tensor tokens = WidenBfloat16(embed_(x)) + positions.unsqueeze(0);  // (B, T, d), float32 under autocast too
+  const torch::Tensor time = WidenBfloat16(time_out_(torch::mish(WidenBfloat16(time_in_(Sinusoid(t * config_.time_scale))))));  // (B, d)
   std::vector<torch::Tensor> parts = {time.unsqueeze(1)};
-  if (cond_dim_ > 0) parts.push_back(Float32(cond_in_(cond.view({B, 2, cond_dim_ / 2}))));  // start and goal tokens
+  if (cond_dim_ > 0) parts.push_back(WidenBfloat16(cond_in_(cond.view({B, 2, cond_dim_ / 2}))));  // start and goal tokens
   parts.push_back(tokens);
   torch::Tensor h = torch::cat(parts, 1);  // (B, N, d)
   const int64_t N = h.size(1);
   for (Layer& layer : layers_) {
     const torch::Tensor qkv = layer.qkv(layer.norm1(h)).view({B, N, 3, H, dh}).permute({2, 0, 3, 1, 4});  // (3, B, H, N, dh)
     const torch::Tensor scores = torch::matmul(qkv[0], qkv[1].transpose(-2, -1)) * (1.0 / std::sqrt(double(dh)));
-    const torch::Tensor attended = torch::matmul(torch::softmax(Float32(scores), -1), qkv[2]);  // (B, H, N, dh)
+    const torch::Tensor attended = torch::matmul(torch::softmax(WidenBfloat16(scores), -1), qkv[2]);  // (B, H, N, dh)
     h = h + layer.out(attended.transpose(1, 2).reshape({B, N, d}));
     h = h + layer.down(torch::gelu(layer.up(layer.norm2(h))));
   }
-  return Float32(head_(final_norm_(h.slice(1, N - T, N))));
+  return WidenBfloat16(head_(final_norm_(h.slice(1, N - T, N))));
 }
 
 std::string Transformer::WriteScript(jit::ScriptWriter& w) const {

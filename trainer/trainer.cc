@@ -171,8 +171,8 @@ class TrainingRun {
         normalizer_(SharedNormalizer(data)) {
     const int parts = config_.data_parts, ranks = communicator_.size();
     if (config_.precision == models::Precision::kBf16 && !setup.device.is_cpu()) {
-      throw Error("train.precision=bf16 is CPU autocast; device " + setup.device.str() +
-                  " trains in fp32 (train.precision=fp32)");
+      throw Error("train.precision=bf16 is CPU autocast and device is " + setup.device.str() +
+                  ": set train.precision=fp32 or device=cpu");
     }
     if (parts % ranks != 0) {
       throw Error("train.data_parts=" + std::to_string(parts) + " must be a multiple of the number of processes (" +
@@ -225,7 +225,7 @@ class TrainingRun {
     spdlog::info("model: {} parameters, horizon {}, state dim {}, {} training / {} validation episodes", 
                  models::CountParameters(*net_), T_, D_, data.num_train, data.val.size(0));
     if (config_.precision == models::Precision::kBf16) {
-      spdlog::info("precision bf16: forward and backward under CPU autocast, weights and optimizer in float32; {}",
+      spdlog::info("precision bf16: the loss under CPU autocast (backward follows its dtypes), weights and optimizer in float32; {}",
                    models::DescribeBf16Kernels());
     }
     if (ranks > 1 || parts > 1) {

@@ -32,7 +32,8 @@ TEST(AutocastScopeTest, RunsConvolutionsInBfloat16OnItsOwnThreadUntilTheOutermos
 TEST(AutocastScopeTest, AConvolutionTakesBfloat16RoundedOperandsAndAccumulatesInFloat32) {
   // Reference without autocast: round the operands to bfloat16, convolve in
   // float32, round the result. The kernels accumulate in float32 in another
-  // order, so the two may differ by one bfloat16 step (2^-8 relative) at most.
+  // order, so the two may differ by one bfloat16 step at most: 2^-7 of the
+  // power of two below the value, so at most 2^-7 of its magnitude.
   torch::manual_seed(1);
   const torch::Tensor x = torch::randn({4, 32, 64}), w = torch::randn({64, 32, 5}) * 0.1;
   const auto round = [](const torch::Tensor& t) { return t.to(torch::kBFloat16).to(torch::kFloat32); };
@@ -43,15 +44,25 @@ TEST(AutocastScopeTest, AConvolutionTakesBfloat16RoundedOperandsAndAccumulatesIn
     autocast = Conv(x, w);
   }
   ASSERT_EQ(autocast.scalar_type(), torch::kBFloat16);
-  const torch::Tensor step = reference.abs() * std::ldexp(1.0, -8) + 1e-6;
+  const torch::Tensor step = reference.abs() * std::ldexp(1.0, -7) + 1e-6;
   EXPECT_TRUE(((autocast.to(torch::kFloat32) - reference).abs() <= step).all().item<bool>());
   // And it is not the float32 convolution.
   EXPECT_GT((autocast.to(torch::kFloat32) - Conv(x, w)).abs().max().item<double>(), 1e-3);
 }
 
+TEST(WidenBfloat16Test, WidensBfloat16AndPassesEveryOtherTensorThroughAsItIs) {
+  const torch::Tensor f = torch::randn({3}), d = torch::randn({3}, torch::kFloat64);
+  EXPECT_TRUE(WidenBfloat16(f).is_same(f));
+  EXPECT_TRUE(WidenBfloat16(d).is_same(d));
+  const torch::Tensor widened = WidenBfloat16(f.to(torch::kBFloat16));
+  EXPECT_EQ(widened.scalar_type(), torch::kFloat32);
+  EXPECT_TRUE(torch::equal(widened, f.to(torch::kBFloat16).to(torch::kFloat32)));
+}
+
 struct NetworkCase {
   const char* name;
   Architecture architecture;
+  bool direct = false;  // conditioned on a (B, 2 D) start/goal vector
 };
 
 void PrintTo(const NetworkCase& c, std::ostream* os) { *os << c.name; }
@@ -68,7 +79,8 @@ TEST_P(Bf16NetworkTest, ForwardAndBackwardRunUnderAutocastAndStayCloseToFloat32)
   config.vae.hidden = {32, 32};
   config.vae.latent = 4;
   const int64_t D = 6, B = 8, T = 16;
-  NetworkPtr net = MakeNetwork(config, D, 0);
+  const int64_t C = GetParam().direct ? 2 * D : 0;
+  NetworkPtr net = MakeNetwork(config, D, C);
   // The network's output and the gradient of a loss on it, in float32 and under bf16 autocast.
   const auto run = [&](Precision precision) {
     net->zero_grad();
@@ -84,7 +96,7 @@ TEST_P(Bf16NetworkTest, ForwardAndBackwardRunUnderAutocastAndStayCloseToFloat32)
       } else {
         auto& trajectory = dynamic_cast<TrajectoryNet&>(*net);
         out = trajectory.Forward(torch::linspace(-1, 1, B * T * D).view({B, T, D}), torch::linspace(0, 1, B),
-                                 torch::Tensor());
+                                 C > 0 ? torch::linspace(1, -1, B * C).view({B, C}) : torch::Tensor());
         loss = out.square().mean();
       }
     }
@@ -110,7 +122,9 @@ TEST_P(Bf16NetworkTest, ForwardAndBackwardRunUnderAutocastAndStayCloseToFloat32)
 
 INSTANTIATE_TEST_SUITE_P(EveryNetwork, Bf16NetworkTest,
                          ::testing::Values(NetworkCase{"UNet1D", Architecture::kUNet1D},
+                                           NetworkCase{"UNet1DDirect", Architecture::kUNet1D, true},
                                            NetworkCase{"Transformer", Architecture::kTransformer},
+                                           NetworkCase{"TransformerDirect", Architecture::kTransformer, true},
                                            NetworkCase{"StateVae", Architecture::kStateVae}),
                          [](const auto& info) { return std::string(info.param.name); });
 
