@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "models/mish.h"
 #include "models/precision.h"
 
 namespace flowplan::models {
@@ -57,7 +58,7 @@ torch::Tensor Transformer::Forward(const torch::Tensor& x, const torch::Tensor& 
   const int64_t B = x.size(0), T = x.size(1), d = config_.d_model, H = config_.heads, dh = d / H;
   const torch::Tensor positions = Sinusoid(torch::arange(T, x.options()));                      // (T, d)
   torch::Tensor tokens = WidenBfloat16(embed_(x)) + positions.unsqueeze(0);  // (B, T, d), float32 under autocast too
-  const torch::Tensor time = WidenBfloat16(time_out_(torch::mish(WidenBfloat16(time_in_(Sinusoid(t * config_.time_scale))))));  // (B, d)
+  const torch::Tensor time = WidenBfloat16(time_out_(Mish(time_in_(Sinusoid(t * config_.time_scale)))));  // (B, d)
   std::vector<torch::Tensor> parts = {time.unsqueeze(1)};
   if (cond_dim_ > 0) parts.push_back(WidenBfloat16(cond_in_(cond.view({B, 2, cond_dim_ / 2}))));  // start and goal tokens
   parts.push_back(tokens);

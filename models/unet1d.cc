@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "models/mish.h"
 #include "models/precision.h"
 
 namespace flowplan::models {
@@ -30,7 +31,7 @@ ConvBlock::ConvBlock(int in, int out, int kernel, int groups) : padding_(kernel 
   norm_ = register_module("norm", torch::nn::GroupNorm(torch::nn::GroupNormOptions(groups, out)));
 }
 
-torch::Tensor ConvBlock::Forward(const torch::Tensor& x) { return torch::mish(norm_(WidenBfloat16(conv_(x)))); }
+torch::Tensor ConvBlock::Forward(const torch::Tensor& x) { return Mish(norm_(WidenBfloat16(conv_(x)))); }
 
 std::string ConvBlock::WriteScript(jit::ScriptWriter& w, const std::string& prefix, const std::string& x) const {
   const std::string c = w.Let("torch.conv1d(" + x + ", " + w.Tensor(prefix + ".conv.weight", conv_->weight) +
@@ -54,7 +55,7 @@ ResidualBlock::ResidualBlock(int in, int out, int cond_dim, int kernel, int grou
 
 torch::Tensor ResidualBlock::Forward(const torch::Tensor& x, const torch::Tensor& cond) {
   torch::Tensor h = block0_->Forward(x);
-  const torch::Tensor film = film_(torch::mish(WidenBfloat16(cond))).unsqueeze(-1);  // (B, 2*out, 1)
+  const torch::Tensor film = film_(Mish(cond)).unsqueeze(-1);  // (B, 2*out, 1)
   h = film.slice(1, 0, out_) * h + film.slice(1, out_, 2 * out_);
   h = block1_->Forward(h);
   return h + (residual_ ? residual_(x) : x);
@@ -132,7 +133,7 @@ void UNet1D::CheckHorizon(int64_t horizon) const {
 torch::Tensor UNet1D::TimeFeature(const torch::Tensor& t) const {
   const torch::Tensor angles = (t * config_.time_scale).unsqueeze(-1) * frequencies_.unsqueeze(0);  // (B, half)
   const torch::Tensor embedding = torch::cat({angles.sin(), angles.cos()}, -1);                     // (B, e)
-  return torch::linear(torch::mish(WidenBfloat16(torch::linear(embedding, time_in_->weight, time_in_->bias))), time_out_->weight,
+  return torch::linear(Mish(torch::linear(embedding, time_in_->weight, time_in_->bias)), time_out_->weight,
                        time_out_->bias);
 }
 
