@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "models/model_config.h"
+#include "tests/support/tiny_model.h"
 
 namespace flowplan::models {
 namespace {
@@ -71,13 +72,7 @@ class Bf16NetworkTest : public ::testing::TestWithParam<NetworkCase> {};
 
 TEST_P(Bf16NetworkTest, ForwardAndBackwardRunUnderAutocastAndStayCloseToFloat32) {
   torch::manual_seed(2);
-  ModelConfig config;
-  config.architecture = GetParam().architecture;
-  config.unet.down_dims = {16, 32};
-  config.transformer.d_model = 32;
-  config.transformer.heads = 2;
-  config.vae.hidden = {32, 32};
-  config.vae.latent = 4;
+  const ModelConfig config = flowplan::testing::TinyModelConfig(GetParam().architecture);
   const int64_t D = 6, B = 8, T = 16;
   const int64_t C = GetParam().direct ? 2 * D : 0;
   NetworkPtr net = MakeNetwork(config, D, C);

@@ -12,6 +12,7 @@
 #include "objectives/flow_matching.h"
 #include "objectives/objective.h"
 #include "objectives/vae.h"
+#include "tests/support/tiny_model.h"
 
 namespace flowplan::objectives {
 namespace {
@@ -129,13 +130,7 @@ class TrainsTest : public ::testing::TestWithParam<Case> {};
 
 TEST_P(TrainsTest, LossHalvesOnATinyProblem) {
   torch::manual_seed(0);
-  models::ModelConfig model;
-  model.architecture = GetParam().architecture;
-  model.unet.down_dims = {16, 32};
-  model.transformer.d_model = 32;
-  model.transformer.heads = 2;
-  model.vae.hidden = {32, 32};
-  model.vae.latent = 4;
+  const models::ModelConfig model = flowplan::testing::TinyModelConfig(GetParam().architecture);
   ObjectiveConfig config;
   config.name = GetParam().objective;
   const auto objective = MakeObjective(config, model);
