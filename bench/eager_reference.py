@@ -84,7 +84,7 @@ class ConvBlock(nn.Module):
         self.norm = nn.GroupNorm(groups, channels_out)
 
     def forward(self, x):
-        return F.mish(self.norm(self.conv(x).float()))   # float(): see Float32 in models/precision.h
+        return F.mish(self.norm(self.conv(x).float()))   # float(): see WidenBfloat16 in models/precision.h
 
 
 class ResidualBlock(nn.Module):

@@ -233,6 +233,10 @@ int Main(int argc, char** argv) {
                 ref == reference.end() ? "-" : (std::to_string(ref->second).substr(0, 6) + " ms").c_str(),
                 ref == reference.end() ? "-" : (std::to_string(ref->second / ms[key]).substr(0, 4) + "x").c_str());
   }
+  if (reference.count("train_step_b256") > 0) {
+    std::printf("%-26s %12s %12s %9.2f ms %8s\n", "  bf16 against eager fp32", "", "", reference["train_step_b256"],
+                (std::to_string(reference["train_step_b256"] / ms["train_step_b256_bf16"]).substr(0, 4) + "x").c_str());
+  }
   // The arithmetic limit of a forward pass: its FLOPs at the best rate this
   // machine's LibTorch reaches, a large convolution of the UNet's kind (oneDNN);
   // a large matrix product (OpenBLAS) for comparison.
