@@ -26,6 +26,38 @@ void UNetConfig::Validate() const {
 
 namespace internal {
 
+namespace {
+
+/// "[a]" of a 1-D size option as a 2-D TorchScript list "[fill, a]".
+std::string Pair(int64_t fill, int64_t a) { return "[" + std::to_string(fill) + ", " + std::to_string(a) + "]"; }
+
+int64_t Padding(const torch::nn::detail::ConvNdOptions<1>& options) {
+  return (*c10::get<torch::ExpandingArray<1>>(options.padding()))[0];
+}
+
+}  // namespace
+
+/// The script expression of a 1-D convolution (transposed when the options
+/// say so) of x (B, C, T). A batch of at most 4 goes straight to LibTorch's
+/// im2col + GEMM kernel as a 2-D convolution of height 1, which LibTorch 1.13
+/// picks by itself only for a batch of one: for B = 2..4 (the two halves of a
+/// split plan) its oneDNN path took 1.4-2.8x longer at these sizes
+/// (docs/performance.md). Larger batches take torch.conv1d.
+std::string ScriptConv(const std::string& x, const std::string& weight, const std::string& bias,
+                       const torch::nn::detail::ConvNdOptions<1>& options) {
+  const int64_t k = (*options.kernel_size())[0], stride = (*options.stride())[0], padding = Padding(options);
+  const std::string geometry = Pair(1, stride) + ", " + Pair(0, padding);
+  if (options.transposed()) {
+    return "(torch.slow_conv_transpose2d(" + x + ".unsqueeze(2), " + weight + ".unsqueeze(2), " + Pair(1, k) +
+           ", " + bias + ", " + geometry + ", [0, 0], [1, 1]).squeeze(2) if " + x + ".size(0) <= 4 else " +
+           "torch.conv_transpose1d(" + x + ", " + weight + ", " + bias + ", " + std::to_string(stride) + ", " +
+           std::to_string(padding) + "))";
+  }
+  return "(torch.thnn_conv2d(" + x + ".unsqueeze(2), " + weight + ".unsqueeze(2), " + Pair(1, k) + ", " + bias +
+         ", " + geometry + ").squeeze(2) if " + x + ".size(0) <= 4 else torch.conv1d(" + x + ", " + weight + ", " + bias +
+         ", " + std::to_string(stride) + ", " + std::to_string(padding) + "))";
+}
+
 ConvBlock::ConvBlock(int in, int out, int kernel, int groups) : padding_(kernel / 2), groups_(groups) {
   conv_ = register_module("conv", torch::nn::Conv1d(torch::nn::Conv1dOptions(in, out, kernel).padding(kernel / 2)));
   norm_ = register_module("norm", torch::nn::GroupNorm(torch::nn::GroupNormOptions(groups, out)));
@@ -34,9 +66,8 @@ ConvBlock::ConvBlock(int in, int out, int kernel, int groups) : padding_(kernel 
 torch::Tensor ConvBlock::Forward(const torch::Tensor& x) { return Mish(norm_(WidenBfloat16(conv_(x)))); }
 
 std::string ConvBlock::WriteScript(jit::ScriptWriter& w, const std::string& prefix, const std::string& x) const {
-  const std::string c = w.Let("torch.conv1d(" + x + ", " + w.Tensor(prefix + ".conv.weight", conv_->weight) +
-                              ", " + w.Tensor(prefix + ".conv.bias", conv_->bias) + ", 1, " +
-                              std::to_string(padding_) + ")");
+  const std::string c = w.Let(ScriptConv(x, w.Tensor(prefix + ".conv.weight", conv_->weight),
+                                         w.Tensor(prefix + ".conv.bias", conv_->bias), conv_->options));
   const std::string n = w.Let("torch.group_norm(" + c + ", " + std::to_string(groups_) + ", " +
                               w.Tensor(prefix + ".norm.weight", norm_->weight) + ", " +
                               w.Tensor(prefix + ".norm.bias", norm_->bias) + ", " +
@@ -62,18 +93,16 @@ torch::Tensor ResidualBlock::Forward(const torch::Tensor& x, const torch::Tensor
 }
 
 std::string ResidualBlock::WriteScript(jit::ScriptWriter& w, const std::string& prefix, const std::string& x,
-                                       const std::string& cond) const {
+                                       const std::string& film, int64_t film_offset) const {
   std::string h = block0_->WriteScript(w, prefix + ".block0", x);
-  const std::string film = w.Let("torch.linear(torch.mish(" + cond + "), " +
-                                 w.Tensor(prefix + ".film.weight", film_->weight) + ", " +
-                                 w.Tensor(prefix + ".film.bias", film_->bias) + ").unsqueeze(-1)");
-  const std::string out = std::to_string(out_);
-  h = w.Let(film + "[:, 0:" + out + "] * " + h + " + " + film + "[:, " + out + ":" + std::to_string(2 * out_) + "]");
+  const std::string scale = std::to_string(film_offset) + ":" + std::to_string(film_offset + out_);
+  const std::string shift = std::to_string(film_offset + out_) + ":" + std::to_string(film_offset + 2 * out_);
+  h = w.Let(film + "[:, " + scale + "] * " + h + " + " + film + "[:, " + shift + "]");
   h = block1_->WriteScript(w, prefix + ".block1", h);
-  const std::string skip =
-      residual_ ? "torch.conv1d(" + x + ", " + w.Tensor(prefix + ".residual.weight", residual_->weight) + ", " +
-                      w.Tensor(prefix + ".residual.bias", residual_->bias) + ")"
-                : x;
+  const std::string skip = residual_ ? ScriptConv(x, w.Tensor(prefix + ".residual.weight", residual_->weight),
+                                                  w.Tensor(prefix + ".residual.bias", residual_->bias),
+                                                  residual_->options)
+                                     : x;
   return w.Let(h + " + " + skip);
 }
 
@@ -165,16 +194,6 @@ torch::Tensor UNet1D::Forward(const torch::Tensor& x, const torch::Tensor& t, co
   return h.transpose(1, 2);  // (B, T, D)
 }
 
-namespace {
-
-/// "stride, padding" of a 1-D convolution, as torch.conv1d / conv_transpose1d take them.
-std::string Geometry(const torch::nn::detail::ConvNdOptions<1>& options) {
-  const auto& padding = c10::get<torch::ExpandingArray<1>>(options.padding());
-  return std::to_string((*options.stride())[0]) + ", " + std::to_string((*padding)[0]);
-}
-
-}  // namespace
-
 std::string UNet1D::WriteScript(jit::ScriptWriter& w) const {
   const std::string angles = w.Let("(t * " + jit::ScriptFloat(config_.time_scale) + ").unsqueeze(-1) * " +
                                    w.Tensor("frequencies", frequencies_) + ".unsqueeze(0)");
@@ -187,32 +206,55 @@ std::string UNet1D::WriteScript(jit::ScriptWriter& w) const {
     w.Line("assert cond is not None");
     feature = w.Let("torch.cat([" + feature + ", cond], -1)");
   }
+  // Every residual block's FiLM layer reads the same Mish(feature): one
+  // linear layer with their weights stacked computes them all (B, F, 1).
+  std::vector<const internal::ResidualBlock*> blocks;
+  for (const Level& level : down_) blocks.insert(blocks.end(), {level.block0.get(), level.block1.get()});
+  blocks.insert(blocks.end(), {mid0_.get(), mid1_.get()});
+  for (const Level& level : up_) blocks.insert(blocks.end(), {level.block0.get(), level.block1.get()});
+  std::vector<torch::Tensor> film_weights, film_biases;
+  std::vector<int64_t> film_offsets;
+  int64_t film_rows = 0;
+  for (const internal::ResidualBlock* block : blocks) {
+    film_weights.push_back(block->film()->weight);
+    film_biases.push_back(block->film()->bias);
+    film_offsets.push_back(film_rows);
+    film_rows += block->film()->weight.size(0);
+  }
+  const std::string film =
+      w.Let("torch.linear(torch.mish(" + feature + "), " + w.Tensor("films.weight", torch::cat(film_weights, 0)) + ", " +
+            w.Tensor("films.bias", torch::cat(film_biases, 0)) + ").unsqueeze(-1)");
+  size_t next_block = 0;
+  auto write_block = [&](const internal::ResidualBlock& block, const std::string& name, const std::string& x) {
+    return block.WriteScript(w, name, x, film, film_offsets[next_block++]);
+  };
+
   std::string h = w.Let("x.transpose(1, 2)");
   std::vector<std::string> skips;
   for (size_t i = 0; i < down_.size(); ++i) {
     const std::string name = "down" + std::to_string(i);
-    h = down_[i].block0->WriteScript(w, name + "_block0", h, feature);
-    h = down_[i].block1->WriteScript(w, name + "_block1", h, feature);
+    h = write_block(*down_[i].block0, name + "_block0", h);
+    h = write_block(*down_[i].block1, name + "_block1", h);
     skips.push_back(h);
     if (down_[i].down) {
-      h = w.Let("torch.conv1d(" + h + ", " + w.Tensor(name + "_down.weight", down_[i].down->weight) + ", " +
-                w.Tensor(name + "_down.bias", down_[i].down->bias) + ", " + Geometry(down_[i].down->options) + ")");
+      h = w.Let(internal::ScriptConv(h, w.Tensor(name + "_down.weight", down_[i].down->weight),
+                                     w.Tensor(name + "_down.bias", down_[i].down->bias), down_[i].down->options));
     }
   }
-  h = mid0_->WriteScript(w, "mid0", h, feature);
-  h = mid1_->WriteScript(w, "mid1", h, feature);
+  h = write_block(*mid0_, "mid0", h);
+  h = write_block(*mid1_, "mid1", h);
   for (size_t i = 0; i < up_.size(); ++i) {
     const std::string name = "up" + std::to_string(i);
     h = w.Let("torch.cat([" + h + ", " + skips.back() + "], 1)");
     skips.pop_back();
-    h = up_[i].block0->WriteScript(w, name + "_block0", h, feature);
-    h = up_[i].block1->WriteScript(w, name + "_block1", h, feature);
-    h = w.Let("torch.conv_transpose1d(" + h + ", " + w.Tensor(name + "_up.weight", up_[i].up->weight) + ", " +
-              w.Tensor(name + "_up.bias", up_[i].up->bias) + ", " + Geometry(up_[i].up->options) + ")");
+    h = write_block(*up_[i].block0, name + "_block0", h);
+    h = write_block(*up_[i].block1, name + "_block1", h);
+    h = w.Let(internal::ScriptConv(h, w.Tensor(name + "_up.weight", up_[i].up->weight),
+                                   w.Tensor(name + "_up.bias", up_[i].up->bias), up_[i].up->options));
   }
   h = final_block_->WriteScript(w, "final_block", h);
-  h = w.Let("torch.conv1d(" + h + ", " + w.Tensor("final_conv.weight", final_conv_->weight) + ", " +
-            w.Tensor("final_conv.bias", final_conv_->bias) + ")");
+  h = w.Let(internal::ScriptConv(h, w.Tensor("final_conv.weight", final_conv_->weight),
+                                 w.Tensor("final_conv.bias", final_conv_->bias), final_conv_->options));
   return w.Let(h + ".transpose(1, 2)");
 }
 

@@ -56,8 +56,12 @@ class ResidualBlock : public torch::nn::Module {
   ResidualBlock(int in, int out, int cond_dim, int kernel, int groups);
   /// x: (B, in, T), cond: (B, cond_dim) -> (B, out, T)
   torch::Tensor Forward(const torch::Tensor& x, const torch::Tensor& cond);
+  /// Writes the block's forward pass; `film` names the (B, F, 1) FiLM
+  /// output of every block at once (UNet1D::WriteScript), whose rows
+  /// film_offset .. film_offset + 2 * out are this block's scale and shift.
   std::string WriteScript(jit::ScriptWriter& w, const std::string& prefix, const std::string& x,
-                          const std::string& cond) const;
+                          const std::string& film, int64_t film_offset) const;
+  const torch::nn::Linear& film() const { return film_; }
 
  private:
   std::shared_ptr<ConvBlock> block0_, block1_;
