@@ -679,6 +679,19 @@ def main():
             lambda: planner.plan(plan_start, plan_goal, plan_noise, plan_renoise, sphere, scale, split=True),
             args.repeats)
 
+    # Throughput: 64 guided, split plans in one call between the postures of the TCPs (0.5, -/+0.3, 0.2), around
+    # the sphere and around the eight spheres of bench/speed_bench.cc (EightSpheres).
+    eight = {"spheres": torch.tensor([[0.5, 0.0, 0.2, 0.1], [0.3, -0.5, 0.6, 0.05], [0.3, 0.5, 0.6, 0.05],
+                                      [0.7, -0.4, 0.5, 0.05], [0.7, 0.4, 0.5, 0.05], [0.6, 0.0, 0.8, 0.05],
+                                      [0.2, -0.3, 0.1, 0.05], [0.2, 0.3, 0.1, 0.05]])}           # (K = 8, 4)
+    start64, goal64 = start.expand(64, D), goal.expand(64, D)                                   # (64, D) raw
+    noise64, renoise64 = torch.randn(64, T, D), torch.randn(64, T, D)                           # (64, T, D)
+    for suffix, scene in (("", sphere), ("_8", eight)):
+        with torch.no_grad():
+            ms["plan_guided_split_b64" + suffix] = median_ms(
+                lambda: planner.plan(start64, goal64, noise64, renoise64, scene, scale, split=True),
+                max(3, args.repeats // 10), warmup=1)
+
     result = dict(ms)
     result.update({
         "flops_b1": flops_b1,

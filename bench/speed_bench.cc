@@ -31,7 +31,9 @@
 #include "core/error.h"
 #include "experiment/experiment_config.h"
 #include "experiment/trained_planner.h"
+#include "classical/rrt_connect.h"
 #include "geometry/scene_rows.h"
+#include "jit/library.h"
 #include "models/model_config.h"
 #include "models/precision.h"
 #include "objectives/objective.h"
@@ -59,9 +61,10 @@ double MedianMs(int repeats, const std::function<void()>& body, int warmup = 3) 
 
 /// A checkpoint of configs/franka_reach.yaml's network with fresh weights,
 /// a normalizer spanning the joint limits (and +-2 rad/s) and the Franka.
-std::string WriteFreshCheckpoint(const std::string& dir) {
+std::string WriteFreshCheckpoint(const std::string& dir, const std::vector<std::string>& overrides = {},
+                                 const std::string& name = "fresh_franka.pt") {
   const experiment::ExperimentConfig config =
-      experiment::LoadExperiment(std::string(FLOWPLAN_SOURCE_DIR) + "/configs/franka_reach.yaml", {});
+      experiment::LoadExperiment(std::string(FLOWPLAN_SOURCE_DIR) + "/configs/franka_reach.yaml", overrides);
   const auto robot = sim::LoadFrankaModel().description();
   const int64_t D = 14, T = 64;
   torch::manual_seed(0);
@@ -85,9 +88,19 @@ std::string WriteFreshCheckpoint(const std::string& dir) {
   header.trajectory.horizon = T;
   header.trajectory.robot = robot;
   header.data_fingerprint = "none";
-  const std::string path = dir + "/fresh_franka.pt";
+  const std::string path = dir + "/" + name;
   checkpoints::SaveCheckpoint(path, header, {net.get(), ema.get(), nullptr});
   return path;
+}
+
+/// The eight-sphere scene of the throughput figures (K = 8, 4): the paper's
+/// 0.10 m sphere between the start and goal TCPs and seven of 0.05 m around
+/// the workspace, clear of the start and goal postures (bench/eager_reference.py
+/// has the same list).
+torch::Tensor EightSpheres() {
+  return torch::tensor({{0.5f, 0.0f, 0.2f, 0.1f}, {0.3f, -0.5f, 0.6f, 0.05f}, {0.3f, 0.5f, 0.6f, 0.05f},
+                        {0.7f, -0.4f, 0.5f, 0.05f}, {0.7f, 0.4f, 0.5f, 0.05f}, {0.6f, 0.0f, 0.8f, 0.05f},
+                        {0.2f, -0.3f, 0.1f, 0.05f}, {0.2f, 0.3f, 0.1f, 0.05f}});
 }
 
 /// Reads the flat {"key": number} pairs of a JSON file (the reference's output).
@@ -196,6 +209,38 @@ int Main(int argc, char** argv) {
   }
   ms["plan_guided_split_b1"] = MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, sphere); });
 
+  // Throughput: B = 64 plans in one call, guided and split (the flow planner) or guided (MPD: the same network as
+  // a DDPM, fresh weights), around one sphere and around eight; RRT-Connect per plan (8 searches, one per plan, the
+  // call's wall time over 8). The start and goal are the postures of the TCPs (0.5, -/+0.3, 0.2), gripper down.
+  {
+    const experiment::TrainedPlanner mpd =
+        experiment::LoadTrainedPlanner(WriteFreshCheckpoint(out, {"objective.name=ddpm"}, "fresh_franka_mpd.pt"), "", {});
+    const classical::RrtConnectPlanner rrt(plain.planner->info(), config.rrt_connect);
+    const torch::Tensor ends =
+        jit::Call(flow->module(), "ik", {torch::tensor({{0.5, -0.3, 0.2}, {0.5, 0.3, 0.2}}, torch::kFloat64)}).toTensor();
+    const torch::Tensor rest = torch::zeros({1, D - ends.size(1)});
+    const torch::Tensor q_start = torch::cat({ends.slice(0, 0, 1).to(torch::kFloat32), rest}, 1);
+    const torch::Tensor q_goal = torch::cat({ends.slice(0, 1, 2).to(torch::kFloat32), rest}, 1);
+    for (const auto& [suffix, rows] : {std::pair<std::string, torch::Tensor>{"", obstacles}, {"_8", EightSpheres()}}) {
+      const geometry::SceneRows scene = geometry::SphereRows(rows);
+      planning::PlanRequest request;
+      request.start = q_start.expand({64, D}).contiguous();
+      request.goal = q_goal.expand({64, D}).contiguous();
+      request.scene = scene;
+      request.seed = 1;
+      const int few = std::max(3, repeats / 10);
+      ms["plan_guided_split_b64" + suffix] = MedianMs(few, [&] { flow_split->Plan(request); }, 1);
+      ms["mpd_guided_b64" + suffix] = MedianMs(few, [&] { mpd.planner->Plan(request); }, 1);
+      request.start = q_start.expand({8, D}).contiguous();
+      request.goal = q_goal.expand({8, D}).contiguous();
+      int64_t found = 0;
+      ms["rrt_connect_per_plan" + suffix] = MedianMs(few, [&] {
+        found = rrt.Plan(request).found.sum().item<int64_t>();
+      }, 1) / 8.0;
+      if (found != 8) spdlog::warn("RRT-Connect found {} of 8 plans around {} sphere(s)", found, rows.size(0));
+    }
+  }
+
   const std::string plain_file = out + "/planner.pt", split_file = out + "/planner_split.pt";
   plain.planner->Save(plain_file);
   split.planner->Save(split_file);
@@ -225,7 +270,9 @@ int Main(int argc, char** argv) {
 
   std::printf("\n%-26s %12s %12s %12s %9s\n", "", "flowplan", "exported", "eager", "eager/fp");
   for (const std::string key : {"forward_b1", "forward_b64", "train_step_b256", "train_step_b256_bf16", "plan_b1",
-                                "plan_guided_split_b1"}) {
+                                "plan_guided_split_b1", "plan_guided_split_b64", "plan_guided_split_b64_8",
+                                "mpd_guided_b64", "mpd_guided_b64_8", "rrt_connect_per_plan",
+                                "rrt_connect_per_plan_8"}) {
     const auto exported = ms.find(key + "_exported");
     const auto ref = reference.find(key);
     std::printf("%-26s %9.2f ms %9s    %9s    %8s\n", key.c_str(), ms[key],
@@ -236,6 +283,21 @@ int Main(int argc, char** argv) {
   if (reference.count("train_step_b256") > 0) {
     std::printf("%-26s %12s %12s %9.2f ms %8s\n", "  bf16 against eager fp32", "", "", reference["train_step_b256"],
                 (std::to_string(reference["train_step_b256"] / ms["train_step_b256_bf16"]).substr(0, 4) + "x").c_str());
+  }
+  // Throughput in plans and training samples per second.
+  std::printf("\nthroughput (\"_8\": eight spheres)     flowplan        eager\n");
+  for (const std::string key : {"plan_guided_split_b64", "plan_guided_split_b64_8", "mpd_guided_b64", "mpd_guided_b64_8"}) {
+    const auto ref = reference.find(key);
+    std::printf("%-34s %8.1f plans/s %8s\n", key.c_str(), 64e3 / ms[key],
+                ref == reference.end() ? "-" : (std::to_string(64e3 / ref->second).substr(0, 5) + " plans/s").c_str());
+  }
+  for (const std::string key : {"rrt_connect_per_plan", "rrt_connect_per_plan_8"}) {
+    std::printf("%-34s %8.1f plans/s\n", key.c_str(), 1e3 / ms[key]);
+  }
+  for (const std::string key : {"train_step_b256", "train_step_b256_bf16"}) {
+    const auto ref = reference.find(key);
+    std::printf("%-34s %8.2f steps/s, %6.0f samples/s   eager %s\n", key.c_str(), 1e3 / ms[key], 256e3 / ms[key],
+                ref == reference.end() ? "-" : (std::to_string(256e3 / ref->second).substr(0, 6) + " samples/s").c_str());
   }
   // The arithmetic limit of a forward pass: its FLOPs at the best rate this
   // machine's LibTorch reaches, a large convolution of the UNet's kind (oneDNN);
