@@ -47,6 +47,14 @@ def shape_distance(kind: str, points: Tensor, params: Tensor) -> Tuple[Tensor, T
     raise Exception("unknown obstacle kind " + kind)
 
 
+def shape_distance_only(kind: str, points: Tensor, params: Tensor) -> Tensor:
+    """shape_distance's distances (M, K) alone. A sphere has a cheaper way to
+    them; the other shapes find the nearest point, which gives the gradient too."""
+    if kind == "spheres":
+        return sphere_distance_only(points, params)
+    return shape_distance(kind, points, params)[0]
+
+
 def add_obstacles(scene: Dict[str, Tensor], kind: str, params: Optional[Tensor], W: int, where: str):
     """Checks the rows `params` of one kind (an argument named `where` in
     messages) and adds them to `scene`, after any rows of that kind already there."""
@@ -98,3 +106,13 @@ def scene_distance(points: Tensor, scene: Dict[str, Tensor]) -> Tuple[Tensor, Te
         W = points.size(1)
         return torch.zeros([M, 0], dtype=points.dtype, device=points.device), torch.zeros([M, 0, W], dtype=points.dtype, device=points.device)
     return torch.cat(distances, 1), torch.cat(gradients, 1)
+
+
+def scene_distance_only(points: Tensor, scene: Dict[str, Tensor]) -> Tensor:
+    """The signed distances (M, K) of scene_distance without their gradient."""
+    distances: List[Tensor] = []
+    for kind, params in scene.items():
+        distances.append(shape_distance_only(kind, points, params.to(points.dtype)))
+    if len(distances) == 0:
+        return torch.zeros([points.size(0), 0], dtype=points.dtype, device=points.device)
+    return distances[0] if len(distances) == 1 else torch.cat(distances, 1)

@@ -28,12 +28,20 @@ def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], op
     M = centres.size(0)
     S = centres.size(1)
     W = centres.size(2)
-    distance, normal = scene_distance(centres.reshape(M * S, W), scene)
+    points = centres.reshape(M * S, W)
+    distance = scene_distance_only(points, scene)
     K = distance.size(1)
     reach = opts["guidance.margin"] + self.robot.sphere_radii.to(q.dtype).view(1, S, 1)
     penetration = torch.relu(reach - distance.view(M, S, K))
-    # d/dc_s of sum_k relu(reach - d_k(c_s)) = -sum_k [active] grad d_k(c_s), as one batched product.
-    active = (penetration > 0).to(q.dtype).view(M * S, 1, K)
-    grad_centres = -torch.bmm(active, normal).view(M, S, W)
-    grad_q = self.robot.spheres_vjp(centres, axes, origins, grad_centres).view(B, T, J)
+    # d/dc_s of sum_k relu(reach - d_k(c_s)) = -sum_k [active] grad d_k(c_s). Only the sphere centres within
+    # reach of some obstacle have a gradient, usually a few of the M S: the obstacles' gradients are taken
+    # at those alone, and summed as one batched product.
+    active = (penetration > 0).view(M * S, K)
+    near = active.any(1).nonzero().squeeze(1)
+    grad_centres = torch.zeros([M * S, W], dtype=q.dtype, device=q.device)
+    if near.size(0) > 0:
+        near_distance, normal = scene_distance(points.index_select(0, near), scene)
+        weights = active.index_select(0, near).to(q.dtype).unsqueeze(1)
+        grad_centres.index_copy_(0, near, -torch.bmm(weights, normal).squeeze(1))
+    grad_q = self.robot.spheres_vjp(centres, axes, origins, grad_centres.view(M, S, W)).view(B, T, J)
     return penetration.sum([1, 2]).view(B, T).sum(1), grad_q, torch.zeros_like(qd)

@@ -18,6 +18,6 @@ def sphere_clearance(centres: Tensor, radii: Tensor, scene: Dict[str, Tensor]) -
     overlap)."""
     M = centres.size(0)
     S = centres.size(1)
-    distance, gradient = scene_distance(centres.reshape(M * S, -1), scene)
+    distance = scene_distance_only(centres.reshape(M * S, -1), scene)
     clearance = distance.view(M, S, -1) - radii.to(distance.dtype).view(1, S, 1)
     return clearance.min(1)[0]

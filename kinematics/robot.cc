@@ -155,8 +155,7 @@ torch::Tensor Robot::Clearance(const torch::Tensor& q, const geometry::SceneRows
 }
 
 torch::Tensor Robot::PointClearance(const torch::Tensor& points, const geometry::SceneRows& scene) {
-  const auto out = jit::CallFunction("scene_distance", {points.to(torch::kFloat64), scene}).toTuple();
-  return out->elements()[0].toTensor();
+  return jit::CallFunction("scene_distance_only", {points.to(torch::kFloat64), scene}).toTensor();
 }
 
 IkSolution Robot::InverseTcp(const torch::Tensor& targets, const torch::Tensor& seed) const {

@@ -250,6 +250,12 @@ TEST_P(ShapeTest, DistanceMatchesTheReferenceAndItsGradientFiniteDifferencesAndA
       inside += want < 0;
       ++total;
     }
+    // The distance alone (shape_distance_only; a sphere's is another computation) against the reference too.
+    const torch::Tensor alone = jit::CallFunction("shape_distance_only", {kind, p, rows}).toTensor();
+    ASSERT_EQ(alone.sizes(), distance.sizes());
+    for (size_t n = 0; n < points.size(); ++n) {
+      EXPECT_NEAR(alone[n][0].item<double>(), Reference(kind, points[n], row, W), 1e-12) << kind << " point " << n;
+    }
     // Central differences of the reference (h = 1e-6) and of the script itself.
     const double h = 1e-6;
     for (size_t n = 0; n < points.size(); ++n) {
@@ -304,6 +310,11 @@ TEST(Shapes, ClosedFormValues) {
   const auto all = jit::CallFunction("scene_distance", {p, scene}).toTuple();
   EXPECT_EQ(all->elements()[0].toTensor().sizes(), torch::IntArrayRef({3, 2}));
   EXPECT_NEAR(all->elements()[0].toTensor()[0][0].item<double>(), -0.5, 1e-12);
+  EXPECT_TRUE(torch::equal(jit::CallFunction("scene_distance_only", {p, scene}).toTensor().slice(1, 1, 2),
+                           all->elements()[0].toTensor().slice(1, 1, 2)))
+      << "a box's distance alone is the same computation";
+  EXPECT_NEAR(jit::CallFunction("scene_distance_only", {p, scene}).toTensor()[0][0].item<double>(), -0.5, 1e-12);
+  EXPECT_EQ(jit::CallFunction("scene_distance_only", {p, SceneRows()}).toTensor().sizes(), torch::IntArrayRef({3, 0}));
 }
 
 TEST(Scene, FileRowsAndNames) {
