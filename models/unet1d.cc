@@ -42,19 +42,24 @@ int64_t Padding(const torch::nn::detail::ConvNdOptions<1>& options) {
 /// im2col + GEMM kernel as a 2-D convolution of height 1, which LibTorch 1.13
 /// picks by itself only for a batch of one: for B = 2..4 (the two halves of a
 /// split plan) its oneDNN path took 1.4-2.8x longer at these sizes
-/// (docs/performance.md). Larger batches take torch.conv1d.
+/// (docs/performance.md). Larger batches, and an empty one (which the im2col
+/// kernel refuses), take torch.conv1d. Only what the UNet's convolutions use
+/// is written: one group, no dilation, no output padding, zero padding.
 std::string ScriptConv(const std::string& x, const std::string& weight, const std::string& bias,
                        const torch::nn::detail::ConvNdOptions<1>& options) {
+  FLOWPLAN_DEMAND(options.groups() == 1 && (*options.dilation())[0] == 1 && (*options.output_padding())[0] == 0 &&
+                  c10::get_if<torch::enumtype::kZeros>(&options.padding_mode()) != nullptr);
   const int64_t k = (*options.kernel_size())[0], stride = (*options.stride())[0], padding = Padding(options);
   const std::string geometry = Pair(1, stride) + ", " + Pair(0, padding);
+  const std::string few = "(" + x + ".size(0) > 0 and " + x + ".size(0) <= 4)";
   if (options.transposed()) {
     return "(torch.slow_conv_transpose2d(" + x + ".unsqueeze(2), " + weight + ".unsqueeze(2), " + Pair(1, k) +
-           ", " + bias + ", " + geometry + ", [0, 0], [1, 1]).squeeze(2) if " + x + ".size(0) <= 4 else " +
+           ", " + bias + ", " + geometry + ", [0, 0], [1, 1]).squeeze(2) if " + few + " else " +
            "torch.conv_transpose1d(" + x + ", " + weight + ", " + bias + ", " + std::to_string(stride) + ", " +
            std::to_string(padding) + "))";
   }
   return "(torch.thnn_conv2d(" + x + ".unsqueeze(2), " + weight + ".unsqueeze(2), " + Pair(1, k) + ", " + bias +
-         ", " + geometry + ").squeeze(2) if " + x + ".size(0) <= 4 else torch.conv1d(" + x + ", " + weight + ", " + bias +
+         ", " + geometry + ").squeeze(2) if " + few + " else torch.conv1d(" + x + ", " + weight + ", " + bias +
          ", " + std::to_string(stride) + ", " + std::to_string(padding) + "))";
 }
 
@@ -252,6 +257,7 @@ std::string UNet1D::WriteScript(jit::ScriptWriter& w) const {
     h = w.Let(internal::ScriptConv(h, w.Tensor(name + "_up.weight", up_[i].up->weight),
                                    w.Tensor(name + "_up.bias", up_[i].up->bias), up_[i].up->options));
   }
+  FLOWPLAN_DEMAND(next_block == blocks.size());  // every block's FiLM rows were read, in the order stacked
   h = final_block_->WriteScript(w, "final_block", h);
   h = w.Let(internal::ScriptConv(h, w.Tensor("final_conv.weight", final_conv_->weight),
                                  w.Tensor("final_conv.bias", final_conv_->bias), final_conv_->options));

@@ -315,6 +315,17 @@ TEST(Shapes, ClosedFormValues) {
       << "a box's distance alone is the same computation";
   EXPECT_NEAR(jit::CallFunction("scene_distance_only", {p, scene}).toTensor()[0][0].item<double>(), -0.5, 1e-12);
   EXPECT_EQ(jit::CallFunction("scene_distance_only", {p, SceneRows()}).toTensor().sizes(), torch::IntArrayRef({3, 0}));
+  // Several spheres at once, in float32 too: distance alone against distance with gradient.
+  const torch::Tensor balls = torch::tensor({{2.0, 0.0, 0.0, 0.5}, {0.0, 0.1, 0.0, 0.2}, {1.0, 1.0, 0.5, 0.3}},
+                                            torch::kFloat64);
+  const torch::Tensor many = torch::rand({50, 3}, torch::kFloat64) * 3 - 1;
+  for (const auto dtype : {torch::kFloat64, torch::kFloat32}) {
+    const torch::Tensor alone =
+        jit::CallFunction("shape_distance_only", {std::string("spheres"), many.to(dtype), balls.to(dtype)}).toTensor();
+    const torch::Tensor with = ScriptDistance("spheres", many.to(dtype), balls.to(dtype)).first;
+    ASSERT_EQ(alone.sizes(), torch::IntArrayRef({50, 3}));
+    EXPECT_LT((alone - with).abs().max().item<double>(), dtype == torch::kFloat64 ? 1e-14 : 1e-6);
+  }
 }
 
 TEST(Scene, FileRowsAndNames) {

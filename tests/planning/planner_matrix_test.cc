@@ -203,6 +203,10 @@ TEST_P(PlannerMatrixTest, InProcessCppAndPythonPlanAlike) {
       const torch::Tensor ours = jit::Call(script, "forward", {x, t, cond.defined() ? c10::IValue(cond) : c10::IValue()}).toTensor();
       EXPECT_LT((ours - net->Forward(x, t, cond)).abs().max().item<float>(), 1e-5) << "batch " << batch;
     }
+    const torch::Tensor none = jit::Call(script, "forward", {torch::zeros({0, 16, D}), torch::zeros({0}),
+                                                             net->cond_dim() > 0 ? c10::IValue(torch::zeros({0, net->cond_dim()}))
+                                                                                 : c10::IValue()}).toTensor();
+    EXPECT_EQ(none.sizes(), torch::IntArrayRef({0, 16, D})) << "an empty batch";
   }
 
   // Start and goal: positions at 40 % and 60 % of the range, velocities 0; the scene around the middle.
