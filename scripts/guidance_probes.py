@@ -1,0 +1,168 @@
+#!/usr/bin/python3
+"""Two probes of how guidance acts inside a flow planner's Euler sampler, on
+exported planners (`flowplan export`; inpainting, no splitting needed):
+
+survival   A fixed push d on the interior states (normalized units) is added
+           after Euler step i only (i = 0 .. N-1, flow time t_{i+1}), and the
+           plan is finished unguided. The push's survival is
+           <x1(pushed) - x1, d> / <d, d>: 1 if the rest of the sampling keeps it,
+           0 if the flow undoes it. After the last step it is 1 by definition.
+           d is the guidance direction at the unguided plan: minus the cost
+           gradient of the final plans (guide.gradient, scale 1), scaled per
+           plan to an RMS of --push over the interior.
+direction  Along the unguided trajectory, the cosine between the cost gradient
+           at the final plan and the gradient at x_t (what today's guidance
+           step uses) or at the clean-sample prediction x1_hat = x_t + (1 - t) v.
+
+    /usr/bin/python3 scripts/guidance_probes.py PLANNER.pt [PLANNER.pt ...] \
+        --plans 64 --json probes.json [--plot probes.png]
+
+The scene is the paper's sphere (0.5, 0, 0.2), radius --radius; start and goal
+TCPs (0.5, -/+0.3, 0.2), gripper down. Plans whose final cost gradient is zero
+(clear of the sphere's margin) have no direction and are left out of both
+probes; how many were used is reported.
+"""
+import argparse
+import json
+import sys
+
+import torch
+
+
+def euler(sampler, x, s, g, t0, steps, h):
+    """Unguided Euler steps of size h from flow time t0, inpainting after each: x (B, T, D) normalized."""
+    for k in range(steps):
+        t = torch.full([x.size(0)], t0 + k * h)
+        x = x + h * sampler.velocity(x, t, s, g)
+        x = torch.cat([s.unsqueeze(1), x[:, 1:-1], g.unsqueeze(1)], 1)
+    return x
+
+
+def cosine(a, b):
+    """Row-wise cosine (B,) of a, b (B, T, D) over their interior states."""
+    a, b = a[:, 1:-1].flatten(1), b[:, 1:-1].flatten(1)
+    return (a * b).sum(1) / (a.norm(dim=1) * b.norm(dim=1)).clamp_min(1e-30)
+
+
+def probe(path, plans, radius, push, seed):
+    planner = torch.jit.load(path)
+    sampler = planner.sampler
+    if sampler.conditioning != "inpaint":
+        sys.exit(f"{path}: the probes need an inpainting planner, got {sampler.conditioning}")
+    opts = dict(planner.settings)
+    steps = int(opts["sampler.steps"])
+    h = 1.0 / steps
+    scene = {"spheres": torch.tensor([[0.5, 0.0, 0.2, radius]])}
+    ends = planner.ik(torch.tensor([[0.5, -0.3, 0.2], [0.5, 0.3, 0.2]], dtype=torch.float64)).float()  # (2, J)
+    J = ends.size(1)
+    D = sampler.normalizer.normalize(torch.zeros(1, 2 * J)).size(1)
+    start = torch.cat([ends[0:1], torch.zeros(1, D - J)], 1).expand(plans, D)  # (B, D) raw
+    goal = torch.cat([ends[1:2], torch.zeros(1, D - J)], 1).expand(plans, D)
+    s, g = sampler.normalizer.normalize(start), sampler.normalizer.normalize(goal)  # (B, D) normalized
+    torch.manual_seed(seed)
+    noise = torch.randn(plans, sampler.horizon, D)
+    with torch.no_grad():
+        # The unguided trajectory x_{t_i}, i = 0 .. N, and its velocities.
+        xs = [torch.cat([s.unsqueeze(1), noise[:, 1:-1], g.unsqueeze(1)], 1)]
+        vs = []
+        for i in range(steps):
+            v = sampler.velocity(xs[-1], torch.full([plans], i * h), s, g)
+            vs.append(v)
+            x = xs[-1] + h * v
+            xs.append(torch.cat([s.unsqueeze(1), x[:, 1:-1], g.unsqueeze(1)], 1))
+        final = xs[-1]
+        grad_final = sampler.guide.gradient(final, scene, opts)  # (B, T, D)
+        interior = grad_final[:, 1:-1].flatten(1)
+        used = interior.norm(dim=1) > 0  # plans with a direction
+        n = int(used.sum())
+        result = {"planner": path, "plans": plans, "plans_used": n, "radius": radius, "steps": steps,
+                  "push_rms": push, "t_after_step": [(i + 1) * h for i in range(steps)],
+                  "t_at_step": [i * h for i in range(steps)]}
+        if n == 0:
+            return result
+        d = -grad_final
+        d[:, 0] = 0.0
+        d[:, -1] = 0.0
+        rms = d[:, 1:-1].flatten(1).pow(2).mean(1).sqrt().clamp_min(1e-30)
+        d = d * (push / rms).view(-1, 1, 1)
+        survival = []
+        for i in range(steps):
+            pushed = euler(sampler, xs[i + 1] + d, s, g, (i + 1) * h, steps - 1 - i, h)
+            change = (pushed - final)[:, 1:-1].flatten(1)
+            share = (change * d[:, 1:-1].flatten(1)).sum(1) / d[:, 1:-1].flatten(1).pow(2).sum(1)
+            survival.append(share[used].tolist())
+        at_xt, at_x1hat = [], []
+        for i in range(steps):
+            t = i * h
+            x1_hat = xs[i] + (1.0 - t) * vs[i]
+            x1_hat = torch.cat([s.unsqueeze(1), x1_hat[:, 1:-1], g.unsqueeze(1)], 1)  # conditioned, as plans are
+            at_xt.append(cosine(sampler.guide.gradient(xs[i], scene, opts), grad_final)[used].tolist())
+            at_x1hat.append(cosine(sampler.guide.gradient(x1_hat, scene, opts), grad_final)[used].tolist())
+    median = lambda rows: [float(torch.tensor(r).median()) for r in rows]
+    quartiles = lambda rows: [[float(torch.tensor(r).quantile(0.25)), float(torch.tensor(r).quantile(0.75))] for r in rows]
+    result.update({"survival_median": median(survival), "survival_quartiles": quartiles(survival),
+                   "cos_xt_median": median(at_xt), "cos_xt_quartiles": quartiles(at_xt),
+                   "cos_x1hat_median": median(at_x1hat), "cos_x1hat_quartiles": quartiles(at_x1hat)})
+    return result
+
+
+def plot(results, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.8))
+    for r in results:
+        if r["plans_used"] == 0:
+            continue
+        label = r.get("label", r["planner"])
+        a.plot(r["t_after_step"], r["survival_median"], marker="o", label=label)
+        line, = b.plot(r["t_at_step"], r["cos_x1hat_median"], marker="o", label=label + ", at x1_hat")
+        b.plot(r["t_at_step"], r["cos_xt_median"], marker="x", linestyle="--", color=line.get_color(),
+               label=label + ", at x_t")
+    a.set(xlabel="flow time t after the pushed step", ylabel="share of the push in the plan (median)",
+          title="survival of a push")
+    b.set(xlabel="flow time t of the step", ylabel="cosine with the gradient at the plan (median)",
+          title="direction of the cost gradient")
+    for ax in (a, b):
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("planners", nargs="+", help="exported planners (.pt), optionally LABEL=PATH")
+    parser.add_argument("--plans", type=int, default=64)
+    parser.add_argument("--radius", type=float, default=0.1, help="the sphere's radius (m)")
+    parser.add_argument("--push", type=float, default=0.01, help="RMS of the push over the interior (normalized units)")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--json", required=True)
+    parser.add_argument("--plot")
+    args = parser.parse_args()
+    torch.set_num_threads(args.threads)
+    results = []
+    for spec in args.planners:
+        label, _, path = spec.rpartition("=")
+        r = probe(path, args.plans, args.radius, args.push, args.seed)
+        r["label"] = label or path
+        results.append(r)
+        if r["plans_used"] == 0:
+            print(f"{r['label']}: no plan comes near the sphere; nothing to probe")
+            continue
+        print(f"{r['label']}: {r['plans_used']} of {r['plans']} plans near the sphere")
+        print("  t after step     " + " ".join(f"{t:6.2f}" for t in r["t_after_step"]))
+        print("  survival         " + " ".join(f"{v:6.3f}" for v in r["survival_median"]))
+        print("  t of step        " + " ".join(f"{t:6.2f}" for t in r["t_at_step"]))
+        print("  cos at x_t       " + " ".join(f"{v:6.3f}" for v in r["cos_xt_median"]))
+        print("  cos at x1_hat    " + " ".join(f"{v:6.3f}" for v in r["cos_x1hat_median"]))
+    with open(args.json, "w") as f:
+        json.dump(results, f, indent=1)
+    if args.plot:
+        plot(results, args.plot)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
