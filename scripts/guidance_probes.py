@@ -1,26 +1,32 @@
 #!/usr/bin/python3
 """Two probes of how guidance acts inside a flow planner's Euler sampler, on
-exported planners (`flowplan export`; inpainting, no splitting needed):
+exported planners (`flowplan export`; inpainting, no splitting needed). Both
+use the collision term's gradient alone (the other terms' weights set to 0).
 
 survival   A fixed push d on the interior states (normalized units) is added
-           after Euler step i only (i = 0 .. N-1, flow time t_{i+1}), and the
-           plan is finished unguided. The push's survival is
-           <x1(pushed) - x1, d> / <d, d>: 1 if the rest of the sampling keeps it,
-           0 if the flow undoes it. After the last step it is 1 by definition.
-           d is the guidance direction at the unguided plan: minus the cost
-           gradient of the final plans (guide.gradient, scale 1), scaled per
-           plan to an RMS of --push over the interior.
-direction  Along the unguided trajectory, the cosine between the cost gradient
-           at the final plan and the gradient at x_t (what today's guidance
-           step uses) or at the clean-sample prediction x1_hat = x_t + (1 - t) v.
+           after Euler step i only (i = 0 .. N-1, reaching flow time t_{i+1},
+           where a guidance step acts), and the plan is finished unguided.
+           The push's survival is <x1(pushed) - x1, d> / <d, d>: 1 if the rest
+           of the sampling keeps it, 0 if the flow undoes it; after the last
+           step it is 1 by definition. d is minus the collision gradient at
+           the unguided plan (guide.gradient), scaled per plan to an RMS of
+           --push over the interior.
+direction  At the states where guidance acts, x_{t_{i+1}} after each Euler
+           step, the cosine between the collision gradient at the final plan
+           and the gradient at x_t (what the guidance step uses) or at the
+           clean-sample prediction x1_hat = x_t + (1 - t) v (inpainted). At
+           t = 1 both are the plan: cosine 1.
 
-    /usr/bin/python3 scripts/guidance_probes.py PLANNER.pt [PLANNER.pt ...] \
+    /usr/bin/python3 scripts/guidance_probes.py [LABEL=]PLANNER.pt ... \
         --plans 64 --json probes.json [--plot probes.png]
 
 The scene is the paper's sphere (0.5, 0, 0.2), radius --radius; start and goal
-TCPs (0.5, -/+0.3, 0.2), gripper down. Plans whose final cost gradient is zero
-(clear of the sphere's margin) have no direction and are left out of both
-probes; how many were used is reported.
+TCPs (0.5, -/+0.3, 0.2), gripper down. Plans whose final collision gradient is
+zero (clear of the sphere by more than the margin) have no direction and are
+left out of both probes; how many were used is reported. Two self-checks are
+written beside the figures: the probe's unguided plans against the planner's
+own plan(..., scale=0), and its x1_hat against the sampler's integrate() of
+one step to t = 1 (largest absolute differences).
 """
 import argparse
 import json
@@ -50,6 +56,9 @@ def probe(path, plans, radius, push, seed):
     if sampler.conditioning != "inpaint":
         sys.exit(f"{path}: the probes need an inpainting planner, got {sampler.conditioning}")
     opts = dict(planner.settings)
+    for key in ("guidance.smoothness_weight", "guidance.joint_limit_weight", "guidance.user_cost_weight"):
+        if key in opts:
+            opts[key] = 0.0  # the collision term alone
     steps = int(opts["sampler.steps"])
     h = 1.0 / steps
     scene = {"spheres": torch.tensor([[0.5, 0.0, 0.2, radius]])}
@@ -61,23 +70,21 @@ def probe(path, plans, radius, push, seed):
     s, g = sampler.normalizer.normalize(start), sampler.normalizer.normalize(goal)  # (B, D) normalized
     torch.manual_seed(seed)
     noise = torch.randn(plans, sampler.horizon, D)
+    inpaint = lambda x: torch.cat([s.unsqueeze(1), x[:, 1:-1], g.unsqueeze(1)], 1)
     with torch.no_grad():
-        # The unguided trajectory x_{t_i}, i = 0 .. N, and its velocities.
-        xs = [torch.cat([s.unsqueeze(1), noise[:, 1:-1], g.unsqueeze(1)], 1)]
-        vs = []
+        # The unguided trajectory x_{t_i}, i = 0 .. N.
+        xs = [inpaint(noise)]
         for i in range(steps):
-            v = sampler.velocity(xs[-1], torch.full([plans], i * h), s, g)
-            vs.append(v)
-            x = xs[-1] + h * v
-            xs.append(torch.cat([s.unsqueeze(1), x[:, 1:-1], g.unsqueeze(1)], 1))
+            xs.append(euler(sampler, xs[-1], s, g, i * h, 1, h))
         final = xs[-1]
+        own = planner.plan(start, goal, noise, scale=0.0)  # (B, T, D) raw
+        check_plan = (sampler.normalizer.denormalize(final) - own)[:, 1:-1].abs().max().item()
         grad_final = sampler.guide.gradient(final, scene, opts)  # (B, T, D)
-        interior = grad_final[:, 1:-1].flatten(1)
-        used = interior.norm(dim=1) > 0  # plans with a direction
+        used = grad_final[:, 1:-1].flatten(1).norm(dim=1) > 0  # plans with a direction
         n = int(used.sum())
-        result = {"planner": path, "plans": plans, "plans_used": n, "radius": radius, "steps": steps,
-                  "push_rms": push, "t_after_step": [(i + 1) * h for i in range(steps)],
-                  "t_at_step": [i * h for i in range(steps)]}
+        result = {"planner": path.rsplit("/", 1)[-1], "plans": plans, "plans_used": n, "radius": radius,
+                  "steps": steps, "push_rms": push, "t": [(i + 1) * h for i in range(steps)],
+                  "check_unguided_plan_max_abs": check_plan}
         if n == 0:
             return result
         d = -grad_final
@@ -85,24 +92,30 @@ def probe(path, plans, radius, push, seed):
         d[:, -1] = 0.0
         rms = d[:, 1:-1].flatten(1).pow(2).mean(1).sqrt().clamp_min(1e-30)
         d = d * (push / rms).view(-1, 1, 1)
-        survival = []
+        survival, at_xt, at_x1hat = [], [], []
+        check_x1hat = 0.0
+        schedule = planner.schedule
         for i in range(steps):
-            pushed = euler(sampler, xs[i + 1] + d, s, g, (i + 1) * h, steps - 1 - i, h)
+            t = (i + 1) * h
+            pushed = euler(sampler, xs[i + 1] + d, s, g, t, steps - 1 - i, h)
             change = (pushed - final)[:, 1:-1].flatten(1)
             share = (change * d[:, 1:-1].flatten(1)).sum(1) / d[:, 1:-1].flatten(1).pow(2).sum(1)
             survival.append(share[used].tolist())
-        at_xt, at_x1hat = [], []
-        for i in range(steps):
-            t = i * h
-            x1_hat = xs[i] + (1.0 - t) * vs[i]
-            x1_hat = torch.cat([s.unsqueeze(1), x1_hat[:, 1:-1], g.unsqueeze(1)], 1)  # conditioned, as plans are
-            at_xt.append(cosine(sampler.guide.gradient(xs[i], scene, opts), grad_final)[used].tolist())
+            x = xs[i + 1]
+            if i + 1 < steps:
+                x1_hat = inpaint(x + (1.0 - t) * sampler.velocity(x, torch.full([plans], t), s, g))
+                one_step = sampler.integrate(x, s, g, t, 1, {}, opts, schedule, False)
+                check_x1hat = max(check_x1hat, (x1_hat - one_step).abs().max().item())
+            else:
+                x1_hat = x
+            at_xt.append(cosine(sampler.guide.gradient(x, scene, opts), grad_final)[used].tolist())
             at_x1hat.append(cosine(sampler.guide.gradient(x1_hat, scene, opts), grad_final)[used].tolist())
     median = lambda rows: [float(torch.tensor(r).median()) for r in rows]
     quartiles = lambda rows: [[float(torch.tensor(r).quantile(0.25)), float(torch.tensor(r).quantile(0.75))] for r in rows]
     result.update({"survival_median": median(survival), "survival_quartiles": quartiles(survival),
                    "cos_xt_median": median(at_xt), "cos_xt_quartiles": quartiles(at_xt),
-                   "cos_x1hat_median": median(at_x1hat), "cos_x1hat_quartiles": quartiles(at_x1hat)})
+                   "cos_x1hat_median": median(at_x1hat), "cos_x1hat_quartiles": quartiles(at_x1hat),
+                   "check_x1hat_max_abs": check_x1hat})
     return result
 
 
@@ -115,13 +128,13 @@ def plot(results, path):
         if r["plans_used"] == 0:
             continue
         label = r.get("label", r["planner"])
-        a.plot(r["t_after_step"], r["survival_median"], marker="o", label=label)
-        line, = b.plot(r["t_at_step"], r["cos_x1hat_median"], marker="o", label=label + ", at x1_hat")
-        b.plot(r["t_at_step"], r["cos_xt_median"], marker="x", linestyle="--", color=line.get_color(),
+        a.plot(r["t"], r["survival_median"], marker="o", label=label)
+        line, = b.plot(r["t"], r["cos_x1hat_median"], marker="o", label=label + ", at x1_hat")
+        b.plot(r["t"], r["cos_xt_median"], marker="x", linestyle="--", color=line.get_color(),
                label=label + ", at x_t")
     a.set(xlabel="flow time t after the pushed step", ylabel="share of the push in the plan (median)",
           title="survival of a push")
-    b.set(xlabel="flow time t of the step", ylabel="cosine with the gradient at the plan (median)",
+    b.set(xlabel="flow time t of the guided state", ylabel="cosine with the gradient at the plan (median)",
           title="direction of the cost gradient")
     for ax in (a, b):
         ax.grid(alpha=0.3)
@@ -149,12 +162,12 @@ def main():
         r["label"] = label or path
         results.append(r)
         if r["plans_used"] == 0:
-            print(f"{r['label']}: no plan comes near the sphere; nothing to probe")
+            print(f"{r['label']}: no plan comes within the collision margin; nothing to probe")
             continue
-        print(f"{r['label']}: {r['plans_used']} of {r['plans']} plans near the sphere")
-        print("  t after step     " + " ".join(f"{t:6.2f}" for t in r["t_after_step"]))
+        print(f"{r['label']}: {r['plans_used']} of {r['plans']} plans within the collision margin; self-checks "
+              f"{r['check_unguided_plan_max_abs']:.1e} (unguided plan), {r['check_x1hat_max_abs']:.1e} (x1_hat)")
+        print("  t                " + " ".join(f"{t:6.2f}" for t in r["t"]))
         print("  survival         " + " ".join(f"{v:6.3f}" for v in r["survival_median"]))
-        print("  t of step        " + " ".join(f"{t:6.2f}" for t in r["t_at_step"]))
         print("  cos at x_t       " + " ".join(f"{v:6.3f}" for v in r["cos_xt_median"]))
         print("  cos at x1_hat    " + " ".join(f"{v:6.3f}" for v in r["cos_x1hat_median"]))
     with open(args.json, "w") as f:

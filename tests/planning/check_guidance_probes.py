@@ -1,8 +1,10 @@
 """Runs scripts/guidance_probes.py on the shipped Franka reach planner (a few
-plans) and checks what holds by construction: a push after the last Euler step
-is the plan's change (survival 1), and at the last step the clean-sample
-prediction is the plan (cosine 1); every figure is a finite number and the
-cosines lie in [-1, 1].
+plans) and checks it: its unguided plans equal the planner's own
+plan(..., scale=0) and its clean-sample predictions the sampler's one Euler
+step to t = 1 (to 1e-5); what holds by construction holds (a push after the
+last step is the plan's change: survival 1; at t = 1 both gradients are the
+plan's, and one step before it the clean-sample prediction is the plan:
+cosine 1); every figure is finite and the cosines lie in [-1, 1].
 
 usage: check_guidance_probes.py PYTHON SCRIPT PLANNER.pt OUT_DIR
 """
@@ -21,13 +23,17 @@ def main():
     with open(path) as f:
         result = json.load(f)[0]
     failures = []
+    for key in ("check_unguided_plan_max_abs", "check_x1hat_max_abs"):
+        if not result.get(key, 1.0) <= 1e-5:
+            failures.append(f"{key} = {result.get(key)}, expected at most 1e-5")
     if result["plans_used"] < 1:
-        failures.append("no plan came near the sphere")
+        failures.append("no plan came within the collision margin of the sphere")
     else:
         if abs(result["survival_median"][-1] - 1.0) > 1e-4:
             failures.append(f"survival after the last step {result['survival_median'][-1]}, expected 1")
-        if abs(result["cos_x1hat_median"][-1] - 1.0) > 1e-5:
-            failures.append(f"cosine at x1_hat at the last step {result['cos_x1hat_median'][-1]}, expected 1")
+        for key, index in (("cos_x1hat_median", -1), ("cos_x1hat_median", -2), ("cos_xt_median", -1)):
+            if abs(result[key][index] - 1.0) > 1e-5:
+                failures.append(f"{key}[{index}] = {result[key][index]}, expected 1")
         for key in ("survival_median", "cos_xt_median", "cos_x1hat_median"):
             if not all(math.isfinite(v) for v in result[key]):
                 failures.append(f"{key} has a non-finite value: {result[key]}")
