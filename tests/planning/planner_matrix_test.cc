@@ -22,6 +22,7 @@
 #include "planning/assemble.h"
 #include "tests/support/planners.h"
 #include "tests/support/scratch_dir.h"
+#include "tests/support/tiny_model.h"
 
 namespace flowplan::planning {
 namespace {
@@ -145,14 +146,10 @@ TEST_P(PlannerMatrixTest, InProcessCppAndPythonPlanAlike) {
 
   // The network: tiny, with weights scaled up so that a mistake anywhere shows in the plan.
   torch::manual_seed(11);
-  models::ModelConfig model;
-  model.architecture = value(1) == "unet1d"        ? models::Architecture::kUNet1D
-                       : value(1) == "transformer" ? models::Architecture::kTransformer
-                                                   : models::Architecture::kStateVae;
-  model.unet.down_dims = {16, 32};
-  model.transformer.d_model = 16;
-  model.transformer.heads = 2;
-  model.vae.hidden = {32, 32};
+  models::ModelConfig model = testing::TinyModelConfig(value(1) == "unet1d"        ? models::Architecture::kUNet1D
+                                                       : value(1) == "transformer" ? models::Architecture::kTransformer
+                                                                                   : models::Architecture::kStateVae);
+  model.transformer.d_model = 16;  // smaller still than the shared tiny config: 40 cases each plan three ways
   model.vae.latent = 8;
   PlannerParts parts;
   parts.objective.name = value(0) == "flow"   ? objectives::ObjectiveKind::kFlowMatching
