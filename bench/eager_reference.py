@@ -548,14 +548,15 @@ class ExportReference:
         guided = sampler.guide.active(scene, opts)
         s, g = m.normalize(start), m.normalize(goal)
         steps = int(opts["sampler.steps"])
-        x = sampler.integrate(noise, s, g, 0.0, steps, scene, opts, m.schedule, guided)
+        choices = {"guidance.schedule": m.schedule, "sampler.guide_at": m.guide_at}
+        x = sampler.integrate(noise, s, g, 0.0, steps, scene, opts, choices, guided)
         if split:
             B, half = x.size(0), m.horizon // 2
             before_mid, after_mid = x[:, half - 1], x[:, half]
             x = 0.5 * renoise + 0.5 * x
             halves = torch.cat([x[:, 0:half], x[:, half:m.horizon]], 0)
             refined = sampler.integrate(halves, torch.cat([s, after_mid], 0), torch.cat([before_mid, g], 0), 0.5,
-                                        max(1, steps // 2), scene, opts, m.schedule, guided)
+                                        max(1, steps // 2), scene, opts, choices, guided)
             x = torch.cat([refined[0:B], refined[B:2 * B]], 1)
         return inpaint(m.denormalize(x), start, goal), "export.sampler.integrate"
 

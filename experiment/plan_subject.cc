@@ -16,7 +16,7 @@ namespace fs = std::filesystem;
 namespace {
 
 /// The per-call settings of `planner` that `config` sets: every number the
-/// planner takes (by its key) and the guidance schedule.
+/// planner takes (by its key), the guidance schedule and where it guides.
 planning::PlanSettings CallSettings(const planning::LearnedPlanner& planner, const ExperimentConfig& config) {
   std::map<std::string, double> numbers;
   for (const auto& entry : config::ListNumbers(config.guidance, "guidance")) numbers.insert(entry);
@@ -28,6 +28,8 @@ planning::PlanSettings CallSettings(const planning::LearnedPlanner& planner, con
   }
   const std::string schedule = config::EnumName(config.guidance.schedule);
   if (schedule != planner.schedule()) settings.schedule = schedule;
+  const std::string guide_at = config::EnumName(config.sampler.guide_at);
+  if (guide_at != planner.guide_at()) settings.guide_at = guide_at;
   return settings;
 }
 

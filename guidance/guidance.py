@@ -4,7 +4,7 @@
 
 
 def guidance_schedules() -> List[str]:
-    return ["one_minus_t", "ratio", "rising"]
+    return ["one_minus_t", "ratio", "rising", "constant"]
 
 
 def schedule_factor(schedule: str, t: float) -> float:
@@ -15,7 +15,9 @@ def schedule_factor(schedule: str, t: float) -> float:
         return (1.0 - t) / max(t, 1e-3)
     if schedule == "rising":
         return t
-    raise Exception("guidance.schedule: unknown schedule " + schedule + " (expected one_minus_t, ratio or rising)")
+    if schedule == "constant":
+        return 1.0
+    raise Exception("guidance.schedule: unknown schedule " + schedule + " (expected one_minus_t, ratio, rising or constant)")
 
 
 def clip_states(gradient: Tensor, clip: float) -> Tensor:

@@ -21,12 +21,30 @@ enum class GuidanceSchedule {
   kOneMinusT,  // 1 − t (the paper's)
   kRatio,      // (1 − t)/t, with t at least 1e-3
   kRising,     // t: strongest after the last step, where the network's own pull back to the data is strongest
+  kConstant,   // 1 (with sampler.guide_from: full strength from that flow time on)
 };
 
 inline const config::EnumNames<GuidanceSchedule>& EnumEntries(GuidanceSchedule) {
   static const config::EnumNames<GuidanceSchedule> names = {{GuidanceSchedule::kOneMinusT, "one_minus_t"},
                                                             {GuidanceSchedule::kRatio, "ratio"},
-                                                            {GuidanceSchedule::kRising, "rising"}};
+                                                            {GuidanceSchedule::kRising, "rising"},
+                                                            {GuidanceSchedule::kConstant, "constant"}};
+  return names;
+}
+
+/// Where the flow planner takes the cost's gradient and how it applies it
+/// (sampler.guide_at; docs/planning.md, "Guidance variants"). The DDPM planner
+/// always guides its posterior mean, the latent planner its waypoints.
+enum class GuidanceTarget {
+  kState,       // at x_t after each Euler step, moving x_t: x <- x - s b(t) grad C(x)
+  kVelocity,    // at the clean prediction x̂1 = x_t + (1 - t) v, added to the velocity: v <- v - s b(t) grad C(x̂1)
+  kPrediction,  // guidance.prediction_iterations steps on x̂1, then the Euler step heads for the moved x̂1
+};
+
+inline const config::EnumNames<GuidanceTarget>& EnumEntries(GuidanceTarget) {
+  static const config::EnumNames<GuidanceTarget> names = {{GuidanceTarget::kState, "state"},
+                                                          {GuidanceTarget::kVelocity, "velocity"},
+                                                          {GuidanceTarget::kPrediction, "prediction"}};
   return names;
 }
 
@@ -36,6 +54,7 @@ inline const config::EnumNames<GuidanceSchedule>& EnumEntries(GuidanceSchedule) 
 struct GuidanceConfig {
   double scale = 1.0;  // s; 0: unguided
   GuidanceSchedule schedule = GuidanceSchedule::kOneMinusT;
+  int candidates = 1;               // plans drawn per request; the one of least guidance cost is returned
   double clip = 0.0;                // cap on each term's gradient norm per state (raw units), 0: none
   double collision_weight = 0.1;    // weight of the collision cost (SPEC / the paper)
   double smoothness_weight = 1e-6;  // weight of the GP smoothness prior
@@ -50,6 +69,8 @@ struct GuidanceConfig {
   void Visit(V& v) {
     v.Field("scale", scale, "guidance scale s (0: unguided)", config::NonNegative());
     v.Field("schedule", schedule, "b_t, the factor on the cost gradient at flow time t");
+    v.Field("candidates", candidates, "plans drawn per request; the one of least guidance cost is returned",
+            config::Positive());
     v.Field("clip", clip, "cap on the norm of each cost term's gradient at each state (raw units), 0 for none",
             config::NonNegative());
     v.Field("collision_weight", collision_weight, "weight of the collision cost", config::NonNegative());

@@ -83,6 +83,7 @@ std::unique_ptr<LearnedPlanner> AssemblePlanner(const PlannerParts& parts) {
           .Submodule("sampler", sampler)
           .Attribute("settings", Settings(parts, *kind))
           .Attribute("schedule", std::string(config::EnumName(parts.guidance.schedule)))
+          .Attribute("guide_at", std::string(config::EnumName(parts.sampler.guide_at)))
           .Attribute("noise_shape", c10::List<int64_t>(noise_shape))
           .Attribute("renoise_shape", c10::ListType::ofInts(), c10::List<int64_t>(renoise_shape))
           .Attribute("state_dim", D)

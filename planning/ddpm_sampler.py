@@ -23,7 +23,7 @@ def denoise(self, x: Tensor, k: int, start: Tensor, goal: Tensor, guided: bool,
 
 
 def sample(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Tensor],
-           scene: Dict[str, Tensor], opts: Dict[str, float], schedule: str) -> Tensor:
+           scene: Dict[str, Tensor], opts: Dict[str, float], choices: Dict[str, str]) -> Tensor:
     """start, goal (B, D) raw; noise (B, T, D); renoise (B, diffusion_steps - 1, T, D), the
     noise of the ancestral steps -> plans (B, T, D) raw."""
     assert renoise is not None, "plan: renoise: expected the noise of the DDPM steps"

@@ -1,10 +1,14 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): the class
 # FlowSampler, the flow planner's sampler (SPEC section 2): Euler steps of the
 # network's velocity from noise (t = 0) to a plan (t = 1), inpainting or
-# direct conditioning, guidance after every step, and optional midpoint
-# splitting. Submodules network (forward(x, t, cond)), normalizer and guide;
-# attributes conditioning ("inpaint" or "direct"), splitting ("none" or
-# "midpoint"), horizon (T). Settings: sampler.steps and the guide's.
+# direct conditioning, guidance, and optional midpoint splitting. Submodules
+# network (forward(x, t, cond)), normalizer and guide; attributes conditioning
+# ("inpaint" or "direct"), splitting ("none" or "midpoint"), horizon (T).
+# Settings: sampler.steps, sampler.split_time, the guidance variants
+# sampler.guide_from, .prediction_iterations, .final_iterations,
+# .final_denoise_time, .midpoint_iterations, and the guide's; choices
+# "guidance.schedule" and "sampler.guide_at" (docs/planning.md, "Guidance
+# variants").
 
 
 def velocity(self, x: Tensor, t: Tensor, start: Tensor, goal: Tensor) -> Tensor:
@@ -14,50 +18,96 @@ def velocity(self, x: Tensor, t: Tensor, start: Tensor, goal: Tensor) -> Tensor:
     return self.network.forward(conditioned(x, start, goal, inpainting), t, condition_vector(start, goal, inpainting))
 
 
-def integrate(self, x: Tensor, start: Tensor, goal: Tensor, t0: float, steps: int,
-              scene: Dict[str, Tensor], opts: Dict[str, float], schedule: str, guided: bool) -> Tensor:
-    """Euler from flow time t0 to 1 in `steps` steps:
-    x <- x + h v(x, t_i); guide (at t_{i+1}); inpaint."""
+def descend(self, x: Tensor, factor: float, iterations: int, start: Tensor, goal: Tensor,
+            scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tensor:
+    """`iterations` guidance steps x <- x - factor * gradient(x) on normalized
+    plans x (B, T', D), the ends re-imposed after each."""
     inpainting = self.conditioning == "inpaint"
+    for g in range(iterations):
+        x = conditioned(x - factor * self.guide.gradient(x, scene, opts), start, goal, inpainting)
+    return x
+
+
+def integrate(self, x: Tensor, start: Tensor, goal: Tensor, t0: float, steps: int,
+              scene: Dict[str, Tensor], opts: Dict[str, float], choices: Dict[str, str], guided: bool) -> Tensor:
+    """Euler from flow time t0 to 1 in `steps` steps of h, guided as
+    sampler.guide_at says, from flow time sampler.guide_from on:
+      state:      x <- x + h v(x, t_i); x <- x - s b(t_{i+1}) g(x)
+      velocity:   x̂1 = x + (1 - t_i) v; x <- x + h (v - s b(t_i) g(x̂1))
+      prediction: x̂1 moved by G steps x̂1 <- x̂1 - s b(t_i) g(x̂1); x <- x + h (x̂1 - x) / (1 - t_i)
+    (g the guide's gradient, the ends re-imposed after each step), then the
+    end-game: sampler.final_iterations steps x <- x - s g(x), each followed by
+    an Euler step from sampler.final_denoise_time to 1 when that is non-zero."""
+    inpainting = self.conditioning == "inpaint"
+    at = choices["sampler.guide_at"]
+    schedule = choices["guidance.schedule"]
+    scale = opts["guidance.scale"]
+    guide_from = opts["sampler.guide_from"]
     x = conditioned(x, start, goal, inpainting)
     h = (1.0 - t0) / steps
     for i in range(steps):
-        t = torch.full([x.size(0)], t0 + i * h, dtype=x.dtype, device=x.device)
-        x = x + h * self.velocity(x, t, start, goal)
-        if guided:
-            x = self.guide.step(x, t0 + (i + 1) * h, scene, opts, schedule)
+        t_i = t0 + i * h
+        t = torch.full([x.size(0)], t_i, dtype=x.dtype, device=x.device)
+        v = self.velocity(x, t, start, goal)
+        if guided and at != "state" and t_i >= guide_from - 1e-9:
+            predicted = conditioned(x + (1.0 - t_i) * v, start, goal, inpainting)
+            factor = scale * schedule_factor(schedule, t_i)
+            if at == "velocity":
+                v = v - factor * self.guide.gradient(predicted, scene, opts)
+            else:
+                moved = self.descend(predicted, factor, setting_int(opts, "sampler.prediction_iterations"),
+                                     start, goal, scene, opts)
+                v = v + (moved - predicted) / (1.0 - t_i)
+        x = x + h * v
+        if guided and at == "state" and t_i + h >= guide_from - 1e-9:
+            x = self.guide.step(x, t_i + h, scene, opts, schedule)
         x = conditioned(x, start, goal, inpainting)
+    if guided:
+        denoise_time = opts["sampler.final_denoise_time"]
+        assert denoise_time < 1.0, "sampler.final_denoise_time: expected a flow time below 1, got " + str(denoise_time)
+        t_r = torch.full([x.size(0)], denoise_time, dtype=x.dtype, device=x.device)
+        for g in range(setting_int(opts, "sampler.final_iterations")):
+            x = self.descend(x, scale, 1, start, goal, scene, opts)
+            if denoise_time > 0.0:
+                x = conditioned(x + (1.0 - denoise_time) * self.velocity(x, t_r, start, goal), start, goal, inpainting)
     return x
 
 
 def sample_normalized(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Tensor],
-                      scene: Dict[str, Tensor], opts: Dict[str, float], schedule: str) -> Tensor:
+                      scene: Dict[str, Tensor], opts: Dict[str, float], choices: Dict[str, str]) -> Tensor:
     """start, goal (B, D) normalized; noise, renoise (B, T, D) standard normal
     -> plans (B, T, D) normalized, unclamped."""
+    at = choices["sampler.guide_at"]
+    assert at in guide_targets(), "plan: guide_at: expected one of " + ", ".join(guide_targets()) + ", got " + at
     guided = self.guide.active(scene, opts)
     steps = setting_int(opts, "sampler.steps")
     assert steps >= 1, "sampler.steps: expected at least one step, got " + str(steps)
-    x = self.integrate(noise, start, goal, 0.0, steps, scene, opts, schedule, guided)
+    x = self.integrate(noise, start, goal, 0.0, steps, scene, opts, choices, guided)
     if self.splitting == "none":
         return x
     assert renoise is not None, "plan: renoise: this planner splits trajectories and needs re-noising noise"
+    split_time = opts["sampler.split_time"]
+    assert split_time > 0.0 and split_time < 1.0, "sampler.split_time: expected a flow time in (0, 1), got " + str(split_time)
+    if guided:
+        x = self.descend(x, opts["guidance.scale"], setting_int(opts, "sampler.midpoint_iterations"), start, goal,
+                         scene, opts)
     # Midpoint splitting: the states on either side of the middle become the
     # boundaries of the two halves, so the joined plan has no duplicate state.
     B = x.size(0)
     half = self.horizon // 2
     before_mid = x[:, half - 1]
     after_mid = x[:, half]
-    x = 0.5 * renoise + 0.5 * x
+    x = (1.0 - split_time) * renoise + split_time * x
     halves = torch.cat([x[:, 0:half], x[:, half:self.horizon]], 0)
-    refined = self.integrate(halves, torch.cat([start, after_mid], 0), torch.cat([before_mid, goal], 0), 0.5,
-                             max(1, steps // 2), scene, opts, schedule, guided)
+    refined = self.integrate(halves, torch.cat([start, after_mid], 0), torch.cat([before_mid, goal], 0), split_time,
+                             split_steps(steps, split_time), scene, opts, choices, guided)
     return torch.cat([refined[0:B], refined[B:2 * B]], 1)
 
 
 def sample(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Tensor],
-           scene: Dict[str, Tensor], opts: Dict[str, float], schedule: str) -> Tensor:
+           scene: Dict[str, Tensor], opts: Dict[str, float], choices: Dict[str, str]) -> Tensor:
     """start, goal (B, D) raw -> plans (B, T, D) raw, interior states clamped to
     the training range; under inpainting states 0 and T - 1 are start and goal."""
     x = self.sample_normalized(self.normalizer.normalize(start), self.normalizer.normalize(goal), noise, renoise,
-                               scene, opts, schedule)
+                               scene, opts, choices)
     return conditioned(self.normalizer.denormalize(x), start, goal, self.conditioning == "inpaint")

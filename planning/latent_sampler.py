@@ -14,7 +14,7 @@
 
 
 def sample(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Tensor],
-           scene: Dict[str, Tensor], opts: Dict[str, float], schedule: str) -> Tensor:
+           scene: Dict[str, Tensor], opts: Dict[str, float], choices: Dict[str, str]) -> Tensor:
     """start, goal (B, D) raw; noise (B, L) -> plans (B, T, D) raw."""
     B = start.size(0)
     D = start.size(1)

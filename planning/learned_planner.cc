@@ -11,8 +11,8 @@
 namespace flowplan::planning {
 namespace {
 
-std::vector<int64_t> WithBatch(int64_t batch, const std::vector<int64_t>& shape) {
-  std::vector<int64_t> out = {batch};
+std::vector<int64_t> WithBatch(const std::vector<int64_t>& batch, const std::vector<int64_t>& shape) {
+  std::vector<int64_t> out = batch;
   out.insert(out.end(), shape.begin(), shape.end());
   return out;
 }
@@ -36,6 +36,7 @@ LearnedPlanner::LearnedPlanner(torch::jit::Module module, std::string source)
     info_.robot = kinematics::RobotFromYaml(module_.attr("robot_description").toStringRef(), source_ + ": attribute robot_description");
     config_yaml_ = module_.attr("config").toStringRef();
     schedule_ = module_.attr("schedule").toStringRef();
+    guide_at_ = module_.attr("guide_at").toStringRef();
     for (const auto& entry : module_.attr("settings").toGenericDict()) {
       settings_.emplace(entry.key().toStringRef(), entry.value().toDouble());
     }
@@ -81,6 +82,7 @@ torch::Tensor LearnedPlanner::PlanWithNoise(const torch::Tensor& start, const to
     kwargs["settings"] = values;
   }
   if (settings.schedule) kwargs["schedule"] = *settings.schedule;
+  if (settings.guide_at) kwargs["guide_at"] = *settings.guide_at;
   torch::NoGradGuard no_grad;
   return jit::Call(module_, "plan", {start, goal, noise}, kwargs).toTensor().to(torch::kCPU);
 }
@@ -89,11 +91,16 @@ PlanResult LearnedPlanner::Plan(const PlanRequest& request) const {
   const auto started = std::chrono::steady_clock::now();
   CheckEnds(request.start, request.goal, state_dim(), "plan");
   const int64_t B = request.start.size(0);
+  // Best of N draws N noises per plan (planning/planner.py checks the count).
+  const auto given = request.settings.values.find("guidance.candidates");
+  const auto candidates = static_cast<int64_t>(given != request.settings.values.end() ? given->second
+                                                                                        : settings_.at("guidance.candidates"));
+  const std::vector<int64_t> batch = candidates > 1 ? std::vector<int64_t>{B, candidates} : std::vector<int64_t>{B};
   auto generator = at::make_generator<at::CPUGeneratorImpl>(request.seed);
-  const torch::Tensor noise = torch::randn(WithBatch(B, noise_shape_), generator, torch::kFloat32);
+  const torch::Tensor noise = torch::randn(WithBatch(batch, noise_shape_), generator, torch::kFloat32);
   const torch::Tensor renoise = renoise_shape_.empty()
                                     ? torch::Tensor()
-                                    : torch::randn(WithBatch(B, renoise_shape_), generator, torch::kFloat32);
+                                    : torch::randn(WithBatch(batch, renoise_shape_), generator, torch::kFloat32);
   PlanResult result;
   result.plans = PlanWithNoise(request.start, request.goal, noise, renoise, request.scene, request.settings);
   result.found = torch::ones({B}, torch::kBool);

@@ -20,7 +20,8 @@
 namespace flowplan::planning {
 
 /// The exported planner's format; a file of another version is refused.
-inline constexpr int64_t kExportFormatVersion = 4;  // 4: one planning stack, obstacle shapes, per-call settings
+// 4: one planning stack, obstacle shapes, per-call settings; 5: guidance variants (guide_at), best of N.
+inline constexpr int64_t kExportFormatVersion = 5;
 
 class LearnedPlanner : public Planner {
  public:
@@ -35,13 +36,14 @@ class LearnedPlanner : public Planner {
   /// @throws flowplan::Error if it cannot be written.
   void Save(const std::string& path) const;
 
-  /// Plans with noise drawn from request.seed (noise, then renoise), under torch.no_grad.
+  /// Plans with noise drawn from request.seed (noise, then renoise; with N =
+  /// guidance.candidates > 1, N of each per plan), under torch.no_grad.
   PlanResult Plan(const PlanRequest& request) const override;
 
   /// Plans from explicit noise: the module's plan().
   /// @param start, goal (B, D) raw states
-  /// @param noise       (B, *noise_shape()) standard normal
-  /// @param renoise     (B, *renoise_shape()) standard normal, or undefined when renoise_shape() is empty
+  /// @param noise       (B, *noise_shape()) standard normal; (B, N, *noise_shape()) with N = guidance.candidates > 1
+  /// @param renoise     the same for renoise_shape(), or undefined when renoise_shape() is empty
   /// @returns           (B, T, D) raw plans on the CPU
   torch::Tensor PlanWithNoise(const torch::Tensor& start, const torch::Tensor& goal, const torch::Tensor& noise,
                               const torch::Tensor& renoise = torch::Tensor(),
@@ -61,6 +63,8 @@ class LearnedPlanner : public Planner {
   /// Every per-call setting with the planner's value (the module's `settings`).
   const std::map<std::string, double>& settings() const { return settings_; }
   const std::string& schedule() const { return schedule_; }
+  /// Where the flow planner guides ("state", "velocity", "prediction"; sampler.guide_at).
+  const std::string& guide_at() const { return guide_at_; }
   const std::vector<int64_t>& noise_shape() const { return noise_shape_; }
   const std::vector<int64_t>& renoise_shape() const { return renoise_shape_; }
 
@@ -68,7 +72,7 @@ class LearnedPlanner : public Planner {
   torch::jit::Module module_;
   std::string source_;
   kinematics::TrajectoryInfo info_;
-  std::string kind_, config_yaml_, schedule_;
+  std::string kind_, config_yaml_, schedule_, guide_at_;
   std::map<std::string, double> settings_;
   std::vector<int64_t> noise_shape_, renoise_shape_;
 };

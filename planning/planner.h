@@ -20,12 +20,14 @@
 namespace flowplan::planning {
 
 /// Settings of one call that differ from the planner's: numbers by their
-/// config key (e.g. "guidance.scale", "guidance.clip", "sampler.steps"), and
-/// the guidance schedule by name. A planner rejects a key it does not take.
+/// config key (e.g. "guidance.scale", "guidance.clip", "sampler.steps"), the
+/// guidance schedule and (flow planner) where it guides, by name. A planner
+/// rejects a key it does not take.
 struct PlanSettings {
   std::map<std::string, double> values;
   std::optional<std::string> schedule;
-  bool empty() const { return values.empty() && !schedule; }
+  std::optional<std::string> guide_at;  // sampler.guide_at
+  bool empty() const { return values.empty() && !schedule && !guide_at; }
 };
 
 /// One planning call: B start/goal pairs in one scene.

@@ -1,8 +1,7 @@
 #pragma once
 
-#include <algorithm>
-
 #include "core/config.h"
+#include "guidance/guide.h"
 
 namespace flowplan::planning {
 
@@ -64,6 +63,14 @@ struct SamplerConfig {
 
   int steps = 10;  // flow matching: Euler steps from t = 0 (noise) to t = 1 (data)
   Splitting splitting = Splitting::kNone;
+  double split_time = 0.5;  // splitting: the flow time the halves are re-noised to and restart from
+  // How the flow planner guides (docs/planning.md, "Guidance variants"); the guidance section says how strongly.
+  guidance::GuidanceTarget guide_at = guidance::GuidanceTarget::kState;
+  double guide_from = 0.0;        // no guidance before this flow time
+  int prediction_iterations = 1;  // guide_at prediction: gradient steps on x̂1 per Euler step
+  int final_iterations = 0;       // gradient steps of the guidance scale on the finished plan, each stage of splitting
+  double final_denoise_time = 0.0;  // after each final step, one Euler step from this flow time to 1 (0: none)
+  int midpoint_iterations = 0;      // splitting: gradient steps on the first stage's plan before re-noising
   DdpmSamplerConfig ddpm;
   LatentPlannerConfig latent;
 
@@ -71,12 +78,25 @@ struct SamplerConfig {
   void Visit(V& v) {
     v.Field("steps", steps, "flow matching: Euler steps from noise to a plan", config::Positive());
     v.Field("splitting", splitting, "flow matching: inference-time trajectory splitting");
+    v.Field("split_time", split_time, "flow matching, splitting: flow time the halves are re-noised to",
+            config::InRange(0.01, 0.99));
+    v.Field("guide_at", guide_at,
+            "flow matching: guide x_t (state), the velocity by the gradient at x̂1 (velocity), or x̂1 (prediction)");
+    v.Field("guide_from", guide_from, "flow matching: no guidance before this flow time", config::InRange(0.0, 1.0));
+    v.Field("prediction_iterations", prediction_iterations,
+            "flow matching, guide_at prediction: gradient steps on x̂1 per Euler step", config::Positive());
+    v.Field("final_iterations", final_iterations,
+            "flow matching: gradient steps of the guidance scale on the finished plan (each stage of splitting)",
+            config::NonNegative());
+    v.Field("final_denoise_time", final_denoise_time,
+            "flow matching: after each final gradient step, one Euler step from this flow time to 1 (0: none)",
+            config::InRange(0.0, 0.999));
+    v.Field("midpoint_iterations", midpoint_iterations,
+            "flow matching, splitting: gradient steps on the first stage's plan before re-noising",
+            config::NonNegative());
     v.Field("ddpm", ddpm, "DDPM planner (MPD): guidance schedule");
     v.Field("latent", latent, "latent (VAE) planner: activation maximization");
   }
 };
-
-/// Euler steps of the second (t = 0.5 -> 1) stage of splitting: half the steps, at least one.
-inline int SplitSteps(const SamplerConfig& sampler) { return std::max(1, sampler.steps / 2); }
 
 }  // namespace flowplan::planning

@@ -94,7 +94,7 @@ def probe(path, plans, radius, push, seed):
         d = d * (push / rms).view(-1, 1, 1)
         survival, at_xt, at_x1hat = [], [], []
         check_x1hat = 0.0
-        schedule = planner.schedule
+        choices = {"guidance.schedule": planner.schedule, "sampler.guide_at": planner.guide_at}
         for i in range(steps):
             t = (i + 1) * h
             pushed = euler(sampler, xs[i + 1] + d, s, g, t, steps - 1 - i, h)
@@ -104,7 +104,7 @@ def probe(path, plans, radius, push, seed):
             x = xs[i + 1]
             if i + 1 < steps:
                 x1_hat = inpaint(x + (1.0 - t) * sampler.velocity(x, torch.full([plans], t), s, g))
-                one_step = sampler.integrate(x, s, g, t, 1, {}, opts, schedule, False)
+                one_step = sampler.integrate(x, s, g, t, 1, {}, opts, choices, False)
                 check_x1hat = max(check_x1hat, (x1_hat - one_step).abs().max().item())
             else:
                 x1_hat = x

@@ -10,7 +10,10 @@ torch.no_grad() and, with MODE "inference", under torch.inference_mode(); with
 MODE "no_grad" (a user cost, which needs autograd) checks that
 torch.inference_mode() ends in the user cost's clear error instead. Requires
 every plan within 1e-5 of the in-process one, and checks the documented
-attributes and methods.
+attributes and methods. Then, for the flow planner, each guide_at variant
+plans alike under both modes (MODE "inference"), and best of 3 returns, per
+request, the candidate of least guidance cost as the planner's own guide
+scores the candidates planned one by one.
 """
 import sys
 
@@ -24,9 +27,10 @@ batch = int(batch)
 planner = torch.jit.load(path)
 T, D, W = planner.horizon, planner.state_dim, planner.workspace_dim
 assert len(planner.state_labels) == D, planner.state_labels
-assert planner.dt > 0 and planner.format_version == 4, planner.format_version
+assert planner.dt > 0 and planner.format_version == 5, planner.format_version
 assert "kind:" in planner.robot_description
-assert planner.schedule in ("one_minus_t", "ratio", "rising")
+assert planner.schedule in ("one_minus_t", "ratio", "rising", "constant")
+assert planner.guide_at in ("state", "velocity", "prediction")
 assert "guidance.scale" in planner.settings, planner.settings
 
 
@@ -76,4 +80,28 @@ with torch.no_grad():
     assert planner.tcp(plans[:, :, :J]).shape == (batch, T, W)
     clearance = planner.clearance(plans[:, :, :J], **scene)
     assert clearance.shape == (batch, T, sum(len(rows) for rows in scene.values())), clearance.shape
+
+if planner.planner == "flow_matching":
+    variants = {"sampler.final_iterations": 2.0, "sampler.final_denoise_time": 0.95, "sampler.prediction_iterations": 2.0}
+    for at in ("state", "velocity", "prediction"):
+        with torch.no_grad():
+            guided = planner.plan(start, goal, noise, renoise, schedule=schedule, guide_at=at, settings=variants, **scene)
+        if mode == "inference":
+            with torch.inference_mode():
+                again = planner.plan(start, goal, noise, renoise, schedule=schedule, guide_at=at, settings=variants, **scene)
+            assert torch.equal(again, guided), f"guide_at {at}: inference_mode and no_grad plans differ"
+    N = 3
+    generator = torch.Generator().manual_seed(5)
+    noises = torch.randn((batch, N, *planner.noise_shape), generator=generator)
+    renoises = torch.randn((batch, N, *planner.renoise_shape), generator=generator) if renoise is not None else None
+    with torch.no_grad():
+        best = planner.plan(start, goal, noises, renoises, schedule=schedule, settings={"guidance.candidates": float(N)}, **scene)
+        alone = [planner.plan(start, goal, noises[:, j], None if renoises is None else renoises[:, j], schedule=schedule,
+                              **scene) for j in range(N)]
+        settings = dict(planner.settings)
+        costs = torch.stack([planner.sampler.guide.value(p, scene, settings) for p in alone], 1)
+    choice = costs.argmin(1)
+    for b in range(batch):
+        gap = (best[b] - alone[int(choice[b])][b]).abs().max().item()
+        assert gap <= 1e-5, f"best of {N}: request {b} is not its least-cost candidate ({gap})"
 print("exported planner ok:", path)

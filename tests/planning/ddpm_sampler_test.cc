@@ -133,5 +133,42 @@ TEST(DdpmSamplerTest, GuidanceInTheGuidedStepsAndTheExtraStepsPushesOutOfAnObsta
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("sampler.ddpm.extra_steps: expected a whole number, got 1.5")));
 }
 
+TEST(DdpmSamplerTest, BestOfNReturnsEachRequestsCandidateOfLeastCost) {
+  objectives::DdpmConfig config;
+  const objectives::DdpmSchedule schedule(config);
+  guidance::GuidanceConfig guidance;
+  guidance.scale = 0.0;  // unguided: the candidates differ by their noise, the choice by the cost alone
+  guidance.collision_weight = 1.0;
+  guidance.smoothness_weight = 1e-3;
+  const auto planner = Ddpm(GaussianNoise(0.0, 0.3, schedule, 4), 16, {}, guidance);
+  torch::manual_seed(4);
+  const int64_t B = 3, N = 4;
+  const torch::Tensor start = torch::full({B, 4}, -0.5f), goal = torch::full({B, 4}, 0.5f);
+  const torch::Tensor noise = torch::randn({B, N, 16, 4}), renoise = torch::randn({B, N, 24, 16, 4});
+  const geometry::SceneRows obstacle = testing::Spheres(torch::tensor({{0.1f, 0.0f, 0.3f}}));
+  PlanSettings settings;
+  settings.values["guidance.candidates"] = N;
+  const torch::Tensor best = planner->PlanWithNoise(start, goal, noise, renoise, obstacle, settings);
+  // Each candidate planned alone, scored by the planner's own guide (its cost terms' weighted sum).
+  torch::jit::Module guide = planner->module().attr("sampler").toModule().attr("guide").toModule();
+  std::vector<torch::Tensor> plans, costs;
+  for (int64_t j = 0; j < N; ++j) {
+    plans.push_back(planner->PlanWithNoise(start, goal, noise.select(1, j), renoise.select(1, j), obstacle));
+    costs.push_back(guide.run_method("value", plans.back(), obstacle, planner->module().attr("settings")).toTensor());
+  }
+  const torch::Tensor choice = torch::stack(costs, 1).argmin(1);
+  EXPECT_GT(std::get<0>(at::_unique(choice)).numel(), 1) << "the test needs requests that choose differently";
+  for (int64_t b = 0; b < B; ++b) {
+    EXPECT_TRUE(torch::allclose(best[b], plans[choice[b].item<int64_t>()][b], 0.0, 1e-6)) << "request " << b;
+  }
+  EXPECT_THAT([&] { planner->PlanWithNoise(start, goal, noise, renoise.select(1, 0), obstacle, settings); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("plan: renoise: expected [3, 4, 24, 16, 4] (guidance.candidates = 4)")));
+  // Where to guide is the flow planner's choice; the DDPM planner guides its posterior mean.
+  PlanSettings at;
+  at.guide_at = "prediction";
+  EXPECT_THAT([&] { planner->PlanWithNoise(start, goal, noise.select(1, 0), renoise.select(1, 0), obstacle, at); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("plan: guide_at: only the flow planner takes it")));
+}
+
 }  // namespace
 }  // namespace flowplan::planning

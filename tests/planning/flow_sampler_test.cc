@@ -118,7 +118,7 @@ TEST(FlowSamplerTest, BadShapesAndSettingsNameTheArgument) {
   PlanSettings schedule;
   schedule.schedule = "sideways";
   EXPECT_THAT([&] { planner->PlanWithNoise(torch::zeros({1, 4}), torch::zeros({1, 4}), torch::zeros({1, 16, 4}), {}, geometry::SceneRows(), schedule); },
-              ThrowsMessage<Error>(HasSubstr("plan: schedule: expected one of one_minus_t, ratio, rising, got sideways")));
+              ThrowsMessage<Error>(HasSubstr("plan: schedule: expected one of one_minus_t, ratio, rising, constant, got sideways")));
 }
 
 TEST(FlowSamplerTest, MidpointSplittingUsesTheStatesBesideTheMiddleAsBoundaries) {
@@ -216,6 +216,179 @@ TEST(FlowSamplerTest, GuidanceAlsoRunsInBothHalvesOfSplitting) {
                                 free.slice(1, begin, end).slice(2, 0, 2).norm(2, -1);
     EXPECT_NEAR(moved.mean().item<float>(), 0.1f, 1e-2) << "states " << begin << ".." << end - 1;
   }
+}
+
+/// A near-origin request on the disc, and how far each interior state of a
+/// plan lies from the origin (the outward direction the hinge pushes along).
+struct NearOrigin {
+  torch::Tensor start = torch::tensor({{-0.8f, 0.0f, 0.0f, 0.0f}});
+  torch::Tensor goal = torch::tensor({{0.8f, 0.0f, 0.0f, 0.0f}});
+  torch::Tensor noise, renoise;
+  NearOrigin() {
+    auto generator = at::make_generator<at::CPUGeneratorImpl>(1);
+    noise = 0.01 * torch::randn({1, 16, 4}, generator);
+    renoise = 0.01 * torch::randn({1, 16, 4}, generator);
+  }
+  static torch::Tensor Radii(const torch::Tensor& plan) { return plan.slice(1, 1, 15).slice(2, 0, 2).norm(2, -1); }
+};
+
+PlanSettings With(std::map<std::string, double> values, std::optional<std::string> guide_at = std::nullopt,
+                  std::optional<std::string> schedule = std::nullopt) {
+  PlanSettings settings;
+  settings.values = std::move(values);
+  settings.guide_at = std::move(guide_at);
+  settings.schedule = std::move(schedule);
+  return settings;
+}
+
+TEST(FlowSamplerTest, GuidanceAtThePredictionMovesThePlanByTheClosedFormAmount) {
+  // Zero velocity: x̂1 = x_t. Four steps (h = 0.25), scale 0.1, b = 1 - t taken at t_i = 0, 0.25, 0.5, 0.75:
+  //   velocity:   x moves h s sum b(t_i) = 0.25 * 0.1 * 2.5 = 0.0625;
+  //   prediction: each step heads for x̂1 moved by G s b(t_i), so x moves h G s b / (1 - t_i) = 0.025 G per step:
+  //               0.1 for G = 1 and 0.2 for G = 2, and the plan ends exactly on the last moved x̂1.
+  const NearOrigin r;
+  const auto planner = GuidedZero(Splitting::kNone, 0.1);
+  const geometry::SceneRows obstacle = Spheres(torch::tensor({{0.0f, 0.0f, 0.3f}}));
+  const torch::Tensor free = NearOrigin::Radii(planner->PlanWithNoise(r.start, r.goal, r.noise));
+  const auto moved = [&](const PlanSettings& settings) {
+    return NearOrigin::Radii(planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle, settings)) - free;
+  };
+  for (const auto& [settings, expected] : std::vector<std::pair<PlanSettings, float>>{
+           {With({}, "velocity"), 0.0625f},
+           {With({}, "prediction"), 0.1f},
+           {With({{"sampler.prediction_iterations", 2}}, "prediction"), 0.2f},
+           // The paper's weight at x̂1 with the velocity form: b = 1 - t is never zero where the gradient is taken.
+           {With({}, "velocity", "rising"), 0.25f * 0.1f * 1.5f}}) {
+    const torch::Tensor m = moved(settings);
+    EXPECT_NEAR(m.min().item<float>(), expected, 2e-3) << *settings.guide_at;
+    EXPECT_NEAR(m.max().item<float>(), expected, 2e-3) << *settings.guide_at;
+  }
+  EXPECT_THAT([&] { planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle, With({}, "sideways")); },
+              ThrowsMessage<Error>(HasSubstr("plan: guide_at: expected one of state, velocity, prediction, got sideways")));
+}
+
+TEST(FlowSamplerTest, GuidanceStartsAtGuideFrom) {
+  // b = 1 - t on x_t after the steps reaching 0.75 and 1 only: 0.1 * 0.25; b = 1 (constant) on both: 0.2.
+  const NearOrigin r;
+  const auto planner = GuidedZero(Splitting::kNone, 0.1);
+  const geometry::SceneRows obstacle = Spheres(torch::tensor({{0.0f, 0.0f, 0.3f}}));
+  const torch::Tensor free = NearOrigin::Radii(planner->PlanWithNoise(r.start, r.goal, r.noise));
+  for (const auto& [schedule, expected] : {std::pair{"one_minus_t", 0.025f}, std::pair{"constant", 0.2f}}) {
+    const torch::Tensor m =
+        NearOrigin::Radii(planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle,
+                                                 With({{"sampler.guide_from", 0.6}}, std::nullopt, schedule))) -
+        free;
+    EXPECT_NEAR(m.mean().item<float>(), expected, 2e-3) << schedule;
+  }
+}
+
+TEST(FlowSamplerTest, TheEndGameStepsOnTheFinishedPlanAndDenoisesBetween) {
+  // A velocity of 0.1 in the q̇ dimensions only (which the collision cost does
+  // not see): the Euler loop adds 0.1 to q̇, each final re-denoising step from
+  // t_r adds (1 - t_r) 0.1 more; each final gradient step moves q out by the scale.
+  auto net = std::make_shared<ScriptedNet>(
+      4, std::vector<std::string>{"out = torch.cat([torch.zeros_like(x[:, :, 0:2]), torch.full_like(x[:, :, 2:4], 0.1)], 2)"},
+      std::vector<std::pair<std::string, torch::Tensor>>{}, 0);
+  guidance::GuidanceConfig config;
+  config.scale = 0.05;
+  config.collision_weight = 1.0;
+  config.smoothness_weight = 0.0;
+  config.margin = 0.0;
+  const auto planner = Flow(net, UnitNormalizer(4), 4, Splitting::kNone, models::Conditioning::kInpaint, config);
+  const NearOrigin r;
+  const geometry::SceneRows obstacle = Spheres(torch::tensor({{0.0f, 0.0f, 0.3f}}));
+  const torch::Tensor free = planner->PlanWithNoise(r.start, r.goal, r.noise);
+  const torch::Tensor plain = planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle);
+  const torch::Tensor ended = planner->PlanWithNoise(
+      r.start, r.goal, r.noise, {}, obstacle,
+      With({{"sampler.final_iterations", 2}, {"sampler.final_denoise_time", 0.9}}));
+  // Guided by 1 - t: 0.05 * 1.5 = 0.075 out; two final steps: 0.1 more.
+  EXPECT_NEAR((NearOrigin::Radii(plain) - NearOrigin::Radii(free)).mean().item<float>(), 0.075f, 2e-3);
+  EXPECT_NEAR((NearOrigin::Radii(ended) - NearOrigin::Radii(plain)).mean().item<float>(), 0.1f, 2e-3);
+  const torch::Tensor qd_change = (ended - plain).slice(1, 1, 15).slice(2, 2, 4);
+  EXPECT_NEAR(qd_change.min().item<float>(), 2 * 0.1f * 0.1f, 1e-5);
+  EXPECT_NEAR(qd_change.max().item<float>(), 2 * 0.1f * 0.1f, 1e-5);
+  EXPECT_TRUE(torch::equal(ended.select(1, 0), r.start));
+  EXPECT_TRUE(torch::equal(ended.select(1, 15), r.goal));
+  // Without obstacles nothing guides, so nothing of the end-game runs.
+  EXPECT_TRUE(torch::equal(free, planner->PlanWithNoise(r.start, r.goal, r.noise, {}, geometry::SceneRows(),
+                                                        With({{"sampler.final_iterations", 2},
+                                                              {"sampler.final_denoise_time", 0.9}}))));
+}
+
+TEST(FlowSamplerTest, SplittingRenoisesToSplitTimeAndStepsTheMidpointFirst) {
+  // dx/dt = t, direct conditioning, 10 steps: the first stage gives noise + 0.45;
+  // re-noised to t_s = 0.6 the halves take int(10 * 0.4) = 4 steps of 0.1: + 0.3.
+  auto net = std::make_shared<ScriptedNet>(4, std::vector<std::string>{"out = t.view(-1, 1, 1).expand_as(x)"},
+                                           std::vector<std::pair<std::string, torch::Tensor>>{}, 8);
+  const auto split = Flow(net, UnitNormalizer(4), 10, Splitting::kMidpoint, models::Conditioning::kDirect);
+  const NearOrigin r;
+  const torch::Tensor zero = torch::zeros({1, 4});
+  const torch::Tensor joined = split->PlanWithNoise(zero, zero, r.noise, r.renoise, geometry::SceneRows(), With({{"sampler.split_time", 0.6}}));
+  EXPECT_TRUE(torch::allclose(joined, 0.4 * r.renoise + 0.6 * (r.noise + 0.45) + 0.3, 0.0, 1e-5));
+  EXPECT_THAT([&] { split->PlanWithNoise(zero, zero, r.noise, r.renoise, geometry::SceneRows(), With({{"sampler.split_time", 1.0}})); },
+              ThrowsMessage<Error>(HasSubstr("sampler.split_time: expected a flow time in (0, 1), got 1")));
+  // Guided midpoint steps: the states beside the middle (the halves' fixed ends)
+  // carry the first stage's push (0.15, as above) plus G steps of the scale.
+  const auto guided = GuidedZero(Splitting::kMidpoint, 0.1);
+  const geometry::SceneRows obstacle = Spheres(torch::tensor({{0.0f, 0.0f, 0.5f}}));
+  const torch::Tensor free = guided->PlanWithNoise(r.start, r.goal, r.noise, r.renoise);
+  const torch::Tensor stepped =
+      guided->PlanWithNoise(r.start, r.goal, r.noise, r.renoise, obstacle, With({{"sampler.midpoint_iterations", 2}}));
+  for (int state : {7, 8}) {
+    const float moved = (stepped.select(1, state).slice(1, 0, 2).norm() - free.select(1, state).slice(1, 0, 2).norm())
+                            .item<float>();
+    EXPECT_NEAR(moved, 0.35f, 2e-3) << "state " << state;
+  }
+}
+
+TEST(FlowSamplerTest, EveryVariantIsTheUnguidedPlanAtScaleZero) {
+  const NearOrigin r;
+  const geometry::SceneRows obstacle = Spheres(torch::tensor({{0.0f, 0.0f, 0.3f}}));
+  for (Splitting splitting : {Splitting::kNone, Splitting::kMidpoint}) {
+    const auto planner = Flow(testing::TinyUNet(4, 0), UnitNormalizer(4), 4, splitting);
+    const torch::Tensor renoise = splitting == Splitting::kNone ? torch::Tensor() : r.renoise;
+    const torch::Tensor free = planner->PlanWithNoise(r.start, r.goal, r.noise, renoise);
+    for (const PlanSettings& variant :
+         {With({{"guidance.scale", 0}}, "velocity"), With({{"guidance.scale", 0}}, "prediction"),
+          With({{"guidance.scale", 0}, {"sampler.prediction_iterations", 3}}, "prediction", "constant"),
+          With({{"guidance.scale", 0}, {"sampler.final_iterations", 3}, {"sampler.final_denoise_time", 0.97}}),
+          With({{"guidance.scale", 0}, {"sampler.midpoint_iterations", 3}, {"sampler.guide_from", 0.5}})}) {
+      EXPECT_TRUE(torch::equal(free, planner->PlanWithNoise(r.start, r.goal, r.noise, renoise, obstacle, variant)))
+          << "guide_at " << variant.guide_at.value_or("state") << ", splitting " << config::EnumName(splitting);
+    }
+  }
+}
+
+TEST(FlowSamplerTest, BestOfNReturnsTheCandidateOfLeastCost) {
+  // Three candidates per request: noise near the origin (inside the sphere),
+  // noise shifted out of it (no collision cost), and near the origin again.
+  const auto planner = GuidedZero(Splitting::kNone, 0.0);  // unguided: candidates differ by their noise only
+  const NearOrigin r;
+  const geometry::SceneRows obstacle = Spheres(torch::tensor({{0.0f, 0.0f, 0.3f}}));
+  torch::Tensor outside = r.noise.clone();
+  outside.slice(2, 1, 2) += 0.5;
+  const torch::Tensor candidates = torch::stack({r.noise, outside, 0.5 * r.noise}, 1);  // (1, 3, 16, 4)
+  const PlanSettings three = With({{"guidance.candidates", 3}});
+  const torch::Tensor best = planner->PlanWithNoise(r.start, r.goal, candidates, {}, obstacle, three);
+  EXPECT_TRUE(torch::equal(best, planner->PlanWithNoise(r.start, r.goal, outside, {}, obstacle)));
+  // Equal costs (no obstacle, no smoothness weight): the first candidate.
+  EXPECT_TRUE(torch::equal(planner->PlanWithNoise(r.start, r.goal, candidates, {}, geometry::SceneRows(), three),
+                           planner->PlanWithNoise(r.start, r.goal, r.noise)));
+  // Two requests choose independently.
+  const torch::Tensor two = planner->PlanWithNoise(r.start.repeat({2, 1}), r.goal.repeat({2, 1}),
+                                                   torch::cat({candidates, candidates.flip(1)}, 0), {}, obstacle, three);
+  EXPECT_TRUE(torch::equal(two.select(0, 0), best.select(0, 0)));
+  EXPECT_TRUE(torch::equal(two.select(0, 1), best.select(0, 0)));
+  EXPECT_THAT([&] { planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle, three); },
+              ThrowsMessage<Error>(HasSubstr("plan: noise: expected [1, 3, 16, 4] (guidance.candidates = 3), got [1, 16, 4]")));
+  // Plan() draws the candidates itself.
+  PlanRequest request;
+  request.start = r.start.repeat({5, 1});
+  request.goal = r.goal.repeat({5, 1});
+  request.scene = obstacle;
+  request.settings = three;
+  EXPECT_EQ(planner->Plan(request).plans.sizes(), (std::vector<int64_t>{5, 16, 4}));
 }
 
 TEST(FlowSamplerTest, GuidanceWorksForEveryShape) {
