@@ -40,7 +40,8 @@ void CheckExportedKeys(const ExperimentConfig& exported, const ExperimentConfig&
   const auto before = config::ListKeys(exported), after = config::ListKeys(changed);
   for (size_t i = 0; i < before.size(); ++i) {
     const std::string& key = before[i].key;
-    const bool compiled = key == "sampler.splitting" || key == "guidance.user_cost" || key.rfind("objective.ddpm.", 0) == 0;
+    const bool compiled = key == "sampler.splitting" || key == "sampler.ddpm.guide_on" || key == "guidance.user_cost" ||
+                          key.rfind("objective.ddpm.", 0) == 0;
     if (compiled && before[i].default_value != after[i].default_value) {
       throw Error(key + ": is compiled into " + file + " (" + before[i].default_value +
                   "); plan from the run folder with --ckpt, or export again with the setting");

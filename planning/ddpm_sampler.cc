@@ -41,6 +41,7 @@ torch::jit::Module BuildDdpmSampler(const SamplerContext& context) {
       .Buffer("noise_std", noise_std)
       .Attribute("conditioning", std::string(config::EnumName(parts.objective.conditioning)))
       .Attribute("diffusion_steps", static_cast<int64_t>(steps))
+      .Attribute("guide_on", std::string(config::EnumName(parts.sampler.ddpm.guide_on)))
       .Methods("planning/ddpm_sampler.py")
       .Build();
 }

@@ -4,7 +4,10 @@
 # gradient steps) in the last ceil(guide_fraction · diffusion_steps) steps, then extra
 # noise-free guided steps. Submodules network, normalizer and guide; buffers
 # x0_from_x, x0_from_eps, mean_x0, mean_x, noise_std (diffusion_steps,)
-# float64 (the schedule's coefficients); attributes conditioning, diffusion_steps.
+# float64 (the schedule's coefficients); attributes conditioning, diffusion_steps,
+# guide_on ("posterior_mean": MPD's guidance of the posterior mean before the
+# step's noise; "sample_by_variance": the Flow Planner paper's baseline, steps
+# on the noised sample weighted by the step's posterior variance).
 # Settings: sampler.ddpm.* and the guide's.
 
 
@@ -16,7 +19,7 @@ def denoise(self, x: Tensor, k: int, start: Tensor, goal: Tensor, guided: bool,
     eps = self.network.forward(x, t, condition_vector(start, goal, inpainting))
     x0 = torch.clamp(float(self.x0_from_x[k]) * x - float(self.x0_from_eps[k]) * eps, -1.0, 1.0)
     mean = float(self.mean_x0[k]) * x0 + float(self.mean_x[k]) * x
-    if guided:
+    if guided and self.guide_on == "posterior_mean":
         for i in range(setting_int(opts, "sampler.ddpm.guide_iterations")):
             mean = conditioned(mean - opts["guidance.scale"] * self.guide.gradient(mean, scene, opts), start, goal, inpainting)
     return mean
@@ -41,6 +44,10 @@ def sample(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[T
         if k > 0:
             x = x + (noise_scale * float(self.noise_std[k])) * renoise[:, j]
         x = conditioned(x, s, g, inpainting)
+        if guided and k < guided_steps and self.guide_on == "sample_by_variance":
+            weight = opts["guidance.scale"] * float(self.noise_std[k]) ** 2
+            for i in range(setting_int(opts, "sampler.ddpm.guide_iterations")):
+                x = conditioned(x - weight * self.guide.gradient(x, scene, opts), s, g, inpainting)
     for e in range(setting_int(opts, "sampler.ddpm.extra_steps")):
         x = conditioned(self.denoise(x, 0, s, g, guided, scene, opts), s, g, inpainting)
     return conditioned(self.normalizer.denormalize(x), start, goal, inpainting)

@@ -19,8 +19,26 @@ inline const config::EnumNames<Splitting>& EnumEntries(Splitting) {
   return names;
 }
 
-/// How the DDPM planner samples and guides (Motion Planning Diffusion's scheme).
+/// What the DDPM planner's guidance moves.
+enum class DdpmGuideOn {
+  // Motion Planning Diffusion's: guide_iterations steps of the scale on the
+  // posterior mean, before the step's noise is added.
+  kPosteriorMean,
+  // The Flow Planner paper's baseline: guide_iterations steps on the sample
+  // after the step's noise is added, weighted by that step's posterior
+  // variance (0 at the last step).
+  kSampleByVariance,
+};
+
+inline const config::EnumNames<DdpmGuideOn>& EnumEntries(DdpmGuideOn) {
+  static const config::EnumNames<DdpmGuideOn> names = {{DdpmGuideOn::kPosteriorMean, "posterior_mean"},
+                                                       {DdpmGuideOn::kSampleByVariance, "sample_by_variance"}};
+  return names;
+}
+
+/// How the DDPM planner samples and guides (Motion Planning Diffusion's scheme by default).
 struct DdpmSamplerConfig {
+  DdpmGuideOn guide_on = DdpmGuideOn::kPosteriorMean;
   double guide_fraction = 0.25;  // guidance in the last ceil(fraction · steps) denoising steps
   int guide_iterations = 5;      // gradient steps on the posterior mean per guided step
   int extra_steps = 5;           // noise-free denoising steps at k = 0 after the chain, guided
@@ -28,6 +46,7 @@ struct DdpmSamplerConfig {
 
   template <class V>
   void Visit(V& v) {
+    v.Field("guide_on", guide_on, "what guidance moves: the posterior mean (MPD) or the noised sample (the paper's baseline)");
     v.Field("guide_fraction", guide_fraction, "guide the last ceil(fraction * steps) denoising steps",
             config::Probability());
     v.Field("guide_iterations", guide_iterations, "gradient steps per guided denoising step", config::NonNegative());

@@ -80,6 +80,22 @@ TEST(DdpmTest, ScheduleIsMpdsExponentialAndEndsInNoise) {
               1e-15);
 }
 
+TEST(DdpmTest, LinearScheduleIsDdpmsAsTheFlowPlannerPapersBaselineUsedIt) {
+  // 10 steps, beta 1e-4 .. 0.02 evenly spaced: the largest training noise std
+  // is sqrt(1 - ᾱ_9) ≈ 0.31, far from the unit noise sampling starts from.
+  DdpmConfig config;
+  config.steps = 10;
+  config.schedule = BetaSchedule::kLinear;
+  config.beta_end = 0.02;
+  const DdpmSchedule schedule(config);
+  ASSERT_EQ(schedule.betas.size(0), 10);
+  for (int k = 0; k < 10; ++k) EXPECT_NEAR(schedule.beta(k), 1e-4 + k * (0.02 - 1e-4) / 9.0, 1e-15) << k;
+  double product = 1.0;
+  for (int k = 0; k < 10; ++k) product *= 1.0 - (1e-4 + k * (0.02 - 1e-4) / 9.0);
+  EXPECT_NEAR(schedule.alpha_bar(9), product, 1e-14);
+  EXPECT_NEAR(std::sqrt(1.0 - schedule.alpha_bar(9)), 0.3103, 1e-4);
+}
+
 TEST(DdpmTest, LossRegressesTheNoiseOfTheDrawnStep) {
   const torch::Tensor x1 = torch::randn({4, 8, 3});
   DdpmObjective objective(DdpmConfig{});

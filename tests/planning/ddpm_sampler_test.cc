@@ -170,5 +170,56 @@ TEST(DdpmSamplerTest, BestOfNReturnsEachRequestsCandidateOfLeastCost) {
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("plan: guide_at: only the flow planner takes it")));
 }
 
+TEST(DdpmSamplerTest, ThePapersBaselineGuidesTheNoisedSampleByThePosteriorVariance) {
+  // A predictor of zero noise: x0 = x_k / sqrt(ᾱ_k) and the posterior mean is
+  // c_k x_k, c_k = mean_x0 / sqrt(ᾱ_k) + mean_x. Without ancestral noise and
+  // with states near the origin inside a sphere there, every state's distance
+  // r from the origin follows r <- c_k r, then r <- r + s σ_k² (one step of
+  // the unit outward gradient weighted by the step's posterior variance).
+  objectives::DdpmConfig config;
+  config.steps = 10;
+  config.schedule = objectives::BetaSchedule::kLinear;
+  config.beta_start = 1e-4;
+  config.beta_end = 0.02;
+  const objectives::DdpmSchedule schedule(config);
+  DdpmSamplerConfig sampler;
+  sampler.guide_on = DdpmGuideOn::kSampleByVariance;
+  sampler.guide_fraction = 1.0;
+  sampler.guide_iterations = 1;
+  sampler.extra_steps = 0;
+  sampler.noise_scale = 0.0;
+  guidance::GuidanceConfig guidance;
+  guidance.scale = 2.0;
+  guidance.collision_weight = 1.0;
+  guidance.smoothness_weight = 0.0;
+  guidance.margin = 0.0;
+  PlannerParts parts = testing::Parts(testing::ZeroVelocity(4), testing::DiscTrajectory(16), testing::UnitNormalizer(4));
+  parts.objective.name = objectives::ObjectiveKind::kDdpm;
+  parts.objective.ddpm = config;
+  parts.sampler.ddpm = sampler;
+  parts.guidance = guidance;
+  const auto planner = AssemblePlanner(parts);
+  auto generator = at::make_generator<at::CPUGeneratorImpl>(6);
+  const torch::Tensor start = torch::tensor({{-0.8f, 0.0f, 0.0f, 0.0f}}), goal = torch::tensor({{0.8f, 0.0f, 0.0f, 0.0f}});
+  const torch::Tensor noise = 0.01 * torch::randn({1, 16, 4}, generator), renoise = torch::randn({1, 9, 16, 4}, generator);
+  const geometry::SceneRows obstacle = testing::Spheres(torch::tensor({{0.0f, 0.0f, 0.3f}}));
+  const torch::Tensor free = planner->PlanWithNoise(start, goal, noise, renoise);
+  const torch::Tensor guided = planner->PlanWithNoise(start, goal, noise, renoise, obstacle);
+  double pushed = 0.0;  // how far the pushes move r by the end
+  for (int k = 9; k >= 0; --k) {
+    const double a = schedule.alpha_bar(k), before = schedule.alpha_bar_before(k), beta = schedule.beta(k);
+    const double c = beta * std::sqrt(before) / (1.0 - a) / std::sqrt(a) + (1.0 - before) * std::sqrt(schedule.alpha(k)) / (1.0 - a);
+    pushed = c * pushed + guidance.scale * beta * (1.0 - before) / (1.0 - a);
+  }
+  EXPECT_GT(pushed, 0.01);
+  const torch::Tensor moved = guided.slice(1, 1, 15).slice(2, 0, 2).norm(2, -1) - free.slice(1, 1, 15).slice(2, 0, 2).norm(2, -1);
+  EXPECT_NEAR(moved.min().item<float>(), pushed, 1e-4);
+  EXPECT_NEAR(moved.max().item<float>(), pushed, 1e-4);
+  // MPD's guidance of the posterior mean moves the same plans another way.
+  parts.sampler.ddpm.guide_on = DdpmGuideOn::kPosteriorMean;
+  const torch::Tensor mpd = AssemblePlanner(parts)->PlanWithNoise(start, goal, noise, renoise, obstacle);
+  EXPECT_GT((mpd - guided).abs().max().item<float>(), 1e-3);
+}
+
 }  // namespace
 }  // namespace flowplan::planning
