@@ -1,0 +1,283 @@
+#!/usr/bin/python3
+"""Chooses guidance settings on validation problems and reports them on held-out
+test problems, success against time per plan (docs/results.md, "Choosing
+guidance on validation problems").
+
+usage: /usr/bin/python3 scripts/guidance_select.py --planner NAME=FILE.pt ... --val VAL.yaml --test TEST.yaml
+                                                   --out DIR [--plans 8] [--threads 1] [--grid GRID]
+
+--planner names an exported planner (`flowplan export`): `fp` (the flow planner
+whose settings are chosen) and any others (e.g. `mpd`, `paper_mpd`), which run
+at their own settings and the few variants of GRIDS[name]. VAL and TEST are
+`flowplan problems` files drawn with different seeds. Stages:
+
+  1. validation: every setting of every planner's grid on every validation
+     problem, `--plans` plans per problem in one call, the same noise for every
+     setting of a planner (paired comparisons); per setting the share of plans
+     that succeed and the time per plan (wall time of the call / plans);
+  2. selection, on validation only: for each other planner's default setting,
+     the FP setting of highest success whose time per plan is at most that
+     planner's (FP "at equal time"), and FP's best setting at any time;
+  3. test: the chosen settings and every other planner's default on the test
+     problems, with other noise.
+
+A plan succeeds (whole arm) when every collision sphere of every state stays
+outside every obstacle (the planner's own `clearance`, the flowplan kinematics),
+the TCP of its last state is within 3 cm of the goal's and the joint speeds its
+positions imply stay within 1.5 times the velocity limits (as `flowplan plan`
+counts). Each setting's result is kept in DIR/rows/ and not made again (delete
+the folder after changing a planner file); then DIR/validation.json,
+DIR/test.json, DIR/selection.md and DIR/success_vs_time.png are written from them.
+"""
+import argparse
+import json
+import math
+import os
+import sys
+import time
+
+import torch
+import yaml
+
+# Settings grids: name -> (label, settings, guide_at, schedule). The first entry is the planner's default.
+FP_GRID = [
+    ("preset: x_t, rising, s 1.75", {}, None, None),
+    ("x_t, 1 - t, s 1.75", {}, None, "one_minus_t"),
+    ("x_t, 1 - t, s 5", {"guidance.scale": 5.0}, None, "one_minus_t"),
+    ("x_t, rising, s 3", {"guidance.scale": 3.0}, None, None),
+    ("velocity, 1 - t, s 10", {"guidance.scale": 10.0}, "velocity", "one_minus_t"),
+    ("velocity, 1 - t, s 30", {"guidance.scale": 30.0}, "velocity", "one_minus_t"),
+    ("velocity, constant, s 10", {"guidance.scale": 10.0}, "velocity", "constant"),
+    ("prediction, 1 - t, s 1.75", {}, "prediction", "one_minus_t"),
+    ("prediction, 1 - t, s 1.75, G 3", {"sampler.prediction_iterations": 3.0}, "prediction", "one_minus_t"),
+    ("prediction, constant, s 1.75, G 3", {"sampler.prediction_iterations": 3.0}, "prediction", "constant"),
+    ("prediction, constant from 0.5, s 1.75, G 5",
+     {"sampler.prediction_iterations": 5.0, "sampler.guide_from": 0.5}, "prediction", "constant"),
+    ("preset + end-game G 5", {"sampler.final_iterations": 5.0}, None, None),
+    ("preset + end-game G 10", {"sampler.final_iterations": 10.0}, None, None),
+    ("preset + end-game G 5, re-denoise 0.98",
+     {"sampler.final_iterations": 5.0, "sampler.final_denoise_time": 0.98}, None, None),
+    ("preset, 20 steps", {"sampler.steps": 20.0}, None, None),
+    ("preset, best of 4", {"guidance.candidates": 4.0}, None, None),
+    ("preset + end-game G 5, best of 4", {"sampler.final_iterations": 5.0, "guidance.candidates": 4.0}, None, None),
+    ("prediction, constant, G 3, best of 4",
+     {"sampler.prediction_iterations": 3.0, "guidance.candidates": 4.0}, "prediction", "constant"),
+]
+# FP + split: the same planner exported with splitting; its grid adds the re-noise time and midpoint steps.
+FP_SPLIT_GRID = [
+    ("split preset", {}, None, None),
+    ("split, re-noise 0.7", {"sampler.split_time": 0.7}, None, None),
+    ("split, midpoint G 5", {"sampler.midpoint_iterations": 5.0}, None, None),
+    ("split + end-game G 5", {"sampler.final_iterations": 5.0}, None, None),
+    ("split, prediction, constant, G 3", {"sampler.prediction_iterations": 3.0}, "prediction", "constant"),
+    ("split + end-game G 5, best of 4", {"sampler.final_iterations": 5.0, "guidance.candidates": 4.0}, None, None),
+]
+OTHER_GRID = [
+    ("default", {}, None, None),
+    ("best of 4", {"guidance.candidates": 4.0}, None, None),
+]
+MPD_GRID = OTHER_GRID + [("halved noise", {"sampler.ddpm.noise_scale": 0.5}, None, None)]
+GRIDS = {"fp": FP_GRID, "fp_split": FP_SPLIT_GRID, "mpd": MPD_GRID}
+GOAL_TOLERANCE = 0.03
+MAX_SPEED_RATIO = 1.5
+
+
+def load_problems(path):
+    problems = yaml.safe_load(open(path))["problems"]
+    out = []
+    for p in problems:
+        spheres = [list(s["centre"]) + [s["radius"]] for s in p["scene"]["spheres"]]
+        # States are [q, q̇]: at rest at both ends (as `flowplan plan --start/--goal` makes them).
+        out.append({"start": torch.tensor(p["start_q"] + [0.0] * len(p["start_q"]), dtype=torch.float32),
+                    "goal": torch.tensor(p["goal_q"] + [0.0] * len(p["goal_q"]), dtype=torch.float32),
+                    "goal_tcp": torch.tensor(p["goal_tcp"], dtype=torch.float32),
+                    "spheres": torch.tensor(spheres, dtype=torch.float32).view(-1, 4)})
+    return out
+
+
+def successes(planner, plans, problem, limits):
+    """(plans,) bool: whole-arm success of raw plans (P, T, D)."""
+    J = planner.num_joints
+    q = plans[:, :, :J]
+    clear = planner.clearance(q, spheres=problem["spheres"]).flatten(1).min(1).values > 0.0
+    goal = (planner.tcp(q[:, -1]) - problem["goal_tcp"]).norm(dim=-1) <= GOAL_TOLERANCE
+    speed = ((q[:, 1:] - q[:, :-1]).abs() / planner.dt / limits).flatten(1).max(1).values <= MAX_SPEED_RATIO
+    return clear & goal & speed
+
+
+def run(planner, grid_entry, problems, plans, seed, limits):
+    label, settings, guide_at, schedule = grid_entry
+    N = int(settings.get("guidance.candidates", planner.settings["guidance.candidates"]))
+    ok, seconds = 0, 0.0
+    per_problem = []
+    # Three untimed calls first: TorchScript's executor profiles and specialises a method on its first calls.
+    for i, problem in [(-1, problems[0])] * 3 + list(enumerate(problems)):
+        generator = torch.Generator().manual_seed(seed * 100003 + i)
+        shape = [plans] if N == 1 else [plans, N]
+        noise = torch.randn(shape + list(planner.noise_shape), generator=generator)
+        renoise = (torch.randn(shape + list(planner.renoise_shape), generator=generator)
+                   if len(planner.renoise_shape) > 0 else None)
+        start = problem["start"].expand(plans, -1)
+        goal = problem["goal"].expand(plans, -1)
+        with torch.inference_mode():
+            begin = time.perf_counter()
+            out = planner.plan(start, goal, noise, renoise, spheres=problem["spheres"], settings=settings,
+                               schedule=schedule, guide_at=guide_at)
+            seconds += time.perf_counter() - begin
+            good = successes(planner, out, problem, limits)
+        if i < 0:
+            seconds = 0.0
+            continue
+        ok += int(good.sum())
+        per_problem.append(int(good.sum()))
+    total = plans * len(problems)
+    return {"label": label, "settings": settings, "guide_at": guide_at, "schedule": schedule,
+            "success_arm": ok / total, "problems_solved": sum(1 for c in per_problem if c > 0) / len(problems),
+            "seconds_per_plan": seconds / total, "per_problem": per_problem}
+
+
+def cached(path, make):
+    """make()'s JSON, kept in `path`: a row that exists is not made again."""
+    if os.path.exists(path):
+        return json.load(open(path))
+    result = make()
+    with open(path + ".tmp", "w") as f:
+        json.dump(result, f, indent=1)
+    os.replace(path + ".tmp", path)
+    return result
+
+
+def wilson(p, n):
+    """95 % Wilson interval of a rate p over n trials."""
+    z = 1.96
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return centre - half, centre + half
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--planner", action="append", required=True, metavar="NAME=FILE")
+    parser.add_argument("--val", required=True)
+    parser.add_argument("--test", required=True)
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--plans", type=int, default=8)
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--limit", type=int, default=0, help="first K problems of each set (0: all)")
+    args = parser.parse_args()
+    torch.set_num_threads(args.threads)
+    planners = {}
+    for spec in args.planner:
+        name, _, path = spec.partition("=")
+        if not path or not os.path.isfile(path):
+            sys.exit(f"--planner {spec}: expected NAME=FILE of an exported planner")
+        planners[name] = torch.jit.load(path)
+    if "fp" not in planners:
+        sys.exit("--planner: expected fp=FILE, the flow planner whose settings are chosen")
+    os.makedirs(args.out, exist_ok=True)
+    val, test = load_problems(args.val), load_problems(args.test)
+    if args.limit > 0:
+        val, test = val[:args.limit], test[:args.limit]
+    limits = {name: torch.tensor(yaml.safe_load(p.robot_description)["velocity_limit"], dtype=torch.float32)
+              for name, p in planners.items()}
+
+    def validate():
+        out = {"problems": len(val), "plans_per_problem": args.plans, "threads": args.threads, "planners": {}}
+        for name, planner in planners.items():
+            rows = []
+            for k, entry in enumerate(GRIDS.get(name, OTHER_GRID)):
+                rows.append(cached(os.path.join(args.out, "rows", f"validation_{name}_{k}.json"),
+                                   lambda: run(planner, entry, val, args.plans, 1, limits[name])))
+                r = rows[-1]
+                print(f"validation {name} | {r['label']}: {r['success_arm']:.1%} of plans, "
+                      f"{r['problems_solved']:.0%} of problems, {1e3 * r['seconds_per_plan']:.1f} ms/plan", flush=True)
+            out["planners"][name] = rows
+        return out
+
+    os.makedirs(os.path.join(args.out, "rows"), exist_ok=True)
+    validation = validate()
+    fp_names = [n for n in planners if n.startswith("fp")]
+    others = [n for n in planners if not n.startswith("fp")]
+    fp_rows = [(n, r) for n in fp_names for r in validation["planners"][n]]
+    best_any = max(fp_rows, key=lambda nr: (nr[1]["success_arm"], -nr[1]["seconds_per_plan"]))
+    chosen = {"fp_best": {"planner": best_any[0], "label": best_any[1]["label"]}}
+    for other in others:
+        budget = validation["planners"][other][0]["seconds_per_plan"]
+        within = [nr for nr in fp_rows if nr[1]["seconds_per_plan"] <= budget]
+        if within:
+            pick = max(within, key=lambda nr: (nr[1]["success_arm"], -nr[1]["seconds_per_plan"]))
+            chosen[f"fp_within_{other}_time"] = {"planner": pick[0], "label": pick[1]["label"]}
+
+    def held_out():
+        out = {"problems": len(test), "plans_per_problem": args.plans, "threads": args.threads, "chosen": chosen,
+               "rows": []}
+        runs = {}
+        for key, pick in chosen.items():
+            runs[(pick["planner"], pick["label"])] = key
+        for other in others:
+            runs[(other, GRIDS.get(other, OTHER_GRID)[0][0])] = f"{other}_default"
+        runs.setdefault((fp_names[0], GRIDS[fp_names[0]][0][0]), "fp_default")
+        for (name, label), key in runs.items():
+            k, entry = next((k, e) for k, e in enumerate(GRIDS.get(name, OTHER_GRID)) if e[0] == label)
+            row = dict(cached(os.path.join(args.out, "rows", f"test_{name}_{k}.json"),
+                              lambda: run(planners[name], entry, test, args.plans, 2, limits[name])))
+            row |= {"planner": name, "role": key}
+            out["rows"].append(row)
+            print(f"test {key} ({name} | {label}): {row['success_arm']:.1%} of plans, {row['problems_solved']:.0%} "
+                  f"of problems, {1e3 * row['seconds_per_plan']:.1f} ms/plan", flush=True)
+        return out
+
+    test_result = held_out()
+    for name, content in (("validation.json", validation), ("test.json", test_result)):
+        with open(os.path.join(args.out, name + ".tmp"), "w") as f:
+            json.dump(content, f, indent=1)
+        os.replace(os.path.join(args.out, name + ".tmp"), os.path.join(args.out, name))
+    write_report(args.out, validation, test_result)
+
+
+def write_report(out, validation, test_result):
+    lines = [f"Validation: {validation['problems']} problems x {validation['plans_per_problem']} plans, "
+             f"{validation['threads']} thread(s).", "",
+             "| planner | setting | success (whole arm) | 95 % interval | problems solved | time per plan (ms) |",
+             "|---|---|---|---|---|---|"]
+    n = validation["problems"] * validation["plans_per_problem"]
+    for name, rows in validation["planners"].items():
+        for r in rows:
+            lo, hi = wilson(r["success_arm"], n)
+            lines.append(f"| {name} | {r['label']} | {r['success_arm']:.1%} | {lo:.1%}–{hi:.1%} | "
+                         f"{r['problems_solved']:.0%} | {1e3 * r['seconds_per_plan']:.1f} |")
+    n = test_result["problems"] * test_result["plans_per_problem"]
+    lines += ["", f"Test (held out): {test_result['problems']} problems x {test_result['plans_per_problem']} plans.", "",
+              "| role | planner | setting | success (whole arm) | 95 % interval | problems solved | time per plan (ms) |",
+              "|---|---|---|---|---|---|---|"]
+    for r in test_result["rows"]:
+        lo, hi = wilson(r["success_arm"], n)
+        lines.append(f"| {r['role']} | {r['planner']} | {r['label']} | {r['success_arm']:.1%} | {lo:.1%}–{hi:.1%} | "
+                     f"{r['problems_solved']:.0%} | {1e3 * r['seconds_per_plan']:.1f} |")
+    with open(os.path.join(out, "selection.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("\n".join(lines))
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
+    for ax, title, groups in ((axes[0], "validation: every setting", validation["planners"].items()),
+                              (axes[1], "test: the chosen settings and the defaults",
+                               [(r["planner"], [r]) for r in test_result["rows"]])):
+        for name, rows in groups:
+            ax.scatter([1e3 * r["seconds_per_plan"] for r in rows], [100 * r["success_arm"] for r in rows],
+                       label=name, s=18)
+        ax.set_xscale("log")
+        ax.set_xlabel("time per plan (ms, log)")
+        ax.set_title(title)
+        ax.grid(True, alpha=0.3)
+        handles, labels = ax.get_legend_handles_labels()
+        unique = dict(zip(labels, handles))
+        ax.legend(unique.values(), unique.keys(), fontsize=8)
+    axes[0].set_ylabel("plans that succeed, whole arm (%)")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "success_vs_time.png"), dpi=110)
+
+
+if __name__ == "__main__":
+    main()
