@@ -62,6 +62,13 @@ FP_GRID = [
     ("preset + end-game G 5, best of 4", {"sampler.final_iterations": 5.0, "guidance.candidates": 4.0}, None, None),
     ("prediction, constant, G 3, best of 4",
      {"sampler.prediction_iterations": 3.0, "guidance.candidates": 4.0}, "prediction", "constant"),
+    ("preset + end-game G 10, re-denoise 0.9",
+     {"sampler.final_iterations": 10.0, "sampler.final_denoise_time": 0.9}, None, None),
+    ("preset + end-game G 10, smoothness 0.2",
+     {"sampler.final_iterations": 10.0, "guidance.smoothness_weight": 0.2}, None, None),
+    ("prediction, constant from 0.5, G 5 + end-game G 10",
+     {"sampler.prediction_iterations": 5.0, "sampler.guide_from": 0.5, "sampler.final_iterations": 10.0},
+     "prediction", "constant"),
 ]
 # FP + split: the same planner exported with splitting; its grid adds the re-noise time and midpoint steps.
 FP_SPLIT_GRID = [
@@ -71,6 +78,9 @@ FP_SPLIT_GRID = [
     ("split + end-game G 5", {"sampler.final_iterations": 5.0}, None, None),
     ("split, prediction, constant, G 3", {"sampler.prediction_iterations": 3.0}, "prediction", "constant"),
     ("split + end-game G 5, best of 4", {"sampler.final_iterations": 5.0, "guidance.candidates": 4.0}, None, None),
+    ("split + end-game G 10", {"sampler.final_iterations": 10.0}, None, None),
+    ("split + end-game G 10, re-denoise 0.9",
+     {"sampler.final_iterations": 10.0, "sampler.final_denoise_time": 0.9}, None, None),
 ]
 OTHER_GRID = [
     ("default", {}, None, None),
@@ -261,19 +271,28 @@ def write_report(out, validation, test_result):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
-    for ax, title, groups in ((axes[0], "validation: every setting", validation["planners"].items()),
-                              (axes[1], "test: the chosen settings and the defaults",
-                               [(r["planner"], [r]) for r in test_result["rows"]])):
-        for name, rows in groups:
-            ax.scatter([1e3 * r["seconds_per_plan"] for r in rows], [100 * r["success_arm"] for r in rows],
-                       label=name, s=18)
+    colours = {name: f"C{i}" for i, name in enumerate(validation["planners"])}
+    for name, rows in validation["planners"].items():
+        points = sorted((1e3 * r["seconds_per_plan"], 100 * r["success_arm"]) for r in rows)
+        axes[0].scatter([x for x, _ in points], [y for _, y in points], s=16, color=colours[name], alpha=0.5)
+        # The planner's curve: its best success at each time per plan or less (one point per budget).
+        front, best = [], -1.0
+        for x, y in points:
+            if y > best:
+                front.append((x, y))
+                best = y
+        axes[0].step([x for x, _ in front], [y for _, y in front], where="post", color=colours[name], label=name)
+    for r in test_result["rows"]:
+        axes[1].scatter([1e3 * r["seconds_per_plan"]], [100 * r["success_arm"]], color=colours[r["planner"]], s=24)
+        axes[1].annotate(f"{r['planner']}: {r['label']}", (1e3 * r["seconds_per_plan"], 100 * r["success_arm"]),
+                         fontsize=7, xytext=(4, -10), textcoords="offset points")
+    axes[0].set_title("validation: every setting; line: best within a time", fontsize=10)
+    axes[1].set_title("held-out test: chosen settings, defaults", fontsize=10)
+    for ax in axes:
         ax.set_xscale("log")
-        ax.set_xlabel("time per plan (ms, log)")
-        ax.set_title(title)
+        ax.set_xlabel("time per plan (ms, log; 1 thread)")
         ax.grid(True, alpha=0.3)
-        handles, labels = ax.get_legend_handles_labels()
-        unique = dict(zip(labels, handles))
-        ax.legend(unique.values(), unique.keys(), fontsize=8)
+    axes[0].legend(fontsize=8, loc="lower right")
     axes[0].set_ylabel("plans that succeed, whole arm (%)")
     fig.tight_layout()
     fig.savefig(os.path.join(out, "success_vs_time.png"), dpi=110)
