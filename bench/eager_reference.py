@@ -552,11 +552,14 @@ class ExportReference:
         x = sampler.integrate(noise, s, g, 0.0, steps, scene, opts, choices, guided)
         if split:
             B, half = x.size(0), m.horizon // 2
+            t_s = opts["sampler.split_time"]
+            if guided:
+                x = sampler.descend(x, scale, int(opts["sampler.midpoint_iterations"]), s, g, scene, opts)
             before_mid, after_mid = x[:, half - 1], x[:, half]
-            x = 0.5 * renoise + 0.5 * x
+            x = (1.0 - t_s) * renoise + t_s * x
             halves = torch.cat([x[:, 0:half], x[:, half:m.horizon]], 0)
-            refined = sampler.integrate(halves, torch.cat([s, after_mid], 0), torch.cat([before_mid, g], 0), 0.5,
-                                        max(1, steps // 2), scene, opts, choices, guided)
+            refined = sampler.integrate(halves, torch.cat([s, after_mid], 0), torch.cat([before_mid, g], 0), t_s,
+                                        max(1, int(steps * (1.0 - t_s) + 1e-9)), scene, opts, choices, guided)
             x = torch.cat([refined[0:B], refined[B:2 * B]], 1)
         return inpaint(m.denormalize(x), start, goal), "export.sampler.integrate"
 

@@ -38,7 +38,7 @@ inline const config::EnumNames<GuidanceSchedule>& EnumEntries(GuidanceSchedule) 
 enum class GuidanceTarget {
   kState,       // at x_t after each Euler step, moving x_t: x <- x - s b(t) grad C(x)
   kVelocity,    // at the clean prediction x̂1 = x_t + (1 - t) v, added to the velocity: v <- v - s b(t) grad C(x̂1)
-  kPrediction,  // guidance.prediction_iterations steps on x̂1, then the Euler step heads for the moved x̂1
+  kPrediction,  // sampler.prediction_iterations steps on x̂1, then the Euler step heads for the moved x̂1
 };
 
 inline const config::EnumNames<GuidanceTarget>& EnumEntries(GuidanceTarget) {

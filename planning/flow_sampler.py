@@ -35,7 +35,8 @@ def integrate(self, x: Tensor, start: Tensor, goal: Tensor, t0: float, steps: in
       state:      x <- x + h v(x, t_i); x <- x - s b(t_{i+1}) g(x)
       velocity:   x̂1 = x + (1 - t_i) v; x <- x + h (v - s b(t_i) g(x̂1))
       prediction: x̂1 moved by G steps x̂1 <- x̂1 - s b(t_i) g(x̂1); x <- x + h (x̂1 - x) / (1 - t_i)
-    (g the guide's gradient, the ends re-imposed after each step), then the
+    (g the guide's gradient, the ends re-imposed after each step; with the
+    `ratio` schedule b(0) = 1000 in the velocity and prediction forms), then the
     end-game: sampler.final_iterations steps x <- x - s g(x), each followed by
     an Euler step from sampler.final_denoise_time to 1 when that is non-zero."""
     inpainting = self.conditioning == "inpaint"
@@ -64,7 +65,6 @@ def integrate(self, x: Tensor, start: Tensor, goal: Tensor, t0: float, steps: in
         x = conditioned(x, start, goal, inpainting)
     if guided:
         denoise_time = opts["sampler.final_denoise_time"]
-        assert denoise_time < 1.0, "sampler.final_denoise_time: expected a flow time below 1, got " + str(denoise_time)
         t_r = torch.full([x.size(0)], denoise_time, dtype=x.dtype, device=x.device)
         for g in range(setting_int(opts, "sampler.final_iterations")):
             x = self.descend(x, scale, 1, start, goal, scene, opts)
@@ -78,16 +78,19 @@ def sample_normalized(self, start: Tensor, goal: Tensor, noise: Tensor, renoise:
     """start, goal (B, D) normalized; noise, renoise (B, T, D) standard normal
     -> plans (B, T, D) normalized, unclamped."""
     at = choices["sampler.guide_at"]
-    assert at in guide_targets(), "plan: guide_at: expected one of " + ", ".join(guide_targets()) + ", got " + at
+    assert at in guide_targets(), "plan: guide_at (sampler.guide_at): expected one of " + ", ".join(guide_targets()) + ", got " + at
     guided = self.guide.active(scene, opts)
     steps = setting_int(opts, "sampler.steps")
-    assert steps >= 1, "sampler.steps: expected at least one step, got " + str(steps)
+    assert steps >= 1, "plan: settings: sampler.steps: expected at least one step, got " + str(steps)
+    assert opts["sampler.final_denoise_time"] < 1.0, "plan: settings: sampler.final_denoise_time: expected a flow time below 1, got " + str(opts["sampler.final_denoise_time"])
+    assert opts["sampler.guide_from"] <= 1.0, "plan: settings: sampler.guide_from: expected a flow time of at most 1, got " + str(opts["sampler.guide_from"])
+    assert setting_int(opts, "sampler.prediction_iterations") >= 1, "plan: settings: sampler.prediction_iterations: expected at least one step, got " + str(opts["sampler.prediction_iterations"])
+    split_time = opts["sampler.split_time"]
+    assert split_time > 0.0 and split_time < 1.0, "plan: settings: sampler.split_time: expected a flow time in (0, 1), got " + str(split_time)
     x = self.integrate(noise, start, goal, 0.0, steps, scene, opts, choices, guided)
     if self.splitting == "none":
         return x
     assert renoise is not None, "plan: renoise: this planner splits trajectories and needs re-noising noise"
-    split_time = opts["sampler.split_time"]
-    assert split_time > 0.0 and split_time < 1.0, "sampler.split_time: expected a flow time in (0, 1), got " + str(split_time)
     if guided:
         x = self.descend(x, opts["guidance.scale"], setting_int(opts, "sampler.midpoint_iterations"), start, goal,
                          scene, opts)

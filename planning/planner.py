@@ -64,7 +64,10 @@ def plan(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Ten
     assert N >= 1, "plan: settings: guidance.candidates: expected at least one plan per request, got " + str(N)
     per_request: List[int] = [B] if N == 1 else [B, N]
     because = "" if N == 1 else " (guidance.candidates = " + str(N) + ")"
-    assert noise.shape == per_request + self.noise_shape, "plan: noise: expected " + str(per_request + self.noise_shape) + because + ", got " + str(noise.shape)
+    hint = ""
+    if N == 1 and noise.dim() == len(self.noise_shape) + 2 and noise.shape[2:] == self.noise_shape:
+        hint = " (for N candidates per plan, set guidance.candidates = N)"
+    assert noise.shape == per_request + self.noise_shape, "plan: noise: expected " + str(per_request + self.noise_shape) + because + ", got " + str(noise.shape) + hint
     if len(self.renoise_shape) > 0:
         assert renoise is not None, "plan: renoise: this planner needs renoise " + str(per_request + self.renoise_shape) + because
         assert renoise.shape == per_request + self.renoise_shape, "plan: renoise: expected " + str(per_request + self.renoise_shape) + because + ", got " + str(renoise.shape)

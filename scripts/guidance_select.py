@@ -13,7 +13,7 @@ at their own settings and the few variants of GRIDS[name]. VAL and TEST are
 
   1. validation: every setting of every planner's grid on every validation
      problem, `--plans` plans per problem in one call, the same noise for every
-     setting of a planner (paired comparisons); per setting the share of plans
+     setting of a planner (paired comparisons; best of N draws N times as much); per setting the share of plans
      that succeed and the time per plan (wall time of the call / plans);
   2. selection, on validation only: for each other planner's default setting,
      the FP setting of highest success whose time per plan is at most that

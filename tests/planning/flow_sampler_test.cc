@@ -242,7 +242,7 @@ PlanSettings With(std::map<std::string, double> values, std::optional<std::strin
 }
 
 TEST(FlowSamplerTest, GuidanceAtThePredictionMovesThePlanByTheClosedFormAmount) {
-  // Zero velocity: x̂1 = x_t. Four steps (h = 0.25), scale 0.1, b = 1 - t taken at t_i = 0, 0.25, 0.5, 0.75:
+  // Zero velocity: x̂1 = x_t. Four steps (h = 0.25), scale 0.1, b(t_i) at t_i = 0, 0.25, 0.5, 0.75 (1 - t unless named):
   //   velocity:   x moves h s sum b(t_i) = 0.25 * 0.1 * 2.5 = 0.0625;
   //   prediction: each step heads for x̂1 moved by G s b(t_i), so x moves h G s b / (1 - t_i) = 0.025 G per step:
   //               0.1 for G = 1 and 0.2 for G = 2, and the plan ends exactly on the last moved x̂1.
@@ -264,11 +264,13 @@ TEST(FlowSamplerTest, GuidanceAtThePredictionMovesThePlanByTheClosedFormAmount) 
     EXPECT_NEAR(m.max().item<float>(), expected, 2e-3) << *settings.guide_at;
   }
   EXPECT_THAT([&] { planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle, With({}, "sideways")); },
-              ThrowsMessage<Error>(HasSubstr("plan: guide_at: expected one of state, velocity, prediction, got sideways")));
+              ThrowsMessage<Error>(HasSubstr("plan: guide_at (sampler.guide_at): expected one of state, velocity, prediction, got sideways")));
 }
 
 TEST(FlowSamplerTest, GuidanceStartsAtGuideFrom) {
   // b = 1 - t on x_t after the steps reaching 0.75 and 1 only: 0.1 * 0.25; b = 1 (constant) on both: 0.2.
+  // On the prediction, taken at t_i: only t_i = 0.75 is at or after 0.6, one step of 0.025 / 0.25 * 0.1 = 0.1
+  // with b = 1 (constant), 0.025 with b = 1 - t.
   const NearOrigin r;
   const auto planner = GuidedZero(Splitting::kNone, 0.1);
   const geometry::SceneRows obstacle = Spheres(torch::tensor({{0.0f, 0.0f, 0.3f}}));
@@ -280,6 +282,15 @@ TEST(FlowSamplerTest, GuidanceStartsAtGuideFrom) {
         free;
     EXPECT_NEAR(m.mean().item<float>(), expected, 2e-3) << schedule;
   }
+  for (const auto& [schedule, expected] : {std::pair{"one_minus_t", 0.025f}, std::pair{"constant", 0.1f}}) {
+    const torch::Tensor m =
+        NearOrigin::Radii(planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle,
+                                                 With({{"sampler.guide_from", 0.6}}, "prediction", schedule))) -
+        free;
+    EXPECT_NEAR(m.mean().item<float>(), expected, 2e-3) << "prediction, " << schedule;
+  }
+  EXPECT_THAT([&] { planner->PlanWithNoise(r.start, r.goal, r.noise, {}, geometry::SceneRows(), With({{"sampler.final_denoise_time", 1.0}})); },
+              ThrowsMessage<Error>(HasSubstr("plan: settings: sampler.final_denoise_time: expected a flow time below 1, got 1")));
 }
 
 TEST(FlowSamplerTest, TheEndGameStepsOnTheFinishedPlanAndDenoisesBetween) {
@@ -342,7 +353,7 @@ TEST(FlowSamplerTest, SplittingRenoisesToSplitTimeAndStepsTheMidpointFirst) {
   }
 }
 
-TEST(FlowSamplerTest, EveryVariantIsTheUnguidedPlanAtScaleZero) {
+TEST(FlowSamplerTest, AtScaleZeroEveryVariantSettingLeavesTheUnguidedPlan) {
   const NearOrigin r;
   const geometry::SceneRows obstacle = Spheres(torch::tensor({{0.0f, 0.0f, 0.3f}}));
   for (Splitting splitting : {Splitting::kNone, Splitting::kMidpoint}) {
@@ -375,13 +386,18 @@ TEST(FlowSamplerTest, BestOfNReturnsTheCandidateOfLeastCost) {
   // Equal costs (no obstacle, no smoothness weight): the first candidate.
   EXPECT_TRUE(torch::equal(planner->PlanWithNoise(r.start, r.goal, candidates, {}, geometry::SceneRows(), three),
                            planner->PlanWithNoise(r.start, r.goal, r.noise)));
-  // Two requests choose independently.
-  const torch::Tensor two = planner->PlanWithNoise(r.start.repeat({2, 1}), r.goal.repeat({2, 1}),
-                                                   torch::cat({candidates, candidates.flip(1)}, 0), {}, obstacle, three);
+  // Two requests with different ends choose independently: the second's
+  // candidates are rolled, so its clear candidate is the third.
+  const torch::Tensor starts = torch::cat({r.start, r.start + torch::tensor({{0.0f, 0.05f, 0.0f, 0.0f}})}, 0);
+  const torch::Tensor two = planner->PlanWithNoise(starts, r.goal.repeat({2, 1}),
+                                                   torch::cat({candidates, candidates.roll(1, 1)}, 0), {}, obstacle, three);
   EXPECT_TRUE(torch::equal(two.select(0, 0), best.select(0, 0)));
-  EXPECT_TRUE(torch::equal(two.select(0, 1), best.select(0, 0)));
+  EXPECT_TRUE(torch::equal(two.select(0, 1),
+                           planner->PlanWithNoise(starts.slice(0, 1, 2), r.goal, outside, {}, obstacle).select(0, 0)));
   EXPECT_THAT([&] { planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle, three); },
               ThrowsMessage<Error>(HasSubstr("plan: noise: expected [1, 3, 16, 4] (guidance.candidates = 3), got [1, 16, 4]")));
+  EXPECT_THAT([&] { planner->PlanWithNoise(r.start, r.goal, candidates, {}, obstacle); },
+              ThrowsMessage<Error>(HasSubstr("(for N candidates per plan, set guidance.candidates = N)")));
   // Plan() draws the candidates itself.
   PlanRequest request;
   request.start = r.start.repeat({5, 1});
