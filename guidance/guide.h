@@ -32,22 +32,6 @@ inline const config::EnumNames<GuidanceSchedule>& EnumEntries(GuidanceSchedule) 
   return names;
 }
 
-/// Where the flow planner takes the cost's gradient and how it applies it
-/// (sampler.guide_at; docs/planning.md, "Guidance variants"). The DDPM planner
-/// always guides its posterior mean, the latent planner its waypoints.
-enum class GuidanceTarget {
-  kState,       // at x_t after each Euler step, moving x_t: x <- x - s b(t) grad C(x)
-  kVelocity,    // at the clean prediction x̂1 = x_t + (1 - t) v, added to the velocity: v <- v - s b(t) grad C(x̂1)
-  kPrediction,  // sampler.prediction_iterations steps on x̂1, then the Euler step heads for the moved x̂1
-};
-
-inline const config::EnumNames<GuidanceTarget>& EnumEntries(GuidanceTarget) {
-  static const config::EnumNames<GuidanceTarget> names = {{GuidanceTarget::kState, "state"},
-                                                          {GuidanceTarget::kVelocity, "velocity"},
-                                                          {GuidanceTarget::kPrediction, "prediction"}};
-  return names;
-}
-
 /// The `guidance` section of an experiment config. Every number here is also a
 /// per-call setting of a planner (by its key, e.g. "guidance.clip"), and so is
 /// the schedule; the user cost file is compiled in.

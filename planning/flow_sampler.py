@@ -65,10 +65,10 @@ def integrate(self, x: Tensor, start: Tensor, goal: Tensor, t0: float, steps: in
         x = conditioned(x, start, goal, inpainting)
     if guided:
         denoise_time = opts["sampler.final_denoise_time"]
-        t_r = torch.full([x.size(0)], denoise_time, dtype=x.dtype, device=x.device)
         for g in range(setting_int(opts, "sampler.final_iterations")):
             x = self.descend(x, scale, 1, start, goal, scene, opts)
             if denoise_time > 0.0:
+                t_r = torch.full([x.size(0)], denoise_time, dtype=x.dtype, device=x.device)
                 x = conditioned(x + (1.0 - denoise_time) * self.velocity(x, t_r, start, goal), start, goal, inpainting)
     return x
 

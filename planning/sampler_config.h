@@ -1,7 +1,6 @@
 #pragma once
 
 #include "core/config.h"
-#include "guidance/guide.h"
 
 namespace flowplan::planning {
 
@@ -16,6 +15,22 @@ enum class Splitting {
 
 inline const config::EnumNames<Splitting>& EnumEntries(Splitting) {
   static const config::EnumNames<Splitting> names = {{Splitting::kNone, "none"}, {Splitting::kMidpoint, "midpoint"}};
+  return names;
+}
+
+/// Where the flow planner takes the cost's gradient and how it applies it
+/// (sampler.guide_at; docs/planning.md, "Guidance variants"). The DDPM planner
+/// always guides its posterior mean, the latent planner its waypoints.
+enum class GuidanceTarget {
+  kState,       // at x_t after each Euler step, moving x_t: x <- x - s b(t) grad C(x)
+  kVelocity,    // at the clean prediction x̂1 = x_t + (1 - t) v, added to the velocity: v <- v - s b(t) grad C(x̂1)
+  kPrediction,  // sampler.prediction_iterations steps on x̂1, then the Euler step heads for the moved x̂1
+};
+
+inline const config::EnumNames<GuidanceTarget>& EnumEntries(GuidanceTarget) {
+  static const config::EnumNames<GuidanceTarget> names = {{GuidanceTarget::kState, "state"},
+                                                          {GuidanceTarget::kVelocity, "velocity"},
+                                                          {GuidanceTarget::kPrediction, "prediction"}};
   return names;
 }
 
@@ -84,7 +99,7 @@ struct SamplerConfig {
   Splitting splitting = Splitting::kNone;
   double split_time = 0.5;  // splitting: the flow time the halves are re-noised to and restart from
   // How the flow planner guides (docs/planning.md, "Guidance variants"); the guidance section says how strongly.
-  guidance::GuidanceTarget guide_at = guidance::GuidanceTarget::kState;
+  GuidanceTarget guide_at = GuidanceTarget::kState;
   double guide_from = 0.0;        // no guidance before this flow time
   int prediction_iterations = 1;  // guide_at prediction: gradient steps on x̂1 per Euler step
   int final_iterations = 0;       // gradient steps of the guidance scale on the finished plan, each stage of splitting
