@@ -19,6 +19,13 @@ where it stopped (a stopped training resumes from its newest checkpoint):
   examples    ROOT/results/example_*.png    a few plans of every planner, drawn
   train-cross ROOT/train/cross_*/done.json  `flowplan train` of every franka_cross row
   stitching   ROOT/stitching/<row>.json     `flowplan eval stitching` of every franka_cross row
+  train-long  ROOT/train/long_*/done.json   FP on franka_cross for 10,000 steps, one run per seed, a checkpoint
+                                            every 1,000 steps (the training-budget curve)
+  curve       ROOT/curve/<row>_k<step>.*    each long run at the steps of the curve: stitching without and with
+                                            splitting, and guided around the paper's sphere on the stitching pair
+  select      ROOT/select/                  guidance chosen on validation problems (seed 101) and reported on
+                                            held-out test problems (seed 202): scripts/guidance_select.py on FP,
+                                            FP + split, MPD and the paper's MPD, exported from the reach rows
   recount     ROOT/results/recount.json     scripts/recount_plans.py on every saved plan (always redone)
   results     ROOT/results/*.md|json|png    tables and plots (always redone from what exists)
 
@@ -36,8 +43,11 @@ results stage leaves out, and lists, every output of another request. Not
 detected: a rebuilt flowplan binary and edited scripts (franka_problems.py,
 plot.py); delete the outputs to redo them.
 
---rows limits the training and stitching stages to the named rows, trained in the
-order given (e.g. --rows cross_mpd,cross_fp_s0 --only train-cross,stitching).
+--rows limits the training, stitching and curve stages to the named rows, trained in
+the order given (e.g. --rows cross_mpd,cross_fp_s0 --only train-cross,stitching).
+--threads N sets the threads of every training and evaluation without entering
+any request (results do not depend on it): two drivers with --threads 1 and
+different --rows share a root on two cores.
 --quick runs every stage at toy size (ROOT defaults to runs/franka_bench_quick).
 The sizes of the full run and how they were chosen: docs/results.md.
 """
@@ -55,6 +65,7 @@ import sys
 import time
 
 REACH_CONFIG = "configs/franka_reach.yaml"
+PAPER_MPD_CONFIG = "configs/franka_reach_paper_mpd.yaml"
 # franka_cross data sets: name, config, augmentation scheme as the paper names it.
 CROSS_SETS = [("franka_cross", "configs/franka_cross.yaml", "per-joint noise"),
               ("franka_cross_same_noise", "configs/franka_cross_same_noise.yaml", "same noise"),
@@ -71,6 +82,27 @@ TABLE1 = [("FP", "cross_fp", [], SEEDS),
           ("Transformer w/o inpainting", "cross_transformer_direct",
            ["model.name=transformer", "objective.conditioning=direct"], [0]),
           ("MPD", "cross_mpd", ["objective.name=ddpm"], [0])]
+# The training-budget curve (stage curve): FP on franka_cross trained for the longest budget with its cosine
+# schedule, evaluated at the checkpoints of CURVE_STEPS; beside it, the 2,000-step rows of table 1, whose schedule
+# ends there.
+LONG_SEEDS = [0, 1]
+CURVE_EVERY = 1000
+LONG_TRAIN = ["train.steps=10000", f"train.checkpoint_every={CURVE_EVERY}", "train.keep_checkpoints=10",
+              f"train.eval_every={CURVE_EVERY}"]
+CURVE_RADII = [0.1, 0.15]
+# Guidance selection (stage select, scripts/guidance_select.py): validation and held-out test problems drawn with
+# two seeds; the planners it compares, each exported from its training row with these settings (the flow planner
+# with the paper's sampler, so that the grids' base setting is that).
+SELECT_SEEDS = {"val": 101, "test": 202}
+SELECT_PLANNERS = [("fp", "reach_fp", ["sampler.splitting=none", "sampler.final_iterations=0"]),
+                   ("fp_split", "reach_fp", ["sampler.splitting=midpoint", "sampler.final_iterations=0"]),
+                   ("mpd", "reach_mpd", []),
+                   ("paper_mpd", "reach_paper_mpd", [])]
+# The cross planner guided around the paper's sphere on the stitching pair (its start and goal TCP are those of the
+# pair (-0.3, 0.2) -> (0.3, 0.2)): the reach preset's guidance, split, with the end-game chosen on validation problems.
+CURVE_GUIDANCE = ["guidance.scale=1.75", "guidance.schedule=rising", "guidance.clip=1", "guidance.collision_weight=0.1",
+                  "guidance.smoothness_weight=0.02", "guidance.margin=0.05", "sampler.splitting=midpoint",
+                  "sampler.final_iterations=10"]
 PAPER_TABLE1 = {"FP": "0.16 ± 0.07", "FP w/o inpainting": "0.71 ± 0.24", "Transformer": "0.30 ± 0.09",
                 "Transformer w/o inpainting": "1.73 ± 0.49", "MPD": "1.00 ± 0.97"}
 PAPER_TABLE2 = {"per-joint noise": "0.16 ± 0.07", "same noise": "1.62 ± 0.25", "no noise": "0.81 ± 0.05",
@@ -80,8 +112,10 @@ PLANNERS = [("mpd", "MPD", "reach_mpd", []),
             # Adam's step on the latent: at the default 0.05 the VAE planner's plans reach the goal but move
             # at 1.9-2.7x the joint speed limits, with no sphere (docs/results.md); 0.02 keeps them within.
             ("vae", "VAE planner", "reach_vae", ["sampler.latent.lr=0.02"]),
-            ("fp", "FP", "reach_fp", []),
-            ("fp_split", "FP + split", "reach_fp", ["sampler.splitting=midpoint"]),
+            # The paper's sampler (no end-game), whatever the preset's defaults; the select stage chooses among the
+            # guidance variants on validation problems.
+            ("fp", "FP", "reach_fp", ["sampler.splitting=none", "sampler.final_iterations=0"]),
+            ("fp_split", "FP + split", "reach_fp", ["sampler.splitting=midpoint", "sampler.final_iterations=0"]),
             ("rrt_connect", "RRT-Connect", None, [])]
 # MPD with other guidance settings than the sweep's (FP's cost weights, 60 gradient steps: MPD guides the last 7
 # of its 25 denoising steps and 5 noise-free steps after them, 5 gradient steps each): FP's budget of gradient
@@ -100,12 +134,14 @@ START_TCP, GOAL_TCP = "0.5,-0.3,0.2", "0.5,0.3,0.2"
 FULL = {"episodes": None, "train": [], "plans_per_pair": 64, "radii": [round(0.025 * i, 3) for i in range(14)],
         "sweep_plans": 64, "scales": [0.5, 1.0, 1.75, 2.5, 3.5, 5.0],
         "scale_radii": [0.1, 0.125, 0.15, 0.175, 0.2, 0.225, 0.25],
-        "problems": 100, "problem_plans": 8, "example_radii": [0.1, 0.2], "example_plans": 8}
+        "problems": 100, "problem_plans": 8, "example_radii": [0.1, 0.2], "example_plans": 8,
+        "curve_steps": [2000, 5000, 10000], "select_problems": 100, "select_plans": 8}
 QUICK = {"episodes": 256,
          "train": ["train.steps=20", "train.batch_size=16", "train.eval_every=0", "train.checkpoint_every=10",
                    "train.log_every=10", "train.val_batch_size=16"],
          "plans_per_pair": 4, "radii": [0.0, 0.1, 0.2, 0.3], "sweep_plans": 4, "scales": [1.0, 2.5],
-         "scale_radii": [0.15], "problems": 2, "problem_plans": 2, "example_radii": [0.1], "example_plans": 2}
+         "scale_radii": [0.15], "problems": 2, "problem_plans": 2, "example_radii": [0.1], "example_plans": 2,
+         "curve_steps": [10, 20], "select_problems": 2, "select_plans": 2}
 
 
 def train_rows():
@@ -117,12 +153,16 @@ def train_rows():
     for seed in SEEDS:  # seed by seed, so that a partial run has every scheme
         for name, config, _ in CROSS_SETS[1:]:
             rows[f"{name[len('franka_'):]}_fp_s{seed}"] = (config, name, [], seed)
+    for seed in LONG_SEEDS:  # the training-budget curve: one long run per seed, a checkpoint every CURVE_EVERY steps
+        rows[f"long_cross_fp_s{seed}"] = (CROSS_SETS[0][1], "franka_cross", LONG_TRAIN, seed)
     rows["reach_fp"] = (REACH_CONFIG, "franka_reach", [], 0)
     rows["reach_mpd"] = (REACH_CONFIG, "franka_reach", ["objective.name=ddpm"], 0)
     # The VAE learns single states: 16 trajectories are 1,024 states per step (as in the particle zoo), and
     # 128 would make its 10,000 steps take 95 minutes here.
     rows["reach_vae"] = (REACH_CONFIG, "franka_reach",
                          ["model.name=state_vae", "objective.name=vae", "train.batch_size=16"], 0)
+    # The Flow Planner paper's MPD baseline as its code runs it (docs/results.md, "Two MPDs").
+    rows["reach_paper_mpd"] = (PAPER_MPD_CONFIG, "franka_reach", [], 0)
     return rows
 
 
@@ -147,6 +187,8 @@ class Bench:
         self.quick = args.quick
         self.child = None  # the running command
         self.rows = args.rows  # None: every row
+        # threads=N on every training and evaluation (not part of any request: results do not depend on it)
+        self.threads = [] if args.threads is None else [f"threads={args.threads}"]
 
     def selected(self, rows):
         """The rows among `rows` that --rows selects, in --rows order (all of them without --rows)."""
@@ -294,6 +336,9 @@ class Bench:
     def train_cross(self):
         self.train([row for row in train_rows() if row.startswith("cross_")])
 
+    def train_long(self):
+        self.train([row for row in train_rows() if row.startswith("long_")])
+
     def train(self, rows):
         for row in self.selected(rows):
             config, data, overrides, seed = train_rows()[row]
@@ -317,11 +362,11 @@ class Bench:
             try:
                 if glob.glob(os.path.join(run, "checkpoints", "step_*.pt")):
                     self.check_training_request(row, open(marker).read() if os.path.exists(marker) else None, request)
-                    self.call([self.flowplan, "train", "--resume", run])
+                    self.call([self.flowplan, "train", "--resume", run, *self.threads])
                 else:
                     shutil.rmtree(run, ignore_errors=True)  # nothing worth keeping: no checkpoint
                     write_text(marker, request)
-                    self.call(command)
+                    self.call(command + self.threads)
             finally:  # also when stopped: the next invocation adds its own time
                 earlier = float(open(partial).read()) if os.path.exists(partial) else 0.0
                 if os.path.isdir(run):
@@ -335,8 +380,8 @@ class Bench:
     # -- stitching ------------------------------------------------------------
     def stitching(self):
         for row in self.selected(train_rows()):
-            if not train_rows()[row][1].startswith("franka_cross"):
-                continue
+            if not train_rows()[row][1].startswith("franka_cross") or row.startswith("long_"):
+                continue  # the long rows are evaluated at each checkpoint by the curve stage
             if not os.path.exists(self.path("train", row, "done.json")):
                 print(f"stitching: {row} not trained yet, skipped", flush=True)
                 continue
@@ -433,6 +478,85 @@ class Bench:
         if not ok:
             print("recount: some files differ (ROOT/results/recount.json, ROOT/bench.log)", flush=True)
 
+    # -- guidance selection ---------------------------------------------------
+    def select_commands(self):
+        """(commands, request) of the select stage: the two problem sets, the exports, then the selection."""
+        commands, inputs = [], []
+        for name, seed in SELECT_SEEDS.items():
+            commands.append([self.flowplan, "problems", "--out", self.path("select", f"{name}.yaml"), f"seed={seed}",
+                             f"problems.count={self.size['select_problems']}"])
+        selection = [self.python, "scripts/guidance_select.py"]
+        for name, row, overrides in SELECT_PLANNERS:
+            out = self.path("select", f"{name}.pt")
+            commands.append([self.flowplan, "export", "--ckpt", self.path("train", row), "--out", out, *overrides])
+            inputs.append(self.model_request(row))
+            selection += ["--planner", f"{name}={out}"]
+        commands.append(selection + ["--val", self.path("select", "val.yaml"), "--test", self.path("select", "test.yaml"),
+                                     "--out", self.path("select"), "--plans", str(self.size["select_plans"])])
+        request = "".join(self.request(c) for c in commands)
+        return commands, self.request([], request, *inputs)
+
+    def select(self):
+        commands, request = self.select_commands()
+        marker = self.path("select", "request.txt")
+        done = self.path("select", "test.json")
+        lock = claim(self.path("select.lock"))
+        if lock is None:
+            print("select: another driver is on it, skipped", flush=True)
+            return
+        try:
+            if recorded(marker, request) and os.path.exists(done):
+                return
+            if not recorded(marker, request):  # the cached rows are of another request
+                discard([self.path("select")])
+                write_text(marker, request)
+            print("select: guidance settings chosen on validation problems, reported on test problems", flush=True)
+            for command in commands[:-1]:
+                self.call(command)
+            # the selection keeps each setting's result in select/rows/, so a stopped run continues
+            self.call(commands[-1] + ([] if not self.threads else ["--threads", self.threads[0].split("=")[1]]))
+        finally:
+            lock.close()
+
+    # -- training budget ------------------------------------------------------
+    def curve_commands(self, row, step):
+        """[(prefix, command, request, outputs)] of the evaluations of ROW's checkpoint at STEP: stitching without
+        and with splitting, then the sphere of each radius in CURVE_RADII."""
+        data = train_rows()[row][1]
+        model = self.model_request(row)
+        checkpoint = self.path("train", row, "checkpoints", f"step_{step:08d}.pt")
+        prefix = self.path("curve", f"{row}_k{step}")
+        _, _, _, plans = self.stitching_command(row)
+        cells = []
+        for name, extra in (("", []), ("_split", ["sampler.splitting=midpoint"])):
+            out = prefix + name + ".json"
+            command = [self.flowplan, "eval", "stitching", "--ckpt", checkpoint, "--out", out + ".tmp",
+                       f"data.path={self.path('data', data + '.h5')}", f"eval.num_plans={plans}", *extra]
+            cells.append((out, command, self.request(command, model), [out, out + ".plans.h5"]))
+        for radius in CURVE_RADII:
+            out = f"{prefix}_r{radius:g}"
+            command = [self.flowplan, "plan", "--ckpt", checkpoint, *CURVE_GUIDANCE, "--start-tcp", START_TCP,
+                       "--goal-tcp", GOAL_TCP, "--scene", SCENE, "--radius", str(radius), "-n",
+                       str(self.size["sweep_plans"]), "--seed", "1", "--no-plot", "--log-level", "warn", "--out", out]
+            cells.append((out + ".json", command, self.request(command, model), [out + ".json", out + ".h5"]))
+        return cells
+
+    def curve(self):
+        for row in self.selected([r for r in train_rows() if r.startswith("long_")]):
+            if not os.path.exists(self.path("train", row, "done.json")):
+                print(f"curve: {row} not trained yet, skipped", flush=True)
+                continue
+            for step in self.size["curve_steps"]:
+                for out, command, request, outputs in self.curve_commands(row, step):
+                    with stale(lambda: os.path.exists(out) and recorded(out + ".request", request), out + ".lock",
+                               outputs + [out + ".request"]) as ours:
+                        if ours:
+                            self.call(command + self.threads)
+                            if os.path.exists(out + ".tmp"):  # `eval stitching --out X.tmp`
+                                os.replace(out + ".tmp", out)
+                            write_text(out + ".request", request)
+                print(f"curve: {row} at step {step} done", flush=True)
+
     # -- results: only outputs of the current requests --------------------------
     def current(self, make_request, marker):
         """Whether the output whose request MARKER holds is that of the current request (make_request() ->
@@ -500,6 +624,8 @@ class Bench:
             summary["recount"] = {k: r[k] for k in ("files", "plans", "differ")}
             text.append(f"Independent recount (scripts/recount_plans.py, its own kinematics) of {r['plans']} saved plans "
                         f"in {r['files']} files: {r['differ']} files with a different TCP or whole-arm count.\n")
+        text += select_table(self, summary)
+        text += curve_table(self, summary)
         text.append(training_table(self, summary))
         summary["left_out"] = sorted(set(self.left_out))
         if self.left_out:
@@ -732,6 +858,98 @@ def budget_table(bench, summary, sweep_cells):
     return text + [""]
 
 
+def select_table(bench, summary):
+    """The select stage's tables (select/selection.md) and plot, if made by the current request."""
+    marker, report = bench.path("select", "request.txt"), bench.path("select", "selection.md")
+    if not os.path.exists(report) or not bench.current(lambda: bench.select_commands()[1], marker):
+        return ["### Guidance chosen on validation problems\n", "Not run.\n"]
+    test = json.load(open(bench.path("select", "test.json")))
+    summary["select"] = {"chosen": test["chosen"], "test": test["rows"]}
+    shutil.copyfile(bench.path("select", "success_vs_time.png"), bench.path("results", "success_vs_time.png"))
+    seeds = ", ".join(f"{name} seed {seed}" for name, seed in SELECT_SEEDS.items())
+    return ["### Guidance chosen on validation problems\n",
+            f"Problems: {seeds}; every setting on validation, the chosen ones and the defaults on test "
+            "(scripts/guidance_select.py; plot: success_vs_time.png).\n", open(report).read()]
+
+
+def curve_table(bench, summary):
+    """The training-budget curve: each long row's stitching error, validation loss and success around the paper's
+    sphere at each checkpoint of curve_steps, beside the table-1 rows whose schedule ends at 2,000 steps."""
+    steps = bench.size["curve_steps"]
+    summary["curve"] = {}
+    text = ["### Training budget (FP on franka_cross)\n",
+            f"One run per seed trained for {steps[-1]} steps with its cosine schedule, evaluated (EMA weights) at the "
+            "checkpoints below: a checkpoint before the end is mid-schedule, not a run of that length. Stitching: "
+            "mean ± std over the test-pair plans; sphere: the cross planner guided around the paper's sphere on the "
+            f"stitching pair ({' '.join(CURVE_GUIDANCE)}), {bench.size['sweep_plans']} plans, TCP / whole arm.\n",
+            "| run | step | validation loss | stitching | stitching, split | " +
+            " | ".join(f"sphere {r:g} m" for r in CURVE_RADII) + " |", "|---|---|---|---|---|" + "---|" * len(CURVE_RADII)]
+    for row in [r for r in train_rows() if r.startswith("long_")]:
+        if bench.trained_row(row) is None:
+            text.append(f"| {row} | not run | | | |" + " |" * len(CURVE_RADII))
+            continue
+        losses = {}
+        for line in open(bench.path("train", row, "metrics.jsonl")):
+            record = json.loads(line)
+            if "val_loss" in record:
+                losses[record["step"]] = record["val_loss"]
+        for step in steps:
+            cells, point = [], {"val_loss": losses.get(step)}
+            for out, _, request, _ in bench.curve_commands(row, step):
+                if not bench.current(lambda: request, out + ".request"):
+                    cells.append("")
+                    continue
+                report = json.load(open(out))
+                if "test" in report:
+                    key = "stitching_split" if out.endswith("_split.json") else "stitching"
+                    point[key] = {"mean": report["test"]["mean"], "stddev": report["test"]["stddev"]}
+                    cells.append(f"{report['test']['mean']:.2f} ± {report['test']['stddev']:.2f}")
+                else:
+                    point[os.path.basename(out)[:-len(".json")].rsplit("_", 1)[1]] = {
+                        "tcp": report["success_rate_tcp"], "arm": report["success_rate_arm"]}
+                    cells.append(f"{report['success_rate_tcp']:.0%} / {report['success_rate_arm']:.0%}")
+            summary["curve"].setdefault(row, {})[step] = point
+            loss = "" if point["val_loss"] is None else f"{point['val_loss']:.4f}"
+            text.append(f"| {row} | {step} | {loss} | " + " | ".join(cells) + " |")
+    for seed in LONG_SEEDS:
+        report = bench.stitching_report(f"cross_fp_s{seed}")
+        if report is not None:
+            text.append(f"| cross_fp_s{seed} (schedule ends at its steps) | {bench.trained_row(f'cross_fp_s{seed}')['steps']}"
+                        f" | | {report['test']['mean']:.2f} ± {report['test']['stddev']:.2f} | |" + " |" * len(CURVE_RADII))
+    if summary["curve"]:
+        plot_curve(summary["curve"], bench.path("results", "training_budget.png"))
+        text.append("\nPlot: training_budget.png. The paper's FP: 0.16 ± 0.07.")
+    return text + [""]
+
+
+def plot_curve(curve, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    figure, axes = plt.subplots(1, 2, figsize=(9, 3.6))
+    for row, points in curve.items():
+        steps = sorted(points)
+        for key, style in (("stitching", "-"), ("stitching_split", ":")):
+            xs = [k for k in steps if key in points[k]]
+            axes[0].plot(xs, [points[k][key]["mean"] for k in xs], style, marker="o", ms=3, label=f"{row} {key}")
+        radii = sorted({r for k in steps for r in points[k] if r.startswith("r")})
+        for radius in radii:
+            xs = [k for k in steps if radius in points[k]]
+            axes[1].plot(xs, [points[k][radius]["arm"] for k in xs], marker="o", ms=3, label=f"{row} {radius[1:]} m")
+    axes[0].axhline(0.16, color="grey", lw=0.8, ls="--", label="paper FP")
+    axes[0].set_ylabel("stitching error, test pairs")
+    axes[1].set_ylabel("whole arm clear, goal reached")
+    for axis in axes:
+        axis.set_xscale("log")
+        axis.set_xlabel("training step")
+        axis.legend(fontsize=6)
+    figure.tight_layout()
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    figure.savefig(path + ".tmp.png", dpi=70)
+    os.replace(path + ".tmp.png", path)
+    plt.close(figure)
+
+
 def median_time(cells, planner, radii):
     """Median over the cells of a planner of the planning time per plan (the call's wall time / its plans)."""
     times = []
@@ -808,8 +1026,8 @@ def training_table(bench, summary):
     return "\n".join(text) + "\n"
 
 
-STAGES = ["data", "train-reach", "sweep", "scales", "budget", "problems", "examples", "train-cross", "stitching", "recount",
-          "results"]
+STAGES = ["data", "train-reach", "sweep", "scales", "budget", "problems", "examples", "train-cross", "stitching",
+          "train-long", "curve", "select", "recount", "results"]
 
 
 def main():
@@ -819,6 +1037,8 @@ def main():
                         "runs/franka_bench_quick)")
     parser.add_argument("--only", help=f"comma-separated stages to run ({', '.join(STAGES)})")
     parser.add_argument("--rows", help="comma-separated training rows to train and evaluate, in this order")
+    parser.add_argument("--threads", type=int, help="threads of every training and evaluation (default: the configs' "
+                        "threads, all cores); results do not depend on it, e.g. two drivers with --threads 1 each")
     parser.add_argument("--flowplan", default=os.environ.get("FLOWPLAN"),
                         help="the flowplan binary (default: $FLOWPLAN, else the repository's build/apps/flowplan/flowplan)")
     args = parser.parse_args()

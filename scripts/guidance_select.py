@@ -7,8 +7,13 @@ usage: /usr/bin/python3 scripts/guidance_select.py --planner NAME=FILE.pt ... --
                                                    --out DIR [--plans 8] [--threads 1] [--grid GRID]
 
 --planner names an exported planner (`flowplan export`): `fp` (the flow planner
-whose settings are chosen) and any others (e.g. `mpd`, `paper_mpd`), which run
-at their own settings and the few variants of GRIDS[name]. VAL and TEST are
+whose settings are chosen), `fp_split` (the same network exported with
+splitting) and any others (e.g. `mpd`, `paper_mpd`), which run at their own
+settings and the few variants of GRIDS[name]. Every grid changes the exported
+file's defaults; its base row is those defaults, so export the flow planner
+with the paper's sampler (`sampler.final_iterations=0`, and
+`sampler.splitting=none` or `midpoint`), as scripts/franka_bench.py's select
+stage does. VAL and TEST are
 `flowplan problems` files drawn with different seeds. Stages:
 
   1. validation: every setting of every planner's grid on every validation
@@ -41,7 +46,7 @@ import yaml
 
 # Settings grids: name -> (label, settings, guide_at, schedule). The first entry is the planner's default.
 FP_GRID = [
-    ("preset: x_t, rising, s 1.75", {}, None, None),
+    ("base: x_t, rising, s 1.75", {}, None, None),
     ("x_t, 1 - t, s 1.75", {}, None, "one_minus_t"),
     ("x_t, 1 - t, s 5", {"guidance.scale": 5.0}, None, "one_minus_t"),
     ("x_t, rising, s 3", {"guidance.scale": 3.0}, None, None),
@@ -53,18 +58,18 @@ FP_GRID = [
     ("prediction, constant, s 1.75, G 3", {"sampler.prediction_iterations": 3.0}, "prediction", "constant"),
     ("prediction, constant from 0.5, s 1.75, G 5",
      {"sampler.prediction_iterations": 5.0, "sampler.guide_from": 0.5}, "prediction", "constant"),
-    ("preset + end-game G 5", {"sampler.final_iterations": 5.0}, None, None),
-    ("preset + end-game G 10", {"sampler.final_iterations": 10.0}, None, None),
-    ("preset + end-game G 5, re-denoise 0.98",
+    ("base + end-game G 5", {"sampler.final_iterations": 5.0}, None, None),
+    ("base + end-game G 10", {"sampler.final_iterations": 10.0}, None, None),
+    ("base + end-game G 5, re-denoise 0.98",
      {"sampler.final_iterations": 5.0, "sampler.final_denoise_time": 0.98}, None, None),
-    ("preset, 20 steps", {"sampler.steps": 20.0}, None, None),
-    ("preset, best of 4", {"guidance.candidates": 4.0}, None, None),
-    ("preset + end-game G 5, best of 4", {"sampler.final_iterations": 5.0, "guidance.candidates": 4.0}, None, None),
+    ("base, 20 steps", {"sampler.steps": 20.0}, None, None),
+    ("base, best of 4", {"guidance.candidates": 4.0}, None, None),
+    ("base + end-game G 5, best of 4", {"sampler.final_iterations": 5.0, "guidance.candidates": 4.0}, None, None),
     ("prediction, constant, G 3, best of 4",
      {"sampler.prediction_iterations": 3.0, "guidance.candidates": 4.0}, "prediction", "constant"),
-    ("preset + end-game G 10, re-denoise 0.9",
+    ("base + end-game G 10, re-denoise 0.9",
      {"sampler.final_iterations": 10.0, "sampler.final_denoise_time": 0.9}, None, None),
-    ("preset + end-game G 10, smoothness 0.2",
+    ("base + end-game G 10, smoothness 0.2",
      {"sampler.final_iterations": 10.0, "guidance.smoothness_weight": 0.2}, None, None),
     ("prediction, constant from 0.5, G 5 + end-game G 10",
      {"sampler.prediction_iterations": 5.0, "sampler.guide_from": 0.5, "sampler.final_iterations": 10.0},
@@ -72,7 +77,7 @@ FP_GRID = [
 ]
 # FP + split: the same planner exported with splitting; its grid adds the re-noise time and midpoint steps.
 FP_SPLIT_GRID = [
-    ("split preset", {}, None, None),
+    ("split base", {}, None, None),
     ("split, re-noise 0.7", {"sampler.split_time": 0.7}, None, None),
     ("split, midpoint G 5", {"sampler.midpoint_iterations": 5.0}, None, None),
     ("split + end-game G 5", {"sampler.final_iterations": 5.0}, None, None),

@@ -101,10 +101,30 @@ for row in cross:
     # 4 plans for each of the two test pairs
     with h5py.File(os.path.join(root, "stitching", f"{row}.json.plans.h5"), "r") as f:
         assert sorted(f["test/pair_index"][...].tolist()) == [0] * 4 + [1] * 4, row
+# The training-budget curve: each long row at each checkpoint. Its last checkpoint is the row's own model, so the
+# curve's stitching error there is what `flowplan eval stitching` of the run folder gives (same plans and noise);
+# the first checkpoint's differs.
+assert sorted(summary["curve"]) == ["long_cross_fp_s0", "long_cross_fp_s1"], summary["curve"]
+for row, points in summary["curve"].items():
+    assert sorted(int(k) for k in points) == [10, 20], (row, points)
+    for point in points.values():
+        assert sorted(point) == ["r0.1", "r0.15", "stitching", "stitching_split", "val_loss"], point
+    own = os.path.join(scratch, f"{row}_stitching.json")
+    done = subprocess.run([flowplan, "eval", "stitching", "--ckpt", os.path.join(root, "train", row), "--out", own,
+                           "data.path=" + os.path.join(root, "data", "franka_cross.h5"), "eval.num_plans=8",
+                           "--log-level", "warn"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    final = json.load(open(own))["test"]
+    assert points["20"]["stitching"] == {"mean": final["mean"], "stddev": final["stddev"]}, (row, points["20"], final)
+    assert points["10"]["stitching"] != points["20"]["stitching"], (row, points)
+    losses = [json.loads(line) for line in open(os.path.join(root, "train", row, "metrics.jsonl"))]
+    assert points["20"]["val_loss"] == next(r["val_loss"] for r in losses if r.get("step") == 20 and "val_loss" in r)
+    plans = json.load(open(os.path.join(root, "curve", f"{row}_k10_r0.1.json")))
+    assert points["10"]["r0.1"]["arm"] == sum(p["success_arm"] for p in plans["samples"]) / len(plans["samples"])
 summary_md = open(os.path.join(root, "results", "summary.md")).read()
 times = next(line for line in summary_md.split("\n") if line.startswith("| FP + split | "))
 assert len([t for t in times.split("|")[2:-1] if float(t) > 0]) == 5, times  # 4 radii and their median
-for name in ["success_vs_radius.png", "summary.md"] + [f"example_{p}_r0.1.png" for p in planners]:
+for name in ["success_vs_radius.png", "training_budget.png", "summary.md"] + [f"example_{p}_r0.1.png" for p in planners]:
     assert os.path.getsize(os.path.join(root, "results", name)) > 0, name
 
 # 2. A second run redoes nothing but the recount.
@@ -129,7 +149,8 @@ finally:
 sys.path.insert(0, os.path.join(repo, "scripts"))
 import franka_bench  # noqa: E402
 
-maker = franka_bench.Bench(argparse.Namespace(root="some/root", quick=True, flowplan="bin/flowplan", rows=None))
+maker = franka_bench.Bench(argparse.Namespace(root="some/root", quick=True, flowplan="bin/flowplan", rows=None,
+                                              threads=None))
 config = os.path.join(scratch, "request.yaml")
 requests = []
 for text in ("train:\n  steps: 20\n", "# sized for the test\ntrain: {steps: 20}  # steps\n", "train:\n  steps: 21\n"):
