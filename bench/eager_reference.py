@@ -425,13 +425,14 @@ class Guide:
 # ----------------------------------------------------------------------------
 
 class FlowPlanner:
-    def __init__(self, net, normalizer, conditioning, steps, guide):
+    def __init__(self, net, normalizer, conditioning, steps, guide, final_iterations=0):
         self.net = net
         self.normalizer = normalizer
         self.inpaint = conditioning == "inpaint"
         self.steps = steps
         self.split_steps = max(1, steps // 2)
         self.guide = guide
+        self.final_iterations = final_iterations  # the end-game: gradient steps on each stage's finished plan
 
     def integrate(self, x, s, g, t0, steps, scene, scale):
         """Euler from flow time t0 to 1: x (B, T', D) normalized, boundaries s, g (B, D);
@@ -445,6 +446,10 @@ class FlowPlanner:
             x = x + h * self.net(inpaint(x, s, g) if self.inpaint else x, t, cond)
             if scene is not None:
                 x = self.guide.step(x, t0 + (i + 1) * h, scene, scale)
+            if self.inpaint:
+                x = inpaint(x, s, g)
+        for _ in range(self.final_iterations if scene is not None else 0):
+            x = x - scale * self.guide.gradient(x, scene)  # x <- x - s g(x), no schedule factor
             if self.inpaint:
                 x = inpaint(x, s, g)
         return x
@@ -597,9 +602,9 @@ def main():
     net = load_network(checkpoint, "ema", config, D, C).eval()
     kinematics = ArmKinematics(robot)
     guide = Guide(settings, kinematics, float(checkpoint.dt), normalizer)
-    planner = FlowPlanner(net, normalizer, conditioning, steps, guide)
-
     export = torch.jit.load(args.export, map_location="cpu")
+    # The end-game as the exported file says (the speed benchmark exports without it, the preset has it).
+    planner = FlowPlanner(net, normalizer, conditioning, steps, guide, int(export.settings["sampler.final_iterations"]))
     reference = ExportReference(export)
     compiled = {key[len("guidance."):]: value for key, value in export.settings.items() if key.startswith("guidance.")}
     compiled["schedule"] = export.schedule

@@ -147,8 +147,12 @@ int Main(int argc, char** argv) {
   if (checkpoint.empty()) checkpoint = WriteFreshCheckpoint(out);
   spdlog::info("checkpoint {}, {} threads, median of {} repeats", checkpoint, threads, repeats);
 
-  const experiment::TrainedPlanner plain = experiment::LoadTrainedPlanner(checkpoint, "", {"sampler.splitting=none"});
-  const experiment::TrainedPlanner split = experiment::LoadTrainedPlanner(checkpoint, "", {"sampler.splitting=midpoint"});
+  // The paper's sampler (no end-game steps), whatever the config's defaults: the figures and the eager
+  // reference are of that.
+  const experiment::TrainedPlanner plain =
+      experiment::LoadTrainedPlanner(checkpoint, "", {"sampler.splitting=none", "sampler.final_iterations=0"});
+  const experiment::TrainedPlanner split =
+      experiment::LoadTrainedPlanner(checkpoint, "", {"sampler.splitting=midpoint", "sampler.final_iterations=0"});
   const auto& config = plain.config;
   const int64_t T = plain.planner->horizon(), D = plain.planner->state_dim();
   FLOWPLAN_DEMAND(config.sampler.steps == 10);
