@@ -603,8 +603,16 @@ def main():
     kinematics = ArmKinematics(robot)
     guide = Guide(settings, kinematics, float(checkpoint.dt), normalizer)
     export = torch.jit.load(args.export, map_location="cpu")
-    # The end-game as the exported file says (the speed benchmark exports without it, the preset has it).
-    planner = FlowPlanner(net, normalizer, conditioning, steps, guide, int(export.settings["sampler.final_iterations"]))
+    # The end-game as the exported file says (the speed benchmark exports without it, the preset has it); the
+    # other guidance variants are not written here, so a file that uses one is refused rather than misjudged.
+    variants = {"sampler.final_denoise_time": 0.0, "sampler.midpoint_iterations": 0.0, "sampler.guide_from": 0.0,
+                "sampler.split_time": 0.5, "guidance.candidates": 1.0}
+    other = {k: export.settings[k] for k, v in variants.items() if export.settings.get(k, v) != v}
+    if other or getattr(export, "guide_at", "state") != "state":
+        sys.exit(f"{args.export}: guidance variants this reference does not implement: {other}, "
+                 f"guide_at {getattr(export, 'guide_at', 'state')}")
+    planner = FlowPlanner(net, normalizer, conditioning, steps, guide,
+                          int(export.settings.get("sampler.final_iterations", 0.0)))
     reference = ExportReference(export)
     compiled = {key[len("guidance."):]: value for key, value in export.settings.items() if key.startswith("guidance.")}
     compiled["schedule"] = export.schedule

@@ -2,7 +2,7 @@
 """The Franka benchmarks (SPEC section 4 and beyond), one resumable run.
 
 usage: /usr/bin/python3 scripts/franka_bench.py [--quick] [--root DIR] [--only STAGE,...] [--rows ROW,...]
-                                                [--flowplan BIN]
+                                                [--threads N] [--flowplan BIN]
 (Debian's python3-h5py and python3-yaml; build flowplan first: make build)
 
 Stages, in order; each writes its output atomically and skips an output that
@@ -10,7 +10,7 @@ exists and was made by the current request (below), so a stopped run continues
 where it stopped (a stopped training resumes from its newest checkpoint):
 
   data        ROOT/data/<set>.h5            `flowplan generate` of every data set
-  train-reach ROOT/train/reach_*/done.json  `flowplan train` of FP, MPD and the VAE on franka_reach
+  train-reach ROOT/train/reach_*/done.json  `flowplan train` of FP, MPD, the VAE and the paper's MPD on franka_reach
   sweep       ROOT/sweep/<planner>_r<R>.*   the paper's scene, one sphere of radius R, every
                                             planner, plans executed in MuJoCo
   scales      ROOT/scales/s<S>_r<R>.*       FP + split at several guidance scales
@@ -45,9 +45,10 @@ plot.py); delete the outputs to redo them.
 
 --rows limits the training, stitching and curve stages to the named rows, trained in
 the order given (e.g. --rows cross_mpd,cross_fp_s0 --only train-cross,stitching).
---threads N sets the threads of every training and evaluation without entering
-any request (results do not depend on it): two drivers with --threads 1 and
-different --rows share a root on two cores.
+--threads N sets the threads of the training and curve stages' flowplan calls
+without entering any request (their results do not depend on it): two drivers
+with --threads 1 and different --rows share a root on two cores. The select
+stage plans on one thread always: it compares times per plan.
 --quick runs every stage at toy size (ROOT defaults to runs/franka_bench_quick).
 The sizes of the full run and how they were chosen: docs/results.md.
 """
@@ -498,8 +499,8 @@ class Bench:
 
     def select(self):
         commands, request = self.select_commands()
-        marker = self.path("select", "request.txt")
-        done = self.path("select", "test.json")
+        marker = self.path("select.request")
+        done = self.path("select", "success_vs_time.png")  # guidance_select.py writes it last
         lock = claim(self.path("select.lock"))
         if lock is None:
             print("select: another driver is on it, skipped", flush=True)
@@ -513,8 +514,9 @@ class Bench:
             print("select: guidance settings chosen on validation problems, reported on test problems", flush=True)
             for command in commands[:-1]:
                 self.call(command)
-            # the selection keeps each setting's result in select/rows/, so a stopped run continues
-            self.call(commands[-1] + ([] if not self.threads else ["--threads", self.threads[0].split("=")[1]]))
+            # the selection keeps each setting's result in select/rows/, so a stopped run continues; it plans on one
+            # thread whatever --threads says, since its choices compare times per plan
+            self.call(commands[-1])
         finally:
             lock.close()
 
@@ -553,6 +555,9 @@ class Bench:
                         if ours:
                             self.call(command + self.threads)
                             if os.path.exists(out + ".tmp"):  # `eval stitching --out X.tmp`
+                                plans = self.stitching_command(row)[3]
+                                if json.load(open(out + ".tmp"))["test"]["num_plans"] != plans:
+                                    sys.exit(f"{out}.tmp: expected {plans} test plans")
                                 os.replace(out + ".tmp", out)
                             write_text(out + ".request", request)
                 print(f"curve: {row} at step {step} done", flush=True)
@@ -860,8 +865,9 @@ def budget_table(bench, summary, sweep_cells):
 
 def select_table(bench, summary):
     """The select stage's tables (select/selection.md) and plot, if made by the current request."""
-    marker, report = bench.path("select", "request.txt"), bench.path("select", "selection.md")
-    if not os.path.exists(report) or not bench.current(lambda: bench.select_commands()[1], marker):
+    marker, report = bench.path("select.request"), bench.path("select", "selection.md")
+    made = [report, bench.path("select", "test.json"), bench.path("select", "success_vs_time.png")]
+    if not all(os.path.exists(p) for p in made) or not bench.current(lambda: bench.select_commands()[1], marker):
         return ["### Guidance chosen on validation problems\n", "Not run.\n"]
     test = json.load(open(bench.path("select", "test.json")))
     summary["select"] = {"chosen": test["chosen"], "test": test["rows"]}
@@ -939,6 +945,7 @@ def plot_curve(curve, path):
     axes[0].axhline(0.16, color="grey", lw=0.8, ls="--", label="paper FP")
     axes[0].set_ylabel("stitching error, test pairs")
     axes[1].set_ylabel("whole arm clear, goal reached")
+    axes[1].set_ylim(0.0, 1.02)
     for axis in axes:
         axis.set_xscale("log")
         axis.set_xlabel("training step")
@@ -1037,7 +1044,7 @@ def main():
                         "runs/franka_bench_quick)")
     parser.add_argument("--only", help=f"comma-separated stages to run ({', '.join(STAGES)})")
     parser.add_argument("--rows", help="comma-separated training rows to train and evaluate, in this order")
-    parser.add_argument("--threads", type=int, help="threads of every training and evaluation (default: the configs' "
+    parser.add_argument("--threads", type=int, help="threads of the training and curve stages (default: the configs' "
                         "threads, all cores); results do not depend on it, e.g. two drivers with --threads 1 each")
     parser.add_argument("--flowplan", default=os.environ.get("FLOWPLAN"),
                         help="the flowplan binary (default: $FLOWPLAN, else the repository's build/apps/flowplan/flowplan)")

@@ -151,10 +151,14 @@ def run(planner, grid_entry, problems, plans, seed, limits):
             "seconds_per_plan": seconds / total, "per_problem": per_problem}
 
 
-def cached(path, make):
-    """make()'s JSON, kept in `path`: a row that exists is not made again."""
+def cached(path, entry, make):
+    """make()'s JSON, kept in `path`: a row that exists is not made again if it was made with ENTRY's settings
+    (grid rows are kept by index; a grid edited since makes the row again, a renamed row takes the new label)."""
+    label, settings, guide_at, schedule = entry
     if os.path.exists(path):
-        return json.load(open(path))
+        row = json.load(open(path))
+        if (row["settings"], row["guide_at"], row["schedule"]) == (settings, guide_at, schedule):
+            return row | {"label": label}
     result = make()
     with open(path + ".tmp", "w") as f:
         json.dump(result, f, indent=1)
@@ -179,6 +183,9 @@ def main():
     parser.add_argument("--plans", type=int, default=8)
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--limit", type=int, default=0, help="first K problems of each set (0: all)")
+    parser.add_argument("--test-also", action="append", default=[], metavar="NAME:LABEL",
+                        help="a grid setting to report on the test problems besides the chosen ones (role \"also\"; "
+                             "it takes no part in the choice), e.g. 'fp:base + end-game G 10'")
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
     planners = {}
@@ -189,6 +196,12 @@ def main():
         planners[name] = torch.jit.load(path)
     if "fp" not in planners:
         sys.exit("--planner: expected fp=FILE, the flow planner whose settings are chosen")
+    test_also = []
+    for spec in args.test_also:
+        name, _, label = spec.partition(":")
+        if name not in planners or label not in [e[0] for e in GRIDS.get(name, OTHER_GRID)]:
+            sys.exit(f"--test-also {spec}: expected PLANNER:LABEL of a grid setting of a given planner")
+        test_also.append((name, label))
     os.makedirs(args.out, exist_ok=True)
     val, test = load_problems(args.val), load_problems(args.test)
     if args.limit > 0:
@@ -201,7 +214,7 @@ def main():
         for name, planner in planners.items():
             rows = []
             for k, entry in enumerate(GRIDS.get(name, OTHER_GRID)):
-                rows.append(cached(os.path.join(args.out, "rows", f"validation_{name}_{k}.json"),
+                rows.append(cached(os.path.join(args.out, "rows", f"validation_{name}_{k}.json"), entry,
                                    lambda: run(planner, entry, val, args.plans, 1, limits[name])))
                 r = rows[-1]
                 print(f"validation {name} | {r['label']}: {r['success_arm']:.1%} of plans, "
@@ -232,9 +245,11 @@ def main():
         for other in others:
             runs[(other, GRIDS.get(other, OTHER_GRID)[0][0])] = f"{other}_default"
         runs.setdefault((fp_names[0], GRIDS[fp_names[0]][0][0]), "fp_default")
+        for name, label in test_also:  # reported on test, never chosen from it
+            runs.setdefault((name, label), "also")
         for (name, label), key in runs.items():
             k, entry = next((k, e) for k, e in enumerate(GRIDS.get(name, OTHER_GRID)) if e[0] == label)
-            row = dict(cached(os.path.join(args.out, "rows", f"test_{name}_{k}.json"),
+            row = dict(cached(os.path.join(args.out, "rows", f"test_{name}_{k}.json"), entry,
                               lambda: run(planners[name], entry, test, args.plans, 2, limits[name])))
             row |= {"planner": name, "role": key}
             out["rows"].append(row)

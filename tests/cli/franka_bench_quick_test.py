@@ -121,10 +121,29 @@ for row, points in summary["curve"].items():
     assert points["20"]["val_loss"] == next(r["val_loss"] for r in losses if r.get("step") == 20 and "val_loss" in r)
     plans = json.load(open(os.path.join(root, "curve", f"{row}_k10_r0.1.json")))
     assert points["10"]["r0.1"]["arm"] == sum(p["success_arm"] for p in plans["samples"]) / len(plans["samples"])
+# The select stage: FP and FP + split exported with the paper's sampler (the grids' base row), as the driver's sweep
+# rows plan; every planner's grid on the validation problems; FP's best setting chosen from validation alone, then
+# reported on the test problems beside every other planner's default.
+import torch  # noqa: E402
+
+for name, splitting in (("fp", "none"), ("fp_split", "midpoint")):
+    exported = torch.jit.load(os.path.join(root, "select", f"{name}.pt"))
+    assert exported.settings["sampler.final_iterations"] == 0.0 and exported.splitting == splitting, name
+assert "sampler.final_iterations=0" in open(os.path.join(root, "sweep", "fp_r0.1.request")).read()
+validation = json.load(open(os.path.join(root, "select", "validation.json")))
+assert sorted(validation["planners"]) == ["fp", "fp_split", "mpd", "paper_mpd"], sorted(validation["planners"])
+fp_rows = [(n, r) for n in ("fp", "fp_split") for r in validation["planners"][n]]
+best = max(fp_rows, key=lambda nr: (nr[1]["success_arm"], -nr[1]["seconds_per_plan"]))
+assert summary["select"]["chosen"]["fp_best"] == {"planner": best[0], "label": best[1]["label"]}, summary["select"]
+roles = {r["role"] for r in summary["select"]["test"]}
+assert {"mpd_default", "paper_mpd_default"} <= roles, roles
+assert all(len(r["per_problem"]) == 2 for r in summary["select"]["test"]), summary["select"]["test"]
 summary_md = open(os.path.join(root, "results", "summary.md")).read()
+assert "### Guidance chosen on validation problems" in summary_md and "Test (held out)" in summary_md
 times = next(line for line in summary_md.split("\n") if line.startswith("| FP + split | "))
 assert len([t for t in times.split("|")[2:-1] if float(t) > 0]) == 5, times  # 4 radii and their median
-for name in ["success_vs_radius.png", "training_budget.png", "summary.md"] + [f"example_{p}_r0.1.png" for p in planners]:
+for name in (["success_vs_radius.png", "training_budget.png", "success_vs_time.png", "summary.md"] +
+             [f"example_{p}_r0.1.png" for p in planners]):
     assert os.path.getsize(os.path.join(root, "results", name)) > 0, name
 
 # 2. A second run redoes nothing but the recount.
