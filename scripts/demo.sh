@@ -12,28 +12,49 @@ setting() {  # setting CONFIG KEY: a value of the resolved config
   "$FLOWPLAN" config show --config "$1" --log-level warn | sed -n "s/^$2: //p"
 }
 
+# Training seeds (SEEDS="0 1 2" for the spread between seeds): seed=N changes the
+# initial weights, batches and validation split; every seed trains on the same
+# data. The config's own seed trains in its run_dir, seed N in RUN_DIR_seedN.
+SEEDS=${SEEDS:-0}
 summaries=()
 for config in configs/particle_cross.yaml configs/particle_cross_no_noise.yaml; do
-  run=$(setting "$config" run_dir)
+  base=$(setting "$config" run_dir)
+  own_seed=$(setting "$config" seed)
+  case " $SEEDS " in
+    *" $own_seed "*) ;;
+    *) echo "SEEDS=\"$SEEDS\": it must include $config's own seed ($own_seed), whose run the demo plans with" >&2
+       exit 1 ;;
+  esac
   data=$("$FLOWPLAN" config show --config "$config" --log-level warn | sed -n 's/^  out: //p' | head -1)
-  echo "=== $config: dataset $data, run $run"
+  echo "=== $config: dataset $data, run $base"
   "$FLOWPLAN" generate --config "$config"
-  # A run left by an earlier demo with this very config is continued (a finished
-  # one is left as it is); one made with another config is replaced.
-  if [ -d "$run/checkpoints" ] && cmp -s <("$FLOWPLAN" config show --config "$config" --log-level warn) "$run/config.yaml"; then
-    "$FLOWPLAN" train --resume "$run"
-  else
-    [ -d "$run" ] && echo "replacing $run (made with another config)"
-    rm -rf "$run"
-    "$FLOWPLAN" train --config "$config"
-  fi
-  "$FLOWPLAN" eval stitching --ckpt "$run"
-  "$FLOWPLAN" eval stitching --ckpt "$run" sampler.splitting=midpoint --out "$run/eval_stitching_split.json"
-  "$FLOWPLAN" export --ckpt "$run"
-  "$PYTHON" scripts/plot.py dataset "$data" --out "$run/dataset.png"
-  "$PYTHON" scripts/plot.py plans "$run/eval_stitching.plans.h5" --data "$data" --out "$run/plans.png"
-  "$PYTHON" scripts/plot.py plans "$run/eval_stitching_split.plans.h5" --data "$data" --out "$run/plans_split.png"
-  summaries+=("$("$PYTHON" scripts/summarize_eval.py "$config" "$run")")
+  runs=()
+  for seed in $SEEDS; do
+    run=$base
+    overrides=()
+    if [ "$seed" != "$own_seed" ]; then
+      run="${base}_seed$seed"
+      overrides=("seed=$seed" "run_dir=$run")
+      echo "=== $config, seed $seed: run $run"
+    fi
+    runs+=("$run")
+    # A run left by an earlier demo with this very config is continued (a finished
+    # one is left as it is); one made with another config is replaced.
+    if [ -d "$run/checkpoints" ] && cmp -s <("$FLOWPLAN" config show --config "$config" "${overrides[@]}" --log-level warn) "$run/config.yaml"; then
+      "$FLOWPLAN" train --resume "$run"
+    else
+      [ -d "$run" ] && echo "replacing $run (made with another config)"
+      rm -rf "$run"
+      "$FLOWPLAN" train --config "$config" "${overrides[@]}"
+    fi
+    "$FLOWPLAN" eval stitching --ckpt "$run"
+    "$FLOWPLAN" eval stitching --ckpt "$run" sampler.splitting=midpoint --out "$run/eval_stitching_split.json"
+    "$FLOWPLAN" export --ckpt "$run"
+    "$PYTHON" scripts/plot.py plans "$run/eval_stitching.plans.h5" --data "$data" --out "$run/plans.png"
+    "$PYTHON" scripts/plot.py plans "$run/eval_stitching_split.plans.h5" --data "$data" --out "$run/plans_split.png"
+  done
+  "$PYTHON" scripts/plot.py dataset "$data" --out "$base/dataset.png"
+  summaries+=("$("$PYTHON" scripts/summarize_eval.py "$config" "${runs[@]}")")
 done
 
 run=$(setting configs/particle_cross.yaml run_dir)
@@ -74,7 +95,8 @@ print(f"all 8 plans start and end at the requested states (largest difference {e
 PY
 
 echo
-echo "=== stitching error on the novel pairs (mean ± std over the plans; lower is better)"
+echo "=== stitching error on the novel pairs (lower is better; one seed: mean ± std over the plans,"
+echo "    several: the mean of the seeds' means ± their sample std, then each seed's mean)"
 printf '%s\n' "${summaries[@]}"
 echo
 echo "=== guidance around the disc (runs/particle_cross/plan_guided.png)"
@@ -84,6 +106,9 @@ echo "=== where everything went"
 for config in configs/particle_cross.yaml configs/particle_cross_no_noise.yaml; do
   run=$(setting "$config" run_dir)
   echo "  $config -> $run/{config.yaml,metrics.jsonl,checkpoints/,eval_stitching.json,planner.pt,*.png}"
+  for seed in $SEEDS; do
+    if [ -d "${run}_seed$seed" ]; then echo "    seed $seed -> ${run}_seed$seed/"; fi
+  done
   if [ -f "$run/plan_guided.json" ]; then echo "    and $run/plan_{unguided,guided}.{h5,json}, plan_guided.png"; fi
 done
 echo "  datasets in data/; total time $(( $(date +%s) - start_time )) s"
