@@ -29,6 +29,7 @@ const std::vector<CostTerm> kCostTerms = {
     {"CollisionCost", "guidance/collision.py", "guidance.collision_weight"},
     {"SmoothnessCost", "guidance/smoothness.py", "guidance.smoothness_weight"},
     {"JointLimitCost", "guidance/joint_limit.py", "guidance.joint_limit_weight"},
+    {"JointSpeedCost", "guidance/joint_speed.py", "guidance.joint_speed_weight"},
 };
 
 /// Every term gets the robot, dt and its weight key; a class uses what it needs.

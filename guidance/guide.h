@@ -46,6 +46,8 @@ struct GuidanceConfig {
   double smoothness_sigma = 1.0;    // σ of the GP prior
   double joint_limit_weight = 0.0;  // weight of the joint-limit hinge
   double joint_limit_margin = 0.05;  // joint units (rad) the hinge keeps from each limit
+  double joint_speed_weight = 0.0;  // weight of the joint-speed hinge
+  double joint_speed_ratio = 1.0;   // share of each joint's velocity limit above which that hinge acts
   std::string user_cost;            // a TorchScript file defining cost(self, q, qd, scene); empty: none
   double user_cost_weight = 1.0;    // weight of the user cost
 
@@ -66,6 +68,10 @@ struct GuidanceConfig {
             config::NonNegative());
     v.Field("joint_limit_margin", joint_limit_margin, "distance the joint-limit hinge keeps from each limit",
             config::NonNegative());
+    v.Field("joint_speed_weight", joint_speed_weight,
+            "weight of the joint-speed hinge on the speeds between consecutive states (0: off)", config::NonNegative());
+    v.Field("joint_speed_ratio", joint_speed_ratio,
+            "share of each joint's velocity limit above which the joint-speed hinge acts", config::Positive());
     v.Field("user_cost", user_cost,
             "TorchScript file defining `def cost(self, q, qd, scene) -> Tensor` (docs/planning.md); empty for none");
     v.Field("user_cost_weight", user_cost_weight, "weight of the user cost", config::NonNegative());

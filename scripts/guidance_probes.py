@@ -56,7 +56,8 @@ def probe(path, plans, radius, push, seed):
     if sampler.conditioning != "inpaint":
         sys.exit(f"{path}: the probes need an inpainting planner, got {sampler.conditioning}")
     opts = dict(planner.settings)
-    for key in ("guidance.smoothness_weight", "guidance.joint_limit_weight", "guidance.user_cost_weight"):
+    for key in ("guidance.smoothness_weight", "guidance.joint_limit_weight", "guidance.joint_speed_weight",
+                "guidance.user_cost_weight"):
         if key in opts:
             opts[key] = 0.0  # the collision term alone
     steps = int(opts["sampler.steps"])

@@ -74,6 +74,10 @@ FP_GRID = [
     ("prediction, constant from 0.5, G 5 + end-game G 10",
      {"sampler.prediction_iterations": 5.0, "sampler.guide_from": 0.5, "sampler.final_iterations": 10.0},
      "prediction", "constant"),
+    ("base + end-game G 10, joint speed 0.1", {"sampler.final_iterations": 10.0, "guidance.joint_speed_weight": 0.1},
+     None, None),
+    ("base + end-game G 10, joint speed 1", {"sampler.final_iterations": 10.0, "guidance.joint_speed_weight": 1.0},
+     None, None),
 ]
 # FP + split: the same planner exported with splitting; its grid adds the re-noise time and midpoint steps.
 FP_SPLIT_GRID = [
@@ -86,6 +90,10 @@ FP_SPLIT_GRID = [
     ("split + end-game G 10", {"sampler.final_iterations": 10.0}, None, None),
     ("split + end-game G 10, re-denoise 0.9",
      {"sampler.final_iterations": 10.0, "sampler.final_denoise_time": 0.9}, None, None),
+    ("split + end-game G 10, joint speed 0.1",
+     {"sampler.final_iterations": 10.0, "guidance.joint_speed_weight": 0.1}, None, None),
+    ("split + end-game G 10, joint speed 1",
+     {"sampler.final_iterations": 10.0, "guidance.joint_speed_weight": 1.0}, None, None),
 ]
 OTHER_GRID = [
     ("default", {}, None, None),

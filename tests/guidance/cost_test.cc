@@ -212,6 +212,49 @@ TEST(JointLimitCostTest, HingeOnTheDistanceToTheLimits) {
                          }())}).toBool());
 }
 
+TEST(JointSpeedCostTest, SquaredHingeOnTheSpeedsBetweenStatesMatchesHandValuesAndFiniteDifferences) {
+  GuidanceConfig config;
+  config.joint_speed_ratio = 0.5;
+  const double dt = 0.1;
+  const torch::jit::Module speed = Term(Guide(config, Franka(), dt), 3);
+  const auto& limits = Franka().description().velocity_limit;  // rad/s
+  // Joint 0 moves at 0.8 of its limit, then 0.3: only the first step is over 0.5, by 0.3; joint 3 at 1.5 of its
+  // limit backwards, by 1.0; every other joint stands still.
+  torch::Tensor q = torch::zeros({1, 3, 7}, torch::kFloat64);
+  q[0][1][0] = 0.8 * limits[0] * dt;
+  q[0][2][0] = (0.8 + 0.3) * limits[0] * dt;
+  q[0][1][3] = -1.5 * limits[3] * dt;
+  q[0][2][3] = -1.5 * limits[3] * dt;
+  const torch::Tensor qd = torch::zeros_like(q);
+  const Evaluated r = Evaluate(speed, q, qd, geometry::SceneRows(), Opts(config));
+  EXPECT_NEAR(r.value.item<double>(), 0.3 * 0.3 + 1.0 * 1.0, 1e-9);
+  // dC/dq_1 of joint 0: +2 (0.3) / (v dt) from the first step; of joint 3: -2 (1.0) / (v dt), and back on q_0.
+  EXPECT_NEAR(r.grad_q[0][1][0].item<double>(), 2 * 0.3 / (limits[0] * dt), 1e-9);
+  EXPECT_NEAR(r.grad_q[0][0][0].item<double>(), -2 * 0.3 / (limits[0] * dt), 1e-9);
+  EXPECT_NEAR(r.grad_q[0][1][3].item<double>(), -2 * 1.0 / (limits[3] * dt), 1e-9);
+  EXPECT_NEAR(r.grad_q[0][0][3].item<double>(), 2 * 1.0 / (limits[3] * dt), 1e-9);
+  EXPECT_EQ(Largest(r.grad_qd), 0.0);
+  // Random fast plans: the written gradient is the finite differences' and autograd's.
+  torch::manual_seed(11);
+  const torch::Tensor fast = torch::randn({2, 6, 7}, torch::kFloat64) * 0.5;
+  const Evaluated f = Evaluate(speed, fast, torch::zeros_like(fast), geometry::SceneRows(), Opts(config));
+  EXPECT_GT(f.value.min().item<double>(), 0.0) << "the test needs speeds over the hinge";
+  const auto [numeric_q, numeric_qd] =
+      Numeric(speed, fast, torch::zeros_like(fast), geometry::SceneRows(), Opts(config));
+  EXPECT_LT(Largest(f.grad_q - numeric_q), 1e-5 * Largest(numeric_q));
+  const auto [auto_q, auto_qd] = Autograd(speed, fast, torch::zeros_like(fast), geometry::SceneRows(), Opts(config));
+  EXPECT_LT(Largest(f.grad_q - auto_q), 1e-9 * Largest(auto_q));
+  // A robot without velocity limits has no cost, and the term never makes the guide run alone.
+  const Evaluated none = Evaluate(Term(Guide(config, Disc(0.05)), 3), torch::rand({1, 4, 2}, torch::kFloat64) * 5,
+                                  torch::zeros({1, 4, 2}, torch::kFloat64), geometry::SceneRows(), Opts(config));
+  EXPECT_EQ(none.value.item<double>(), 0.0);
+  EXPECT_EQ(Largest(none.grad_q), 0.0);
+  GuidanceConfig on = config;
+  on.joint_speed_weight = 1.0;
+  on.collision_weight = 0.0;
+  EXPECT_FALSE(jit::Call(Guide(on, Franka()), "active", {geometry::SceneRows(), Opts(on)}).toBool());
+}
+
 std::string WriteFile(const std::string& name, const std::string& text) {
   const std::string path = (flowplan::testing::ScratchDir() / name).string();
   std::ofstream(path) << text;
@@ -226,7 +269,7 @@ def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:
     height = self.robot.tcp(q)[:, :, 1]
     return (torch.relu(0.6 - height) ** 2).sum(1) + 0.0 * qd.sum([1, 2])
 )PY");
-  const torch::jit::Module user = Term(Guide(config, Disc(0.05)), 3);
+  const torch::jit::Module user = Term(Guide(config, Disc(0.05)), 4);
   const torch::Tensor q = torch::tensor({{{0.2, 0.5}, {0.3, 0.7}}}, torch::kFloat64), qd = torch::zeros_like(q);
   torch::NoGradGuard no_grad;  // as a planner calls it
   const Evaluated r = Evaluate(user, q, qd, geometry::SceneRows(), Opts(config));
@@ -246,7 +289,7 @@ TEST(UserCostTest, TheShippedExampleKeepsTheFrankaTcpAbove25Centimetres) {
   // configs/costs/tcp_above.py (docs/planning.md): Σ_t relu(0.25 − z_t)² of the TCP height z.
   GuidanceConfig config;
   config.user_cost = std::string(FLOWPLAN_SOURCE_DIR) + "/configs/costs/tcp_above.py";
-  const torch::jit::Module user = Term(Guide(config, Franka()), 3);
+  const torch::jit::Module user = Term(Guide(config, Franka()), 4);
   const auto [q, qd] = FrankaStates(2, 4, 7);
   const torch::Tensor z = Franka().Tcp(q.reshape({-1, 7})).select(1, 2).reshape({2, 4});
   ASSERT_TRUE((z < 0.25).any().item<bool>() && (z > 0.25).any().item<bool>()) << "states on both sides of 0.25 m";
@@ -273,7 +316,7 @@ TEST(UserCostTest, BadFilesAreOneClearError) {
               ThrowsMessage<Error>(HasSubstr("guidance.user_cost: /nonexistent/cost.py: no such file")));
   config.user_cost = WriteFile("shape.py", "def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
                                            "    return q.sum()\n");
-  const torch::jit::Module user = Term(Guide(config, Disc(0.05)), 3);
+  const torch::jit::Module user = Term(Guide(config, Disc(0.05)), 4);
   EXPECT_THAT([&] { Evaluate(user, torch::zeros({2, 3, 2}), torch::zeros({2, 3, 2}), geometry::SceneRows(), Opts(config)); },
               ThrowsMessage<Error>(HasSubstr("shape.py: cost: expected a value per trajectory (2,), got []")));
 }
