@@ -18,6 +18,7 @@ Command AddEvalCommand(CLI::App& app);      // eval.cc: stitching error of a tra
 Command AddExportCommand(CLI::App& app);    // export.cc: the TorchScript planner
 Command AddPlanCommand(CLI::App& app);      // plan.cc: plan around obstacles, score, execute
 Command AddProblemsCommand(CLI::App& app);  // problems.cc: random blocked planning problems
+Command AddScenesCommand(CLI::App& app);    // scenes.cc: import MoveIt scenes and requests
 Command AddConfigCommand(CLI::App& app);    // config.cc: the resolved config, every key
 Command AddFkCommand(CLI::App& app);        // fk.cc: the Franka's TCP through MuJoCo and the kinematics
 

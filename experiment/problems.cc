@@ -1,5 +1,6 @@
-// `flowplan problems`: random Franka planning problems whose straight path is
-// blocked (problems.*, docs/planning.md).
+// `flowplan problems`: random Franka planning problems, either with spheres
+// blocking the straight path (problems.*) or from a procedural scene family
+// (--family; problems/scene_families.h). docs/planning.md.
 
 #include <spdlog/spdlog.h>
 
@@ -10,6 +11,7 @@
 #include "experiment/commands.h"
 #include "kinematics/robot.h"
 #include "problems/blocked_problems.h"
+#include "problems/scene_families.h"
 #include "sim/franka_model.h"
 
 namespace flowplan::experiment {
@@ -18,16 +20,34 @@ Command AddProblemsCommand(CLI::App& app) {
   struct Args {
     ConfigArgs config;
     std::string out;
+    std::string family;
   };
   auto args = std::make_shared<Args>();
   CLI::App* command =
-      app.add_subcommand("problems", "draw random Franka problems whose straight path is blocked (problems.*)");
+      app.add_subcommand("problems", "draw random Franka problems: spheres blocking the straight path (problems.*), "
+                                     "or a scene family (--family)");
   args->config.Add(command, false);
   command->add_option("--out", args->out, "YAML file of problems")->required();
+  std::string families;
+  for (const auto& name : problems::SceneFamilies()) families += (families.empty() ? "" : ", ") + name;
+  command->add_option("--family", args->family,
+                      "a procedural scene family (" + families + "); problems.count and problems.clearance apply");
   return {command, [args] {
             const ExperimentConfig config = args->config.Load();
-            ConfigureThreads(config);
+            const int threads = ConfigureThreads(config);
             const kinematics::Robot arm(sim::LoadFrankaModel().description(), "the Franka");
+            if (!args->family.empty()) {
+              const problems::ProblemSet set = problems::MakeFamilyProblems(
+                  arm, args->family, static_cast<uint64_t>(config.seed), config.problems.count,
+                  config.problems.clearance, threads);
+              EnsureParentFolder(args->out);
+              WriteFileAtomically(args->out, problems::ProblemSetYaml(set));
+              size_t obstacles = 0;
+              for (const auto& problem : set.problems) obstacles += static_cast<size_t>(problem.scene.size());
+              spdlog::info("wrote {}: {} {} problems, {} obstacles", args->out, set.problems.size(), args->family,
+                           obstacles);
+              return;
+            }
             problems::BlockedProblemSet set;
             try {
               set = problems::MakeBlockedProblems(arm, config.problems, static_cast<uint64_t>(config.seed));

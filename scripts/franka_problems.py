@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
-"""Every planner on every problem of a `flowplan problems` file.
+"""Every planner on every problem of a problem file (`flowplan problems`, with or
+without --family, or `flowplan scenes import`).
 
 For each problem and planner, runs `flowplan plan` (joint start and goal, the
-problem's spheres as the scene, --execute) and keeps its JSON report in
+problem's scene, --execute) and keeps its JSON report in
 OUT/<planner>/<i>.json; a report that exists is not made again, so an
 interrupted run continues where it stopped. Then writes OUT/summary.json and
 OUT/summary.md: per planner, the success rate over all plans counted three
@@ -73,7 +74,7 @@ def main():
         scene = os.path.join(out, "scenes", f"{i}.yaml")
         if not os.path.exists(scene):
             with open(scene + ".tmp", "w") as f:
-                yaml.safe_dump({"spheres": problem["scene"]["spheres"]}, f)
+                yaml.safe_dump({kind: shapes for kind, shapes in problem["scene"].items() if shapes}, f)
             os.replace(scene + ".tmp", scene)
         for planner in planners:
             prefix = os.path.join(out, planner, str(i))

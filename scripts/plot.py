@@ -10,6 +10,11 @@
       cylinders, capsules: their outlines projected; particle: the unit
       square; Franka: the two planes in which the paths spread most), executed
       paths dashed; --compare draws another plan file's paths in grey (e.g. unguided)
+  plot.py problems P1.yaml [P2.yaml ...] --out scenes.png [--index 0] [--planner FILE.pt]
+      one 3-D panel per problem file (problem --index of each): its boxes,
+      cylinders and spheres, the start and goal TCP, and with --planner (an
+      exported Franka planner, whose kinematics draws it) the arm's collision
+      spheres at the start (blue) and the goal (orange)
 
 Needs Debian's python3-h5py and python3-matplotlib (run with /usr/bin/python3).
 """
@@ -232,6 +237,79 @@ def command_scene(args):
     print(f"wrote {args.out}")
 
 
+def box_faces(centre, size, turn):
+    """The 6 faces (6, 4, 3) of a box."""
+    signs = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
+                      [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=float)
+    corners = np.asarray(centre) + (0.5 * signs * np.asarray(size)) @ rotation(turn).T
+    faces = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5], [0, 3, 7, 4]]
+    return [corners[f] for f in faces]
+
+
+def draw_problem_obstacles(ax, scene):
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    faces = []
+    for box in scene.get("boxes") or []:
+        faces += box_faces(box["centre"], box["size"], box.get("quaternion") or [1, 0, 0, 0])
+    angles = np.linspace(0, 2 * np.pi, 17)
+    for cylinder in scene.get("cylinders") or []:
+        r, h = cylinder["radius"], cylinder["height"]
+        turn = rotation(cylinder.get("quaternion") or [1, 0, 0, 0])
+        rim = np.stack([r * np.cos(angles), r * np.sin(angles)], 1)
+        low = np.asarray(cylinder["centre"]) + np.c_[rim, np.full(len(rim), -h / 2)] @ turn.T
+        high = np.asarray(cylinder["centre"]) + np.c_[rim, np.full(len(rim), h / 2)] @ turn.T
+        faces += [np.array([low[i], low[i + 1], high[i + 1], high[i]]) for i in range(len(angles) - 1)]
+        faces += [low, high]
+    if faces:
+        ax.add_collection3d(Poly3DCollection(faces, facecolor=(0.84, 0.15, 0.16, 0.25),
+                                             edgecolor=(0.5, 0.1, 0.1, 0.5), linewidths=0.3))
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 16), np.linspace(0, np.pi, 8))
+    for sphere in scene.get("spheres") or []:
+        c, r = sphere["centre"], sphere["radius"]
+        ax.plot_surface(c[0] + r * np.cos(u) * np.sin(v), c[1] + r * np.sin(u) * np.sin(v), c[2] + r * np.cos(v),
+                        color="tab:red", alpha=0.3, linewidth=0)
+
+
+def command_problems(args):
+    import yaml
+    robot = None
+    if args.planner:
+        import torch
+        robot = torch.jit.load(args.planner).robot
+    columns = min(3, len(args.files))
+    rows = (len(args.files) + columns - 1) // columns
+    fig = plt.figure(figsize=(5.0 * columns, 5.0 * rows))
+    for n, path in enumerate(args.files):
+        with open(path) as f:
+            problems = yaml.safe_load(f)
+        problem = problems["problems"][args.index]
+        ax = fig.add_subplot(rows, columns, n + 1, projection="3d")
+        draw_problem_obstacles(ax, problem["scene"])
+        if robot is not None:
+            import torch
+            q = torch.tensor([problem["start_q"], problem["goal_q"]], dtype=torch.float64)
+            spheres = robot.collision_spheres(q).numpy()  # (2, S, 4): centre, radius
+            for pose, colour in zip(spheres, ("tab:blue", "tab:orange")):
+                ax.scatter(pose[:, 0], pose[:, 1], pose[:, 2], s=(pose[:, 3] * 300) ** 2 / 4, color=colour,
+                           alpha=0.35, depthshade=False)
+        for key, marker, label in (("start_tcp", "o", "start"), ("goal_tcp", "*", "goal")):
+            p = problem[key]
+            ax.scatter([p[0]], [p[1]], [p[2]], marker=marker, s=60, color="k", label=label, depthshade=False)
+        ax.set_xlim(-0.2, 1.0)
+        ax.set_ylim(-0.6, 0.6)
+        ax.set_zlim(-0.1, 1.1)
+        ax.set_box_aspect((1.2, 1.2, 1.2))
+        ax.view_init(elev=22, azim=-135)
+        ax.set_xlabel("x (m)", fontsize=7)
+        ax.set_ylabel("y (m)", fontsize=7)
+        ax.set_zlabel("z (m)", fontsize=7)
+        ax.tick_params(labelsize=6)
+        ax.set_title(f"{problems.get('source', path)}: {problem.get('name', args.index)}", fontsize=9)
+    fig.tight_layout()
+    save(fig, args.out, args.dpi)
+    print(f"wrote {args.out}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -257,6 +335,12 @@ def main():
     p.add_argument("--label", help="the legend's name of the plans (default: plans (scale S))")
     p.add_argument("--title")
     p.set_defaults(run=command_scene)
+    p = sub.add_parser("problems", help="draw one problem of each problem file in 3-D")
+    p.add_argument("files", nargs="+")
+    p.add_argument("--out", required=True)
+    p.add_argument("--index", type=int, default=0, help="which problem of each file")
+    p.add_argument("--planner", help="an exported Franka planner: draw the arm at the start and the goal")
+    p.set_defaults(run=command_problems)
     for p in sub.choices.values():
         p.add_argument("--dpi", type=int, default=120, help="resolution of the 6 x 6 inch PNG")
     args = parser.parse_args()

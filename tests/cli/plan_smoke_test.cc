@@ -295,5 +295,74 @@ TEST(FrankaPlanTest, BoxesAndCylindersBetweenJointGoalsForTheLearnedPlannerAndRr
   EXPECT_EQ(check_rrt.exit_code, 0) << check_rrt.output;
 }
 
+TEST(SceneImportTest, AMoveItFolderImportsAndRrtConnectPlansItsSceneInMujoco) {
+  // MotionBenchMaker's layout: sceneNNNN.yaml and requestNNNN.yaml. The scene of
+  // configs/scenes/franka_shelf.yaml (a table top, an upright board turned about
+  // z, a bottle) written as a MoveIt planning scene, and a joint-space request
+  // across the board.
+  const fs::path dir = flowplan::testing::ScratchDir();
+  auto path = [&](const std::string& name) { return (dir / name).string(); };
+  fs::create_directories(dir / "set");
+  const std::string scene = R"(world:
+  collision_objects:
+    - header: {frame_id: panda_link0}
+      id: table
+      primitives: [{type: box, dimensions: [0.5, 1.0, 0.04]}]
+      primitive_poses: [{position: [0.6, 0.0, 0.0], orientation: [0, 0, 0, 1]}]
+    - header: {frame_id: panda_link0}
+      id: board
+      primitives: [{type: box, dimensions: [0.2, 0.03, 0.22]}]
+      primitive_poses: [{position: {x: 0.447, y: 0.176, z: 0.42}, orientation: {x: 0, y: 0, z: 0.1864, w: 0.9825}}]
+    - header: {frame_id: panda_link0}
+      id: bottle
+      primitives: [{type: cylinder, dimensions: [0.2, 0.04]}]
+      primitive_poses: [{position: [0.55, -0.2, 0.12], orientation: [0, 0, 0, 1]}]
+)";
+  std::ofstream(path("set/scene0001.yaml")) << scene;
+  std::ofstream(path("set/request0001.yaml"))
+      << "start_state:\n  joint_state:\n    name: [panda_joint1, panda_joint2, panda_joint3, panda_joint4, "
+         "panda_joint5, panda_joint6, panda_joint7, panda_finger_joint1]\n"
+         "    position: [0, -0.3, 0, -2.2, 0, 2, 0.8, 0.04]\n"
+         "goal_constraints:\n  - joint_constraints:\n"
+         "      - {joint_name: panda_joint1, position: 0.75}\n      - {joint_name: panda_joint2, position: -0.3}\n"
+         "      - {joint_name: panda_joint3, position: 0}\n      - {joint_name: panda_joint4, position: -2.2}\n"
+         "      - {joint_name: panda_joint5, position: 0}\n      - {joint_name: panda_joint6, position: 2}\n"
+         "      - {joint_name: panda_joint7, position: 0.8}\n";
+  ExpectOk(Flowplan("scenes import --dir " + path("set") + " --out " + path("problems.yaml") + " --scenes-dir " +
+                    path("scenes")));
+  const std::string problems = ReadText(path("problems.yaml"));
+  EXPECT_THAT(problems, HasSubstr("name: 0001"));
+  EXPECT_THAT(problems, HasSubstr("obstacle_names: [table, board, bottle]"));
+  ASSERT_TRUE(fs::exists(path("scenes/0001.yaml")));
+
+  const std::string config = " --config " + Source("configs/franka_reach.yaml") + " data.path=" + path("none.h5") +
+                             " --log-level warn";
+  const Outcome rrt = Flowplan("plan --rrt-connect" + config + " --start 0,-0.3,0,-2.2,0,2,0.8 --goal 0.75,-0.3,0,-2.2,0,2,0.8"
+                               " --scene " + path("scenes/0001.yaml") + " -n 2 --execute --no-plot --max-speed-ratio 3"
+                               " scene.spheres=[] --out " + path("rrt"));
+  ExpectOk(rrt);
+  const std::string report = ReadText(path("rrt.json"));
+  EXPECT_THAT(report, HasSubstr("\"obstacles\": [\"boxes[0]\", \"boxes[1]\", \"cylinders[0]\"]"));
+  EXPECT_THAT(report, HasSubstr("\"success_rate_arm\": 1, \"success_rate_executed\": 1"));
+
+  // A malformed file in the folder: one error naming it and the entry, nothing written.
+  std::string bad = scene;
+  bad.replace(bad.find("[0.2, 0.04]"), 11, "[0.2]");
+  std::ofstream(path("set/scene0002.yaml")) << bad;
+  fs::copy_file(path("set/request0001.yaml"), path("set/request0002.yaml"));
+  ExpectCleanFailure(Flowplan("scenes import --dir " + path("set") + " --out " + path("again.yaml")),
+                     path("set/scene0002.yaml") + ": world.collision_objects[2] (bottle).primitives[0].dimensions: "
+                     "a cylinder needs 2 values (height, radius), got 1");
+  EXPECT_FALSE(fs::exists(path("again.yaml")));
+
+  // A procedural family from the same command that draws the blocked problems.
+  ExpectOk(Flowplan("problems --family box problems.count=2 --out " + path("box.yaml")));
+  const std::string box = ReadText(path("box.yaml"));
+  EXPECT_THAT(box, HasSubstr("source: family box"));
+  EXPECT_THAT(box, HasSubstr("name: box/1"));
+  ExpectCleanFailure(Flowplan("problems --family kitchen --out " + path("k.yaml")),
+                     "scene family \"kitchen\" is not one of table, shelf, box, cage, under_table");
+}
+
 }  // namespace
 }  // namespace flowplan

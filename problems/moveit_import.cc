@@ -1,0 +1,457 @@
+#include "problems/moveit_import.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <regex>
+
+#include "core/error.h"
+#include "geometry/scene_rows.h"
+
+namespace flowplan::problems {
+namespace {
+
+using Vec3 = std::array<double, 3>;
+using Quat = std::array<double, 4>;  // (w, x, y, z)
+
+/// A rigid transform: x -> rotation(x) + position.
+struct Pose {
+  Vec3 position{0.0, 0.0, 0.0};
+  Quat orientation{1.0, 0.0, 0.0, 0.0};
+};
+
+Quat Multiply(const Quat& a, const Quat& b) {
+  return {a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+          a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+          a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+          a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]};
+}
+
+Vec3 Rotate(const Quat& q, const Vec3& v) {
+  const Quat p = Multiply(Multiply(q, {0.0, v[0], v[1], v[2]}), {q[0], -q[1], -q[2], -q[3]});
+  return {p[1], p[2], p[3]};
+}
+
+/// outer ∘ inner: the pose of `inner` (given in outer's frame) in the world.
+Pose Compose(const Pose& outer, const Pose& inner) {
+  Pose out;
+  const Vec3 moved = Rotate(outer.orientation, inner.position);
+  for (int k = 0; k < 3; ++k) out.position[k] = outer.position[k] + moved[k];
+  out.orientation = Multiply(outer.orientation, inner.orientation);
+  return out;
+}
+
+/// Reads entries of one file, naming it and the entry in every error.
+class Reader {
+ public:
+  explicit Reader(std::string path) : path_(std::move(path)) {}
+
+  [[noreturn]] void Fail(const std::string& entry, const std::string& what) const {
+    throw Error(path_ + ": " + entry + ": " + what);
+  }
+
+  double Number(const YAML::Node& node, const std::string& entry) const {
+    if (!node.IsDefined() || node.IsNull()) Fail(entry, "missing");
+    if (!node.IsScalar()) Fail(entry, "expected a number, got " + config::internal::Describe(node));
+    double value = NAN;
+    try {
+      value = node.as<double>();
+    } catch (const YAML::Exception&) {
+      Fail(entry, "expected a number, got " + config::internal::Describe(node));
+    }
+    if (!std::isfinite(value)) Fail(entry, "expected a finite number, got " + config::internal::Describe(node));
+    return value;
+  }
+
+  std::vector<double> Numbers(const YAML::Node& node, const std::string& entry) const {
+    if (!node.IsDefined() || node.IsNull()) Fail(entry, "missing");
+    if (!node.IsSequence()) Fail(entry, "expected a list of numbers, got " + config::internal::Describe(node));
+    std::vector<double> out;
+    for (size_t i = 0; i < node.size(); ++i) out.push_back(Number(node[i], entry + "[" + std::to_string(i) + "]"));
+    return out;
+  }
+
+  std::string Text(const YAML::Node& node, const std::string& entry) const {
+    if (!node.IsDefined() || node.IsNull()) Fail(entry, "missing");
+    if (!node.IsScalar()) Fail(entry, "expected a name, got " + config::internal::Describe(node));
+    return node.as<std::string>();
+  }
+
+  /// `names` as a list [a, b, ...] or a mapping {a: , b: , ...}.
+  std::vector<double> Components(const YAML::Node& node, const std::string& entry,
+                                 const std::vector<std::string>& names) const {
+    if (node.IsSequence()) {
+      std::vector<double> values = Numbers(node, entry);
+      if (values.size() != names.size()) {
+        Fail(entry, "expected " + std::to_string(names.size()) + " values, got " + std::to_string(values.size()));
+      }
+      return values;
+    }
+    if (!node.IsMap()) Fail(entry, "expected a list or a mapping, got " + config::internal::Describe(node));
+    std::vector<double> values;
+    for (const std::string& name : names) values.push_back(Number(node[name], entry + "." + name));
+    return values;
+  }
+
+  /// A geometry_msgs/Pose; a missing position is the origin, a missing orientation the identity.
+  Pose ReadPose(const YAML::Node& node, const std::string& entry) const {
+    Pose pose;
+    if (!node.IsMap()) Fail(entry, "expected a mapping with position and orientation, got " +
+                                       config::internal::Describe(node));
+    if (node["position"]) {
+      const std::vector<double> p = Components(node["position"], entry + ".position", {"x", "y", "z"});
+      pose.position = {p[0], p[1], p[2]};
+    }
+    if (node["orientation"]) {
+      const std::vector<double> q = Components(node["orientation"], entry + ".orientation", {"x", "y", "z", "w"});
+      const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+      if (norm < 1e-9) Fail(entry + ".orientation", "a zero quaternion is no orientation");
+      pose.orientation = {q[3] / norm, q[0] / norm, q[1] / norm, q[2] / norm};
+    }
+    return pose;
+  }
+
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+YAML::Node Load(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) throw Error(path + ": no such file");
+  YAML::Node root = config::ParseYamlFile(path);
+  if (!root.IsMap()) throw Error(path + ": expected a mapping at the top, got " + config::internal::Describe(root));
+  return root;
+}
+
+std::string Lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+/// "box", "sphere" or "cylinder" of a SolidPrimitive type (a name or its number).
+std::string PrimitiveType(const Reader& r, const YAML::Node& node, const std::string& entry) {
+  const std::string text = Lower(r.Text(node, entry));
+  static const std::map<std::string, std::string> kinds = {
+      {"box", "box"}, {"1", "box"}, {"sphere", "sphere"}, {"2", "sphere"}, {"cylinder", "cylinder"},
+      {"3", "cylinder"}, {"cone", "cone"}, {"4", "cone"}};
+  const auto it = kinds.find(text);
+  if (it == kinds.end()) r.Fail(entry, "unknown primitive type \"" + text + "\" (box, sphere, cylinder)");
+  if (it->second == "cone") r.Fail(entry, "cones are not supported (box, sphere, cylinder)");
+  return it->second;
+}
+
+/// The position of each robot joint (J,) in a JointState {name, position}.
+std::vector<double> JointPositions(const Reader& r, const YAML::Node& state, const std::string& entry,
+                                   const MoveItImportOptions& options) {
+  if (!state.IsMap()) r.Fail(entry, "expected a mapping with name and position, got " +
+                                        config::internal::Describe(state));
+  const YAML::Node names = state["name"];
+  if (!names.IsDefined() || !names.IsSequence()) r.Fail(entry + ".name", "expected a list of joint names");
+  const std::vector<double> positions = r.Numbers(state["position"], entry + ".position");
+  if (positions.size() != names.size()) {
+    r.Fail(entry, std::to_string(names.size()) + " names but " + std::to_string(positions.size()) + " positions");
+  }
+  std::vector<double> q(options.joint_names.size(), NAN);
+  for (size_t i = 0; i < names.size(); ++i) {
+    const std::string name = r.Text(names[i], entry + ".name[" + std::to_string(i) + "]");
+    for (size_t j = 0; j < options.joint_names.size(); ++j) {
+      for (const std::string& accepted : options.joint_names[j]) {
+        if (name == accepted) q[j] = positions[i];
+      }
+    }
+  }
+  for (size_t j = 0; j < q.size(); ++j) {
+    if (std::isnan(q[j])) r.Fail(entry, "no position for " + options.joint_names[j][0]);
+  }
+  return q;
+}
+
+/// The MotionPlanRequest of a request file (at the top or under a key).
+YAML::Node RequestNode(const Reader& r, const YAML::Node& root, std::string& prefix) {
+  for (const char* key : {"motion_plan_request", "request"}) {
+    if (root[key] && root[key].IsMap()) {
+      prefix = std::string(key) + ".";
+      return root[key];
+    }
+  }
+  if (!root["goal_constraints"]) r.Fail("goal_constraints", "missing (not a MoveIt motion-plan request?)");
+  prefix = "";
+  return root;
+}
+
+void CheckLimits(const kinematics::Robot& arm, const std::vector<double>& q, const std::string& path,
+                 const std::string& what, const MoveItImportOptions& options) {
+  const auto& d = arm.description();
+  constexpr double kSlack = 1e-6;  // rad: limits written with fewer digits
+  for (size_t j = 0; j < q.size(); ++j) {
+    if (q[j] < d.joint_lower[j] - kSlack || q[j] > d.joint_upper[j] + kSlack) {
+      throw Error(path + ": " + what + ": " + options.joint_names[j][0] + " = " + config::internal::FormatDouble(q[j]) +
+                  " is outside the joint limits [" + config::internal::FormatDouble(d.joint_lower[j]) + ", " +
+                  config::internal::FormatDouble(d.joint_upper[j]) + "]");
+    }
+  }
+}
+
+std::vector<double> Row(const torch::Tensor& t) {
+  const torch::Tensor c = t.to(torch::kFloat64).contiguous();
+  return std::vector<double>(c.data_ptr<double>(), c.data_ptr<double>() + c.numel());
+}
+
+}  // namespace
+
+std::vector<std::vector<std::string>> FrankaJointNames() {
+  std::vector<std::vector<std::string>> names;
+  for (int j = 1; j <= 7; ++j) names.push_back({"panda_joint" + std::to_string(j), "joint" + std::to_string(j)});
+  return names;
+}
+
+namespace {
+
+/// Runs `read`, turning what yaml-cpp throws for a shape it did not expect into an error naming `path`.
+template <class F>
+auto Guarded(const std::string& path, F read) {
+  try {
+    return read();
+  } catch (const YAML::Exception& e) {
+    throw Error(path + ": unexpected structure (" + e.msg + ")");
+  }
+}
+
+NamedScene ReadScene(const std::string& path, const MoveItImportOptions& options) {
+  const YAML::Node root = Load(path);
+  const Reader r(path);
+  const YAML::Node world = root["world"];
+  if (!world.IsDefined()) r.Fail("world", "missing (not a MoveIt planning scene?)");
+  if (!world.IsMap()) r.Fail("world", "expected a mapping, got " + config::internal::Describe(world));
+  const YAML::Node objects = world["collision_objects"];
+  // Names per kind, so that they follow the scene's numbering (spheres, boxes, cylinders).
+  std::vector<std::string> sphere_names, box_names, cylinder_names;
+  NamedScene out;
+  if (!objects.IsDefined() || objects.IsNull()) return out;
+  if (!objects.IsSequence()) {
+    r.Fail("world.collision_objects", "expected a list, got " + config::internal::Describe(objects));
+  }
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const YAML::Node object = objects[i];
+    std::string entry = "world.collision_objects[" + std::to_string(i) + "]";
+    if (!object.IsMap()) r.Fail(entry, "expected a mapping, got " + config::internal::Describe(object));
+    const std::string id = r.Text(object["id"], entry + ".id");
+    entry += " (" + id + ")";
+    std::string frame;
+    if (object["header"] && object["header"]["frame_id"]) frame = r.Text(object["header"]["frame_id"], entry + ".header.frame_id");
+    bool known = false;
+    for (const std::string& base : options.base_frames) known = known || frame == base;
+    if (!known) {
+      std::string list;
+      for (const std::string& base : options.base_frames) list += (list.empty() ? "" : ", ") + ("\"" + base + "\"");
+      r.Fail(entry + ".header.frame_id", "\"" + frame + "\" is not the robot's base frame (" + list + ")");
+    }
+    for (const char* unsupported : {"meshes", "planes"}) {
+      const YAML::Node n = object[unsupported];
+      if (n.IsDefined() && n.IsSequence() && n.size() > 0) {
+        r.Fail(entry + "." + unsupported, std::string(unsupported) + " are not imported (box, sphere and cylinder primitives are)");
+      }
+    }
+    const YAML::Node operation = object["operation"];
+    if (operation.IsDefined() && operation.IsScalar()) {
+      const std::string op = Lower(operation.as<std::string>());
+      if (op != "0" && op != "add" && op != "append") {
+        r.Fail(entry + ".operation", "\"" + op + "\": only added objects can be imported (ADD, 0)");
+      }
+    }
+    const Pose object_pose = object["pose"] ? r.ReadPose(object["pose"], entry + ".pose") : Pose{};
+    const YAML::Node primitives = object["primitives"];
+    const YAML::Node poses = object["primitive_poses"];
+    if (!primitives.IsDefined() || !primitives.IsSequence() || primitives.size() == 0) {
+      r.Fail(entry + ".primitives", "expected a list of at least one primitive");
+    }
+    if (!poses.IsDefined() || !poses.IsSequence() || poses.size() != primitives.size()) {
+      r.Fail(entry + ".primitive_poses", "expected one pose per primitive (" + std::to_string(primitives.size()) +
+                                             "), got " + (poses.IsDefined() && poses.IsSequence() ? std::to_string(poses.size()) : "none"));
+    }
+    for (size_t p = 0; p < primitives.size(); ++p) {
+      const std::string where = entry + ".primitives[" + std::to_string(p) + "]";
+      const YAML::Node primitive = primitives[p];
+      if (!primitive.IsMap()) r.Fail(where, "expected a mapping with type and dimensions");
+      const std::string type = PrimitiveType(r, primitive["type"], where + ".type");
+      const std::vector<double> dims = r.Numbers(primitive["dimensions"], where + ".dimensions");
+      for (size_t k = 0; k < dims.size(); ++k) {
+        if (dims[k] < 0.0) r.Fail(where + ".dimensions[" + std::to_string(k) + "]", "negative size");
+      }
+      const Pose pose =
+          Compose(object_pose, r.ReadPose(poses[p], entry + ".primitive_poses[" + std::to_string(p) + "]"));
+      const std::string name = primitives.size() == 1 ? id : id + "[" + std::to_string(p) + "]";
+      const std::vector<double> centre(pose.position.begin(), pose.position.end());
+      const std::vector<double> quaternion(pose.orientation.begin(), pose.orientation.end());
+      if (type == "box") {
+        if (dims.size() != 3) r.Fail(where + ".dimensions", "a box needs 3 values (x, y, z), got " + std::to_string(dims.size()));
+        out.scene.boxes.push_back({centre, dims, quaternion, NAN});
+        box_names.push_back(name);
+      } else if (type == "cylinder") {
+        if (dims.size() != 2) {
+          r.Fail(where + ".dimensions", "a cylinder needs 2 values (height, radius), got " + std::to_string(dims.size()));
+        }
+        out.scene.cylinders.push_back({centre, dims[1], dims[0], quaternion, NAN});
+        cylinder_names.push_back(name);
+      } else {
+        if (dims.size() != 1) r.Fail(where + ".dimensions", "a sphere needs 1 value (radius), got " + std::to_string(dims.size()));
+        out.scene.spheres.push_back({centre, dims[0]});
+        sphere_names.push_back(name);
+      }
+    }
+  }
+  for (const auto* names : {&sphere_names, &box_names, &cylinder_names}) {
+    out.names.insert(out.names.end(), names->begin(), names->end());
+  }
+  out.scene.Validate(3, path);
+  return out;
+}
+
+void ReadRequest(const std::string& request_path, const std::string& scene_path, const MoveItImportOptions& options,
+                 std::vector<double>& start_q, std::vector<double>& goal_q) {
+  const YAML::Node root = Load(request_path);
+  const Reader r(request_path);
+  std::string prefix;
+  const YAML::Node request = RequestNode(r, root, prefix);
+
+  const YAML::Node start = request["start_state"];
+  if (start.IsDefined() && start.IsMap() && start["joint_state"] && start["joint_state"]["name"] &&
+      start["joint_state"]["name"].size() > 0) {
+    start_q = JointPositions(r, start["joint_state"], prefix + "start_state.joint_state", options);
+  } else {
+    const YAML::Node scene = Load(scene_path);
+    const Reader s(scene_path);
+    const YAML::Node state = scene["robot_state"];
+    if (!state.IsDefined() || !state.IsMap() || !state["joint_state"]) {
+      r.Fail(prefix + "start_state", "missing, and " + scene_path + " has no robot_state.joint_state either");
+    }
+    start_q = JointPositions(s, state["joint_state"], "robot_state.joint_state", options);
+  }
+
+  const YAML::Node goals = request["goal_constraints"];
+  const std::string entry = prefix + "goal_constraints";
+  if (!goals.IsDefined() || !goals.IsSequence() || goals.size() == 0) r.Fail(entry, "expected a list of at least one goal");
+  if (!goals[0].IsMap()) r.Fail(entry + "[0]", "expected a mapping with joint_constraints");
+  const YAML::Node joints = goals[0]["joint_constraints"];
+  if (!joints.IsDefined() || !joints.IsSequence() || joints.size() == 0) {
+    r.Fail(entry + "[0].joint_constraints", "missing: only joint-space goals are imported");
+  }
+  goal_q.assign(options.joint_names.size(), NAN);
+  for (size_t i = 0; i < joints.size(); ++i) {
+    const std::string where = entry + "[0].joint_constraints[" + std::to_string(i) + "]";
+    if (!joints[i].IsMap()) r.Fail(where, "expected a mapping with joint_name and position");
+    const std::string name = r.Text(joints[i]["joint_name"], where + ".joint_name");
+    const double position = r.Number(joints[i]["position"], where + ".position");
+    for (size_t j = 0; j < options.joint_names.size(); ++j) {
+      for (const std::string& accepted : options.joint_names[j]) {
+        if (name == accepted) goal_q[j] = position;
+      }
+    }
+  }
+  for (size_t j = 0; j < goal_q.size(); ++j) {
+    if (std::isnan(goal_q[j])) r.Fail(entry + "[0].joint_constraints", "no constraint on " + options.joint_names[j][0]);
+  }
+}
+
+}  // namespace
+
+NamedScene ReadMoveItScene(const std::string& path, const MoveItImportOptions& options) {
+  return Guarded(path, [&] { return ReadScene(path, options); });
+}
+
+void ReadMoveItRequest(const std::string& request_path, const std::string& scene_path,
+                       const MoveItImportOptions& options, std::vector<double>& start_q,
+                       std::vector<double>& goal_q) {
+  Guarded(request_path, [&] {
+    ReadRequest(request_path, scene_path, options, start_q, goal_q);
+    return 0;
+  });
+}
+
+Problem ImportMoveItProblem(const kinematics::Robot& arm, const std::string& scene_path,
+                            const std::string& request_path, const std::string& name,
+                            const MoveItImportOptions& options) {
+  if (static_cast<int64_t>(options.joint_names.size()) != arm.num_joints()) {
+    throw InternalError("MoveIt import: " + std::to_string(options.joint_names.size()) + " joint names for " +
+                        std::to_string(arm.num_joints()) + " joints");
+  }
+  NamedScene read = ReadMoveItScene(scene_path, options);
+  Problem problem;
+  problem.name = name;
+  ReadMoveItRequest(request_path, scene_path, options, problem.start_q, problem.goal_q);
+  CheckLimits(arm, problem.start_q, request_path, "start", options);
+  CheckLimits(arm, problem.goal_q, request_path, "goal", options);
+
+  const torch::Tensor q = torch::stack({torch::tensor(problem.start_q, torch::kFloat64),
+                                        torch::tensor(problem.goal_q, torch::kFloat64)});  // (2, J)
+  const torch::Tensor tcp = arm.Tcp(q);                                                     // (2, W)
+  problem.start_tcp = Row(tcp[0]);
+  problem.goal_tcp = Row(tcp[1]);
+
+  // The grasped object: every obstacle the goal's TCP lies in or touches.
+  if (options.grasp == GraspRule::kTouchingTcp && read.scene.size() > 0) {
+    const torch::Tensor distance =
+        kinematics::Robot::PointClearance(tcp.slice(0, 1, 2), geometry::Rows(read.scene, 3, scene_path))[0];  // (K,)
+    geometry::Scene kept;
+    std::vector<std::string> kept_names;
+    int64_t k = 0;
+    auto keep = [&](auto& from, auto& to) {
+      for (const auto& obstacle : from) {
+        if (distance[k].item<double>() <= options.grasp_margin) {
+          problem.left_out.push_back(read.names[static_cast<size_t>(k)]);
+        } else {
+          to.push_back(obstacle);
+          kept_names.push_back(read.names[static_cast<size_t>(k)]);
+        }
+        ++k;
+      }
+    };
+    keep(read.scene.spheres, kept.spheres);
+    keep(read.scene.boxes, kept.boxes);
+    keep(read.scene.cylinders, kept.cylinders);
+    keep(read.scene.capsules, kept.capsules);
+    read.scene = std::move(kept);
+    read.names = std::move(kept_names);
+  }
+  problem.scene = std::move(read.scene);
+  problem.obstacle_names = std::move(read.names);
+  if (problem.scene.size() > 0) {
+    const torch::Tensor clearance = arm.Clearance(q, geometry::Rows(problem.scene, 3, scene_path));  // (2, K)
+    problem.start_clearance = clearance[0].min().item<double>();
+    problem.goal_clearance = clearance[1].min().item<double>();
+  } else {
+    problem.start_clearance = problem.goal_clearance = std::numeric_limits<double>::infinity();
+  }
+  return problem;
+}
+
+std::vector<std::pair<std::string, std::string>> FindMoveItPairs(const std::string& folder) {
+  if (!std::filesystem::is_directory(folder)) throw Error(folder + ": no such folder");
+  const std::regex pattern("(scene|request)([0-9]{1,18})\\.ya?ml");
+  // (NNNN as a number, NNNN) -> (scene, request): 9 before 10, 0001 and 1 apart.
+  std::map<std::pair<unsigned long long, std::string>, std::pair<std::string, std::string>> found;
+  for (const auto& item : std::filesystem::directory_iterator(folder)) {
+    std::smatch match;
+    const std::string file = item.path().filename().string();
+    if (!item.is_regular_file() || !std::regex_match(file, match, pattern)) continue;
+    auto& pair = found[{std::stoull(match[2].str()), match[2].str()}];
+    (match[1].str() == "scene" ? pair.first : pair.second) = item.path().string();
+  }
+  std::vector<std::pair<std::string, std::string>> pairs;
+  for (const auto& [key, pair] : found) {
+    const std::string& number = key.second;
+    if (pair.first.empty()) throw Error(pair.second + ": no scene" + number + ".yaml beside it");
+    if (pair.second.empty()) throw Error(pair.first + ": no request" + number + ".yaml beside it");
+    pairs.push_back(pair);
+  }
+  if (pairs.empty()) throw Error(folder + ": no sceneNNNN.yaml / requestNNNN.yaml pairs");
+  return pairs;
+}
+
+}  // namespace flowplan::problems
