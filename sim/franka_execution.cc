@@ -56,6 +56,7 @@ std::string Orientation(const std::vector<double>& quaternion) {
 
 FrankaModel MakeFrankaScene(const geometry::Scene& scene, double timestep) {
   scene.Validate(3, "execution scene");
+  InstallExactConvexOverlaps();  // the margin below would make cylinders overlap what they do not touch
   std::string xml = FrankaModelXml();
   // Room for contacts of every capsule with several obstacles.
   ReplaceOnce(xml, "njmax=\"64\"", "njmax=\"2000\"");

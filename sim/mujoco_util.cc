@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <mutex>
@@ -82,6 +83,47 @@ MjDataPtr MakeData(const mjModel& m) {
 void InstallMujocoHandlers() {
   mju_user_error = OnMujocoError;
   mju_user_warning = OnMujocoWarning;
+}
+
+namespace {
+
+mjfCollision original_colliders[mjNGEOMTYPES][mjNGEOMTYPES];
+
+bool GeneralConvex(int type) { return type == mjGEOM_CYLINDER || type == mjGEOM_ELLIPSOID || type == mjGEOM_MESH; }
+
+bool Solid(int type) { return type != mjGEOM_PLANE && type != mjGEOM_HFIELD && type < mjNGEOMTYPES; }
+
+/// MuJoCo's collider for the pair, with every overlap it reports checked again at margin 0.
+int ExactOverlapCollider(const mjModel* m, const mjData* d, mjContact* contacts, int g1, int g2, mjtNum margin) {
+  const mjfCollision collide = original_colliders[m->geom_type[g1]][m->geom_type[g2]];
+  const int n = collide(m, d, contacts, g1, g2, margin);
+  bool overlap = false;
+  for (int i = 0; i < n; ++i) overlap = overlap || contacts[i].dist < 0;
+  if (!overlap || margin == 0) return n;
+  mjContact exact[mjMAXCONPAIR];
+  const int touching = collide(m, d, exact, g1, g2, 0);
+  if (touching > 0) {
+    for (int i = 0; i < touching; ++i) contacts[i] = exact[i];
+    return touching;
+  }
+  for (int i = 0; i < n; ++i) contacts[i].dist = std::max<mjtNum>(contacts[i].dist, 0);
+  return n;
+}
+
+}  // namespace
+
+void InstallExactConvexOverlaps() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    for (int a = 0; a < mjNGEOMTYPES; ++a) {
+      for (int b = 0; b < mjNGEOMTYPES; ++b) {
+        original_colliders[a][b] = mjCOLLISIONFUNC[a][b];
+        if (mjCOLLISIONFUNC[a][b] != nullptr && Solid(a) && Solid(b) && (GeneralConvex(a) || GeneralConvex(b))) {
+          mjCOLLISIONFUNC[a][b] = &ExactOverlapCollider;
+        }
+      }
+    }
+  });
 }
 
 int64_t WarningCount(const mjData& d) {
