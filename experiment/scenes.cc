@@ -59,10 +59,12 @@ void RunImport(const ImportArgs& args) {
   set.source = "moveit import";
   // Every pair is read before anything is written: a bad file leaves no output.
   for (const auto& [scene, request] : pairs) {
-    std::string name = Stem(scene);
-    if (name.rfind("scene", 0) == 0 && Stem(request).rfind("request", 0) == 0 &&
-        name.substr(5) == Stem(request).substr(7)) {
-      name = name.substr(5);  // MotionBenchMaker: scene0001 + request0001 -> 0001
+    const std::string name = Stem(scene);  // scene0001: a name that no YAML reader takes for a number
+    for (const problems::Problem& earlier : set.problems) {
+      if (earlier.name == name) {
+        throw Error("scenes import: two scenes are called " + name + " (" + scene +
+                    "); their problems and scene files would share the name");
+      }
     }
     set.problems.push_back(problems::ImportMoveItProblem(arm, scene, request, name, options));
     const problems::Problem& p = set.problems.back();
@@ -79,7 +81,7 @@ void RunImport(const ImportArgs& args) {
     }
   }
   if (!args.scenes_dir.empty()) {
-    std::filesystem::create_directories(args.scenes_dir);
+    MakeDirectories(args.scenes_dir);
     for (const problems::Problem& p : set.problems) {
       WriteFileAtomically((std::filesystem::path(args.scenes_dir) / (p.name + ".yaml")).string(),
                           problems::SceneYaml(p.scene));

@@ -1,5 +1,6 @@
 #include "problems/moveit_import.h"
 
+#include <spdlog/spdlog.h>
 #include <yaml-cpp/yaml.h>
 
 #include <array>
@@ -110,8 +111,12 @@ class Reader {
     if (node["orientation"]) {
       const std::vector<double> q = Components(node["orientation"], entry + ".orientation", {"x", "y", "z", "w"});
       const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-      if (norm < 1e-9) Fail(entry + ".orientation", "a zero quaternion is no orientation");
-      pose.orientation = {q[3] / norm, q[0] / norm, q[1] / norm, q[2] / norm};
+      if (norm < 1e-9) {
+        // An unset ROS pose: MoveIt reads it as the identity, with a warning.
+        spdlog::warn("{}: {}.orientation: all zero, taken as the identity (as MoveIt does)", path_, entry);
+      } else {
+        pose.orientation = {q[3] / norm, q[0] / norm, q[1] / norm, q[2] / norm};
+      }
     }
     return pose;
   }
@@ -244,7 +249,11 @@ NamedScene ReadScene(const std::string& path, const MoveItImportOptions& options
     const std::string id = r.Text(object["id"], entry + ".id");
     entry += " (" + id + ")";
     std::string frame;
-    if (object["header"] && object["header"]["frame_id"]) frame = r.Text(object["header"]["frame_id"], entry + ".header.frame_id");
+    if (object["header"]) {
+      if (!object["header"].IsMap()) r.Fail(entry + ".header", "expected a mapping with frame_id, got " +
+                                                                    config::internal::Describe(object["header"]));
+      if (object["header"]["frame_id"]) frame = r.Text(object["header"]["frame_id"], entry + ".header.frame_id");
+    }
     bool known = false;
     for (const std::string& base : options.base_frames) known = known || frame == base;
     if (!known) {
@@ -261,8 +270,8 @@ NamedScene ReadScene(const std::string& path, const MoveItImportOptions& options
     const YAML::Node operation = object["operation"];
     if (operation.IsDefined() && operation.IsScalar()) {
       const std::string op = Lower(operation.as<std::string>());
-      if (op != "0" && op != "add" && op != "append") {
-        r.Fail(entry + ".operation", "\"" + op + "\": only added objects can be imported (ADD, 0)");
+      if (op != "0" && op != "add" && op != "2" && op != "append") {
+        r.Fail(entry + ".operation", "\"" + op + "\": only added objects can be imported (ADD 0, APPEND 2)");
       }
     }
     const Pose object_pose = object["pose"] ? r.ReadPose(object["pose"], entry + ".pose") : Pose{};
@@ -321,8 +330,15 @@ void ReadRequest(const std::string& request_path, const std::string& scene_path,
   const YAML::Node request = RequestNode(r, root, prefix);
 
   const YAML::Node start = request["start_state"];
-  if (start.IsDefined() && start.IsMap() && start["joint_state"] && start["joint_state"]["name"] &&
-      start["joint_state"]["name"].size() > 0) {
+  if (start.IsDefined() && !start.IsMap()) {
+    r.Fail(prefix + "start_state", "expected a mapping with joint_state, got " + config::internal::Describe(start));
+  }
+  if (start.IsDefined() && start["joint_state"] && !start["joint_state"].IsMap()) {
+    r.Fail(prefix + "start_state.joint_state",
+           "expected a mapping with name and position, got " + config::internal::Describe(start["joint_state"]));
+  }
+  if (start.IsDefined() && start["joint_state"] && start["joint_state"]["name"] &&
+      start["joint_state"]["name"].IsSequence() && start["joint_state"]["name"].size() > 0) {
     start_q = JointPositions(r, start["joint_state"], prefix + "start_state.joint_state", options);
   } else {
     const YAML::Node scene = Load(scene_path);

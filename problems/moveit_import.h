@@ -28,7 +28,9 @@
 //         - {joint_name: panda_joint1, position: 0.1, tolerance_above: 0.001, tolerance_below: 0.001}
 //
 // Joints are matched by name; names the robot does not have (the fingers) are
-// ignored. Only the first goal constraint is read, and only its joint
+// ignored. The world frame is taken to be the robot's base frame: a virtual
+// joint's transform (multi_dof_joint_state) is not applied. An all-zero
+// orientation (an unset ROS pose) is the identity, as in MoveIt. Only the first goal constraint is read, and only its joint
 // constraints. Without a start_state the scene's robot_state is the start.
 
 #include <string>
@@ -61,7 +63,7 @@ inline const config::EnumNames<GraspRule>& EnumEntries(GraspRule) {
 
 struct MoveItImportOptions {
   /// Frames taken as the robot's base frame; an object in any other is an error.
-  std::vector<std::string> base_frames = {"panda_link0", "world", "base_link", ""};
+  std::vector<std::string> base_frames = {"panda_link0", "world", "/world", "base_link", ""};
   /// Accepted names of each robot joint (J lists), e.g. {"panda_joint1", "joint1"}.
   std::vector<std::vector<std::string>> joint_names;
   GraspRule grasp = GraspRule::kTouchingTcp;

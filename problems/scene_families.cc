@@ -14,6 +14,10 @@
 namespace flowplan::problems {
 namespace {
 
+// Every random draw is a declaration of its own (never two in one call's
+// arguments or one sum, whose order C++ leaves to the compiler), so that the
+// problems are the same whatever compiler built flowplan.
+
 constexpr int kDraws = 2000;        // scenes drawn per problem before giving up
 constexpr int kPoseTries = 20;      // start or goal poses tried per scene
 constexpr double kMinTravel = 0.2;  // m between the start and goal TCP
@@ -94,8 +98,8 @@ void AddClutter(Layout& l, Rng& rng, const Frame& f, double top, double hx, doub
     const double x = rng.Uniform(-hx, hx), y = rng.Uniform(-hy, hy);
     const double h = rng.Uniform(0.06, 0.25);
     if (rng.Uniform() < 0.5) {
-      AddBox(l, "clutter" + std::to_string(k), f, x, y, top + 0.5 * h, rng.Uniform(0.04, 0.1), rng.Uniform(0.04, 0.1),
-             h, rng.Uniform(-0.8, 0.8));
+      const double turn = rng.Uniform(-0.8, 0.8), wy = rng.Uniform(0.04, 0.1), wx = rng.Uniform(0.04, 0.1);
+      AddBox(l, "clutter" + std::to_string(k), f, x, y, top + 0.5 * h, wx, wy, h, turn);
     } else {
       AddCylinder(l, "clutter" + std::to_string(k), f.Point(x, y, top + 0.5 * h), rng.Uniform(0.02, 0.05), h);
     }
@@ -109,7 +113,8 @@ Layout Table(Rng& rng) {
   AddBox(l, "table", f, 0.0, 0.0, top - 0.02, depth, width, 0.04);
   AddClutter(l, rng, f, top, 0.25, 0.5, 3 + static_cast<int>(rng.Below(5)));
   auto pose = [f, top](Rng& r, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
-    p = f.Point(r.Uniform(-0.22, 0.2), r.Uniform(-0.45, 0.45), top + r.Uniform(0.06, 0.3));
+    const double z = top + r.Uniform(0.06, 0.3), y = r.Uniform(-0.45, 0.45), x = r.Uniform(-0.22, 0.2);
+    p = f.Point(x, y, z);
     rot = Down(f.yaw + r.Uniform(-1.2, 1.2));
   };
   l.start = pose;
@@ -136,12 +141,15 @@ Layout Shelf(Rng& rng) {
   const Eigen::Vector3d inward = f.Direction(1.0, 0.0, 0.0);
   l.goal = [f, levels, depth, width, gap, inward](Rng& r, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
     const size_t slot = r.Below(levels.size() - 1);
-    p = f.Point(-0.5 * depth + r.Uniform(0.08, 0.2), r.Uniform(-0.5 * width + 0.12, 0.5 * width - 0.12),
-                levels[slot] + r.Uniform(0.1, gap - 0.1));
+    const double z = levels[slot] + r.Uniform(0.1, gap - 0.1);
+    const double y = r.Uniform(-0.5 * width + 0.12, 0.5 * width - 0.12), x = -0.5 * depth + r.Uniform(0.08, 0.2);
+    p = f.Point(x, y, z);
     rot = Horizontal(inward, r.Uniform() < 0.5);
   };
   l.start = [f, depth, height, inward](Rng& r, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
-    p = f.Point(-0.5 * depth - r.Uniform(0.12, 0.25), r.Uniform(-0.3, 0.3), r.Uniform(0.15, std::min(height, 0.7)));
+    const double z = r.Uniform(0.15, std::min(height, 0.7)), y = r.Uniform(-0.3, 0.3);
+    const double x = -0.5 * depth - r.Uniform(0.12, 0.25);
+    p = f.Point(x, y, z);
     rot = Horizontal(inward, r.Uniform() < 0.5);
   };
   return l;
@@ -159,13 +167,17 @@ Layout Box(Rng& rng) {
   AddBox(l, "box_left", f, 0.0, 0.5 * ly - 0.5 * wall, top + 0.5 * h, lx - 2 * wall, wall, h);
   AddBox(l, "box_right", f, 0.0, -0.5 * ly + 0.5 * wall, top + 0.5 * h, lx - 2 * wall, wall, h);
   l.goal = [f, top, lx, ly, h](Rng& r, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
-    p = f.Point(r.Uniform(-0.5 * lx + 0.09, 0.5 * lx - 0.09), r.Uniform(-0.5 * ly + 0.09, 0.5 * ly - 0.09),
-                top + r.Uniform(0.06, std::max(0.07, 0.6 * h)));
-    rot = Down(f.yaw + (r.Uniform() < 0.5 ? 0.0 : M_PI_2) + r.Uniform(-0.2, 0.2));
+    const double z = top + r.Uniform(0.06, std::max(0.07, 0.6 * h));
+    const double y = r.Uniform(-0.5 * ly + 0.09, 0.5 * ly - 0.09), x = r.Uniform(-0.5 * lx + 0.09, 0.5 * lx - 0.09);
+    p = f.Point(x, y, z);
+    const double quarter = r.Uniform() < 0.5 ? 0.0 : M_PI_2, wobble = r.Uniform(-0.2, 0.2);
+    rot = Down(f.yaw + quarter + wobble);
   };
   l.start = [f, top, lx, ly, h](Rng& r, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
     const double side = r.Uniform() < 0.5 ? -1.0 : 1.0;
-    p = f.Point(r.Uniform(-0.5 * lx, 0.3 * lx), side * (0.5 * ly + r.Uniform(0.05, 0.25)), top + h + r.Uniform(0.1, 0.35));
+    const double z = top + h + r.Uniform(0.1, 0.35), y = side * (0.5 * ly + r.Uniform(0.05, 0.25));
+    const double x = r.Uniform(-0.5 * lx, 0.3 * lx);
+    p = f.Point(x, y, z);
     rot = Down(f.yaw + r.Uniform(-1.2, 1.2));
   };
   return l;
@@ -196,11 +208,14 @@ Layout Cage(Rng& rng) {
   AddBar(l, "front_bar", f.Point(-s, -s, front), f.Point(-s, s, front), r);
   const Eigen::Vector3d inward = f.Direction(1.0, 0.0, 0.0);
   l.goal = [f, s, base, height, inward](Rng& g, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
-    p = f.Point(g.Uniform(-s + 0.1, s - 0.15), g.Uniform(-s + 0.08, s - 0.08), base + g.Uniform(0.08, height - 0.06));
+    const double z = base + g.Uniform(0.08, height - 0.06), y = g.Uniform(-s + 0.08, s - 0.08);
+    const double x = g.Uniform(-s + 0.1, s - 0.15);
+    p = f.Point(x, y, z);
     rot = Horizontal(inward, g.Uniform() < 0.5);
   };
   l.start = [f, s, inward](Rng& g, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
-    p = f.Point(-s - g.Uniform(0.12, 0.25), g.Uniform(-0.35, 0.35), g.Uniform(0.15, 0.6));
+    const double z = g.Uniform(0.15, 0.6), y = g.Uniform(-0.35, 0.35), x = -s - g.Uniform(0.12, 0.25);
+    p = f.Point(x, y, z);
     rot = Horizontal(inward, g.Uniform() < 0.5);
   };
   return l;
@@ -217,12 +232,15 @@ Layout UnderTable(Rng& rng) {
   }
   const Eigen::Vector3d inward = f.Direction(1.0, 0.0, 0.0);
   l.goal = [f, depth, width, top, inward](Rng& r, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
-    p = f.Point(-0.5 * depth + r.Uniform(0.05, 0.2), r.Uniform(-0.5 * width + 0.15, 0.5 * width - 0.15),
-                r.Uniform(0.08, top - 0.14));
+    const double z = r.Uniform(0.08, top - 0.14), y = r.Uniform(-0.5 * width + 0.15, 0.5 * width - 0.15);
+    const double x = -0.5 * depth + r.Uniform(0.05, 0.2);
+    p = f.Point(x, y, z);
     rot = Horizontal(inward, false);
   };
   l.start = [f, depth, width, top](Rng& r, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
-    p = f.Point(r.Uniform(-0.5 * depth + 0.05, 0.1), r.Uniform(-0.4 * width, 0.4 * width), top + r.Uniform(0.1, 0.3));
+    const double z = top + r.Uniform(0.1, 0.3), y = r.Uniform(-0.4 * width, 0.4 * width);
+    const double x = r.Uniform(-0.5 * depth + 0.05, 0.1);
+    p = f.Point(x, y, z);
     rot = Down(f.yaw + r.Uniform(-1.2, 1.2));
   };
   return l;

@@ -21,7 +21,7 @@
 // base's z axis. Starts and goals are inverse-kinematics solutions (MuJoCo,
 // with the family's TCP orientation), inside the joint limits, and their whole
 // arm (flowplan's collision spheres) keeps `clearance` from every obstacle.
-// Problem i depends only on (seed, family, i).
+// Problem i depends only on (seed, family, i) and the clearance.
 
 #include <cstdint>
 #include <string>

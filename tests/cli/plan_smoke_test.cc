@@ -331,14 +331,14 @@ TEST(SceneImportTest, AMoveItFolderImportsAndRrtConnectPlansItsSceneInMujoco) {
   ExpectOk(Flowplan("scenes import --dir " + path("set") + " --out " + path("problems.yaml") + " --scenes-dir " +
                     path("scenes")));
   const std::string problems = ReadText(path("problems.yaml"));
-  EXPECT_THAT(problems, HasSubstr("name: 0001"));
+  EXPECT_THAT(problems, HasSubstr("name: scene0001"));
   EXPECT_THAT(problems, HasSubstr("obstacle_names: [table, board, bottle]"));
-  ASSERT_TRUE(fs::exists(path("scenes/0001.yaml")));
+  ASSERT_TRUE(fs::exists(path("scenes/scene0001.yaml")));
 
   const std::string config = " --config " + Source("configs/franka_reach.yaml") + " data.path=" + path("none.h5") +
                              " --log-level warn";
   const Outcome rrt = Flowplan("plan --rrt-connect" + config + " --start 0,-0.3,0,-2.2,0,2,0.8 --goal 0.75,-0.3,0,-2.2,0,2,0.8"
-                               " --scene " + path("scenes/0001.yaml") + " -n 2 --execute --no-plot --max-speed-ratio 3"
+                               " --scene " + path("scenes/scene0001.yaml") + " -n 2 --execute --no-plot --max-speed-ratio 3"
                                " scene.spheres=[] --out " + path("rrt"));
   ExpectOk(rrt);
   const std::string report = ReadText(path("rrt.json"));
@@ -354,6 +354,15 @@ TEST(SceneImportTest, AMoveItFolderImportsAndRrtConnectPlansItsSceneInMujoco) {
                      path("set/scene0002.yaml") + ": world.collision_objects[2] (bottle).primitives[0].dimensions: "
                      "a cylinder needs 2 values (height, radius), got 1");
   EXPECT_FALSE(fs::exists(path("again.yaml")));
+
+  // Two scenes of the same name (pairs from two folders) would share a scene file.
+  fs::create_directories(dir / "other");
+  fs::copy_file(path("set/scene0001.yaml"), path("other/scene0001.yaml"));
+  ExpectCleanFailure(Flowplan("scenes import " + path("set/scene0001.yaml") + " " + path("set/request0001.yaml") + " " +
+                              path("other/scene0001.yaml") + " " + path("set/request0001.yaml") + " --out " +
+                              path("twice.yaml")),
+                     "scenes import: two scenes are called scene0001");
+  EXPECT_FALSE(fs::exists(path("twice.yaml")));
 
   // A procedural family from the same command that draws the blocked problems.
   ExpectOk(Flowplan("problems --family box problems.count=2 --out " + path("box.yaml")));

@@ -156,6 +156,20 @@ TEST(MoveItImportTest, AnObjectPoseCarriesItsPrimitives) {
   EXPECT_LT((second.rotation - (turn * turn).normalized().toRotationMatrix()).norm(), 1e-6);  // 180° about z
 }
 
+TEST(MoveItImportTest, AnAllZeroOrientationIsTheIdentityAsInMoveIt) {
+  const std::string path = Write("scene.yaml", R"(world:
+  collision_objects:
+    - id: unset
+      pose: {position: [0.1, 0, 0], orientation: [0, 0, 0, 0]}
+      primitives: [{type: box, dimensions: [0.1, 0.2, 0.3]}]
+      primitive_poses: [{position: [0.5, 0, 0.2], orientation: {x: 0, y: 0, z: 0, w: 0}}]
+)");
+  const NamedScene read = ReadMoveItScene(path, Options());
+  ASSERT_EQ(read.scene.boxes.size(), 1u);
+  EXPECT_THAT(read.scene.boxes[0].centre, ::testing::ElementsAre(0.6, 0.0, 0.2));
+  EXPECT_THAT(read.scene.boxes[0].quaternion, ::testing::ElementsAre(1.0, 0.0, 0.0, 0.0));
+}
+
 TEST(MoveItImportTest, JointsAreMatchedByNameAndTheTcpIsMujocos) {
   const std::string scene = Write("scene.yaml", kScene);
   const std::string request = Write("request.yaml", Request(kStart, kGoal));
@@ -271,9 +285,6 @@ INSTANTIATE_TEST_SUITE_P(
         Malformed{"BadNumber", Object("      primitives: [{type: sphere, dimensions: [0.1]}]\n"
                                       "      primitive_poses: [{position: [0, zero, 0]}]\n"),
                   "", "scene: world.collision_objects[0] (thing).primitive_poses[0].position[1]: expected a number"},
-        Malformed{"ZeroQuaternion", Object("      primitives: [{type: sphere, dimensions: [0.1]}]\n"
-                                           "      primitive_poses: [{orientation: [0, 0, 0, 0]}]\n"),
-                  "", "scene: world.collision_objects[0] (thing).primitive_poses[0].orientation: a zero quaternion"},
         Malformed{"Mesh", Object("      meshes: [{vertices: []}]\n      primitives: [{type: sphere, dimensions: [0.1]}]\n"
                                  "      primitive_poses: [{position: [0, 0, 0]}]\n"),
                   "", "scene: world.collision_objects[0] (thing).meshes: meshes are not imported"},
@@ -307,7 +318,9 @@ INSTANTIATE_TEST_SUITE_P(
                   "request: goal_constraints[0]: expected a mapping with joint_constraints"},
         Malformed{"HeaderNotAMapping", Object("      header: 5\n      primitives: [{type: sphere, dimensions: [0.1]}]\n"
                                               "      primitive_poses: [{position: [0, 0, 0]}]\n"),
-                  "", "scene: "},
+                  "", "scene: world.collision_objects[0] (thing).header: expected a mapping with frame_id"},
+        Malformed{"JointStateNotAMapping", "", "start_state: {joint_state: 5}\ngoal_constraints: []\n",
+                  "request: start_state.joint_state: expected a mapping with name and position"},
         Malformed{"NamesPositions", "",
                   "start_state: {joint_state: {name: [panda_joint1, panda_joint2], position: [0]}}\n"
                   "goal_constraints: []\n",
