@@ -19,9 +19,10 @@ demo: configure
 	cmake --build $(BUILD) -j $(JOBS) --target flowplan
 	FLOWPLAN=$(FLOWPLAN) ./scripts/demo.sh
 
-# Unit, reference and smoke tests (benchmarks excluded).
+# Unit, reference and smoke tests (benchmarks excluded), one per core: each test
+# works in its own scratch folder.
 test: build
-	ctest --test-dir $(BUILD) -LE bench --output-on-failure
+	ctest --test-dir $(BUILD) -LE bench --output-on-failure -j $(JOBS)
 
 bench: build
 	ctest --test-dir $(BUILD) -L bench --output-on-failure -V
