@@ -203,11 +203,6 @@ void CheckLimits(const kinematics::Robot& arm, const std::vector<double>& q, con
   }
 }
 
-std::vector<double> Row(const torch::Tensor& t) {
-  const torch::Tensor c = t.to(torch::kFloat64).contiguous();
-  return std::vector<double>(c.data_ptr<double>(), c.data_ptr<double>() + c.numel());
-}
-
 }  // namespace
 
 std::vector<std::vector<std::string>> FrankaJointNames() {
@@ -404,16 +399,11 @@ Problem ImportMoveItProblem(const kinematics::Robot& arm, const std::string& sce
   CheckLimits(arm, problem.start_q, request_path, "start", options);
   CheckLimits(arm, problem.goal_q, request_path, "goal", options);
 
-  const torch::Tensor q = torch::stack({torch::tensor(problem.start_q, torch::kFloat64),
-                                        torch::tensor(problem.goal_q, torch::kFloat64)});  // (2, J)
-  const torch::Tensor tcp = arm.Tcp(q);                                                     // (2, W)
-  problem.start_tcp = Row(tcp[0]);
-  problem.goal_tcp = Row(tcp[1]);
-
   // The grasped object: every obstacle the goal's TCP lies in or touches.
   if (options.grasp == GraspRule::kTouchingTcp && read.scene.size() > 0) {
+    const torch::Tensor goal_tcp = arm.Tcp(torch::tensor(problem.goal_q, torch::kFloat64).view({1, -1}));  // (1, W)
     const torch::Tensor distance =
-        kinematics::Robot::PointClearance(tcp.slice(0, 1, 2), geometry::Rows(read.scene, 3, scene_path))[0];  // (K,)
+        kinematics::Robot::PointClearance(goal_tcp, geometry::Rows(read.scene, 3, scene_path))[0];  // (K,)
     geometry::Scene kept;
     std::vector<std::string> kept_names;
     int64_t k = 0;
@@ -437,13 +427,7 @@ Problem ImportMoveItProblem(const kinematics::Robot& arm, const std::string& sce
   }
   problem.scene = std::move(read.scene);
   problem.obstacle_names = std::move(read.names);
-  if (problem.scene.size() > 0) {
-    const torch::Tensor clearance = arm.Clearance(q, geometry::Rows(problem.scene, 3, scene_path));  // (2, K)
-    problem.start_clearance = clearance[0].min().item<double>();
-    problem.goal_clearance = clearance[1].min().item<double>();
-  } else {
-    problem.start_clearance = problem.goal_clearance = std::numeric_limits<double>::infinity();
-  }
+  DescribeEnds(arm, problem);
   return problem;
 }
 

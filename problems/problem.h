@@ -29,6 +29,7 @@
 
 #include "core/config.h"
 #include "geometry/scene.h"
+#include "kinematics/robot.h"
 
 namespace flowplan::problems {
 
@@ -70,6 +71,10 @@ struct ProblemSet {
     v.Field("problems", problems, "the problems");
   }
 };
+
+/// Sets start_tcp, goal_tcp, start_clearance and goal_clearance from start_q,
+/// goal_q and the scene (clearances .inf when there is no obstacle).
+void DescribeEnds(const kinematics::Robot& arm, Problem& problem);
 
 /// The YAML text of a problem set, or of one scene (a `--scene` file). Fields
 /// left unset are left out (a 3-D box has no `angle`), so the text reads back

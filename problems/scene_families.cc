@@ -261,11 +261,6 @@ uint64_t NameHash(const std::string& name) {
   return h;
 }
 
-std::vector<double> Row(const torch::Tensor& t) {
-  const torch::Tensor c = t.to(torch::kFloat64).contiguous();
-  return std::vector<double>(c.data_ptr<double>(), c.data_ptr<double>() + c.numel());
-}
-
 /// A collision-free configuration whose TCP is at a pose drawn by `draw`, or false.
 bool FreePose(const kinematics::Robot& arm, const sim::FrankaModel& model, mjData& d, Rng& rng,
               const std::function<void(Rng&, Eigen::Vector3d&, Eigen::Matrix3d&)>& draw,
@@ -324,18 +319,13 @@ Problem MakeFamilyProblem(const kinematics::Robot& arm, const sim::FrankaModel& 
     p.name = family + "/" + std::to_string(index);
     p.start_q.assign(start.data(), start.data() + sim::kFrankaJoints);
     p.goal_q.assign(goal.data(), goal.data() + sim::kFrankaJoints);
-    const torch::Tensor q = torch::stack({torch::tensor(p.start_q, torch::kFloat64),
-                                          torch::tensor(p.goal_q, torch::kFloat64)});  // (2, J)
-    const torch::Tensor tcp = arm.Tcp(q);                                              // (2, 3)
-    if ((tcp[0] - tcp[1]).norm().item<double>() < kMinTravel) continue;
-    p.start_tcp = Row(tcp[0]);
-    p.goal_tcp = Row(tcp[1]);
-    const torch::Tensor c = arm.Clearance(q, rows);  // (2, K)
-    p.start_clearance = c[0].min().item<double>();
-    p.goal_clearance = c[1].min().item<double>();
     p.obstacle_names = layout.box_names;  // the scene's numbering: (spheres,) boxes, cylinders
     p.obstacle_names.insert(p.obstacle_names.end(), layout.cylinder_names.begin(), layout.cylinder_names.end());
     p.scene = std::move(layout.scene);
+    DescribeEnds(arm, p);
+    double travel = 0.0;
+    for (size_t k = 0; k < p.start_tcp.size(); ++k) travel += std::pow(p.goal_tcp[k] - p.start_tcp[k], 2);
+    if (std::sqrt(travel) < kMinTravel) continue;
     return p;
   }
   throw Error("family " + family + ": no valid problem " + std::to_string(index) + " in " + std::to_string(kDraws) +
