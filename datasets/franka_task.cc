@@ -1,5 +1,6 @@
 #include "datasets/franka_task.h"
 
+#include <cmath>
 #include <cstdio>
 
 #include "core/error.h"
@@ -16,10 +17,12 @@ Eigen::Vector3d Point(const std::vector<double>& p) { return {p[0], p[1], p[2]};
 
 class FrankaWorker : public EpisodeWorker {
  public:
-  FrankaWorker(std::shared_ptr<const sim::FrankaModel> model, const FrankaTaskConfig& config,
+  FrankaWorker(std::shared_ptr<const sim::FrankaModel> model,
+               std::shared_ptr<const sim::FrankaCollisionModel> collision_model, const FrankaTaskConfig& config,
                FrankaGoals goals, std::vector<Family> families, std::vector<JointVector> family_start_q,
                std::vector<JointVector> family_goal_q)
       : model_(std::move(model)),
+        collision_model_(std::move(collision_model)),
         config_(config),
         goals_(goals),
         families_(std::move(families)),
@@ -28,10 +31,12 @@ class FrankaWorker : public EpisodeWorker {
         simulator_(*model_, config.rollout),
         scratch_(sim::MakeData(model_->mj())) {
     ik_.posture = Eigen::Map<const JointVector>(config.rollout.controller.posture.data());
+    if (collision_model_) collision_ = std::make_unique<sim::FrankaCollisionChecker>(*collision_model_);
   }
 
   EpisodeRecord Run(int64_t index, uint64_t seed) override {
     Rng rng(seed);
+    if (goals_ == FrankaGoals::kJoint) return RunJoint(rng);
     const Augmentation scheme = config_.rollout.augmentation.scheme;
     EpisodeRecord record;
     Eigen::Vector3d start, goal;
@@ -79,6 +84,54 @@ class FrankaWorker : public EpisodeWorker {
     return record;
   }
 
+  /// franka_joint: draws (start, goal) and rolls out until the episode keeps
+  /// clear of the arm itself and the floor, up to max_draws draws.
+  EpisodeRecord RunJoint(Rng& rng) {
+    const sim::FrankaLimits& limits = model_->limits();
+    const double horizon_time = (config_.rollout.horizon - 1) * config_.rollout.record_dt();
+    const double longest = horizon_time - config_.joint_motion.min_hold;
+    auto draw = [&](JointVector* q) {
+      for (int j = 0; j < sim::kFrankaJoints; ++j) {
+        (*q)[j] = rng.Uniform(limits.q_lower[j] + config_.joint_margin, limits.q_upper[j] - config_.joint_margin);
+      }
+      return collision_->FirstCollision(*q).empty();
+    };
+    const sim::FrankaSimulator::StateCheck check = [&](const JointVector& q) {
+      const std::string collision = collision_->FirstCollision(q);
+      return collision.empty() ? collision : "collision " + collision;
+    };
+    std::string reason = "no draw";
+    JointVector start = JointVector::Zero(), goal = JointVector::Zero();
+    for (int attempt = 0; attempt < config_.max_draws; ++attempt) {
+      if (!draw(&start) || !draw(&goal)) {
+        reason = "start or goal in collision";
+        continue;
+      }
+      const double duration = sim::MinimumJerkMotion::Duration(start, goal, limits.velocity, config_.joint_motion);
+      if (duration > longest) {
+        reason = "motion longer than the episode allows";
+        continue;
+      }
+      const sim::MinimumJerkMotion motion(start, goal, duration);
+      if (!ReferenceIsClear(motion)) {
+        reason = "reference motion in collision";
+        continue;
+      }
+      simulator_.RolloutJoints(motion, config_.joint_motion, check, config_.rollout.augmentation.scheme, rng,
+                               &episode_);
+      if (!episode_.rejected) return JointRecord(start, goal);
+      if (episode_.reject_reason.rfind("collision", 0) != 0) return JointRecord(start, goal);  // unstable, too fast
+      reason = episode_.reject_reason;
+    }
+    // Keep the record's shape; the generator drops rejected episodes.
+    simulator_.Clear(&episode_);
+    EpisodeRecord record = JointRecord(start, goal);
+    record.rejected = true;
+    record.reject_reason = "no collision-free episode in " + std::to_string(config_.max_draws) + " draws (last: " +
+                           reason + ")";
+    return record;
+  }
+
   EpisodeRecord RunNominal(int family) override {
     Rng unused(0);
     EpisodeRecord record;
@@ -110,6 +163,27 @@ class FrankaWorker : public EpisodeWorker {
     return false;
   }
 
+  // Whether the noise-free reference keeps clear at every control step.
+  bool ReferenceIsClear(const sim::MinimumJerkMotion& motion) {
+    const int steps = (config_.rollout.horizon - 1) * config_.rollout.record_every;
+    JointVector q, velocity, acceleration;
+    for (int k = 0; k <= steps; ++k) {
+      const double t = static_cast<double>(k) / config_.rollout.control_hz;
+      if (t > motion.duration()) break;
+      motion.Sample(t, &q, &velocity, &acceleration);
+      if (!collision_->FirstCollision(q).empty()) return false;
+    }
+    return true;
+  }
+
+  EpisodeRecord JointRecord(const JointVector& start, const JointVector& goal) {
+    EpisodeRecord record;
+    record.commanded_start.assign(start.data(), start.data() + sim::kFrankaJoints);
+    record.commanded_goal.assign(goal.data(), goal.data() + sim::kFrankaJoints);
+    Fill(&record);
+    return record;
+  }
+
   void Fill(EpisodeRecord* record) const {
     record->states = episode_.states;
     record->extras["tcp"] = episode_.tcp;
@@ -123,6 +197,8 @@ class FrankaWorker : public EpisodeWorker {
   }
 
   std::shared_ptr<const sim::FrankaModel> model_;
+  std::shared_ptr<const sim::FrankaCollisionModel> collision_model_;
+  std::unique_ptr<sim::FrankaCollisionChecker> collision_;  // franka_joint only
   const FrankaTaskConfig config_;
   const FrankaGoals goals_;
   const std::vector<Family> families_;
@@ -155,6 +231,22 @@ FrankaTask::FrankaTask(FrankaGoals goals, const FrankaTaskConfig& config, const 
     }
   }
   model_ = std::move(model);
+  if (goals_ == FrankaGoals::kJoint) {
+    for (int j = 0; j < sim::kFrankaJoints; ++j) {
+      const sim::FrankaLimits& limits = model_->limits();
+      if (2.0 * config.joint_margin >= limits.q_upper[j] - limits.q_lower[j]) {
+        throw Error(where + ".joint_margin: expected less than half of joint " + std::to_string(j + 1) +
+                    "'s range " + Number(limits.q_upper[j] - limits.q_lower[j]) + " rad, got " +
+                    Number(config.joint_margin));
+      }
+    }
+    const double horizon_time = (config.rollout.horizon - 1) * config.rollout.record_dt();
+    if (config.joint_motion.min_duration + config.joint_motion.min_hold > horizon_time) {
+      throw Error(where + ".joint_motion.min_duration: expected at most the episode's " + Number(horizon_time) +
+                  " s less joint_motion.min_hold, got " + Number(config.joint_motion.min_duration));
+    }
+    collision_model_ = std::make_shared<const sim::FrankaCollisionModel>(config.floor_height);
+  }
 
   if (goals_ == FrankaGoals::kCross) {
     if (config.cross_starts.empty() || config.cross_starts.size() != config.cross_goals.size()) {
@@ -193,7 +285,7 @@ EpisodeLayout FrankaTask::Layout() const {
   layout.info.horizon = config_.rollout.horizon;
   for (int j = 1; j <= sim::kFrankaJoints; ++j) layout.info.state_labels.push_back("q" + std::to_string(j));
   for (int j = 1; j <= sim::kFrankaJoints; ++j) layout.info.state_labels.push_back("dq" + std::to_string(j));
-  layout.point_dim = 3;
+  layout.point_dim = goals_ == FrankaGoals::kJoint ? sim::kFrankaJoints : 3;
   layout.info.robot = model_->description();
   layout.extras["tcp"] = 3;
   layout.extras["torques"] = sim::kFrankaJoints;
@@ -204,7 +296,8 @@ EpisodeLayout FrankaTask::Layout() const {
 std::vector<Family> FrankaTask::Families() const { return families_; }
 
 std::unique_ptr<EpisodeWorker> FrankaTask::MakeWorker() const {
-  return std::make_unique<FrankaWorker>(model_, config_, goals_, families_, family_start_q_, family_goal_q_);
+  return std::make_unique<FrankaWorker>(model_, collision_model_, config_, goals_, families_, family_start_q_,
+                                        family_goal_q_);
 }
 
 }  // namespace flowplan::datasets

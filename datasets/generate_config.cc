@@ -14,6 +14,8 @@ std::unique_ptr<EpisodeTask> MakeTask(const GenerateConfig& config) {
       return std::make_unique<FrankaTask>(FrankaGoals::kCross, config.franka, "generate.franka");
     case DatasetKind::kFrankaReach:
       return std::make_unique<FrankaTask>(FrankaGoals::kReach, config.franka, "generate.franka");
+    case DatasetKind::kFrankaJoint:
+      return std::make_unique<FrankaTask>(FrankaGoals::kJoint, config.franka, "generate.franka");
   }
   FLOWPLAN_DEMAND(false);
   return nullptr;

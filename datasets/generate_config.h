@@ -12,12 +12,13 @@
 namespace flowplan::datasets {
 
 /// Which dataset `flowplan generate` builds.
-enum class DatasetKind { kParticleCross, kFrankaCross, kFrankaReach };
+enum class DatasetKind { kParticleCross, kFrankaCross, kFrankaReach, kFrankaJoint };
 
 inline const config::EnumNames<DatasetKind>& EnumEntries(DatasetKind) {
   static const config::EnumNames<DatasetKind> names = {{DatasetKind::kParticleCross, "particle_cross"},
                                                        {DatasetKind::kFrankaCross, "franka_cross"},
-                                                       {DatasetKind::kFrankaReach, "franka_reach"}};
+                                                       {DatasetKind::kFrankaReach, "franka_reach"},
+                                                       {DatasetKind::kFrankaJoint, "franka_joint"}};
   return names;
 }
 

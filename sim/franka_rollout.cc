@@ -91,6 +91,24 @@ void FrankaSimulator::CheckState(FrankaEpisode* episode) {
 
 void FrankaSimulator::Rollout(const JointVector& q0, const Eigen::Vector3d& goal, Augmentation scheme,
                               Rng& rng, FrankaEpisode* episode) {
+  const Eigen::Matrix3d rotation = DownwardTcpRotation();
+  Simulate(
+      q0, [&](const mjData& d) { return controller_.Compute(d, goal, rotation); }, StateCheck(), scheme, rng,
+      episode);
+}
+
+void FrankaSimulator::RolloutJoints(const MinimumJerkMotion& motion, const JointMotionConfig& joint_motion,
+                                    const StateCheck& check, Augmentation scheme, Rng& rng, FrankaEpisode* episode) {
+  JointTrackingController tracking(model_, joint_motion);
+  JointVector q0, unused_velocity, unused_acceleration;
+  motion.Sample(0.0, &q0, &unused_velocity, &unused_acceleration);
+  Simulate(
+      q0, [&](const mjData& d) { return tracking.Compute(d, motion, d.time); }, check, scheme, rng, episode);
+}
+
+template <class Control>
+void FrankaSimulator::Simulate(const JointVector& q0, Control control_law, const StateCheck& check, Augmentation scheme,
+                               Rng& rng, FrankaEpisode* episode) {
   const mjModel& m = model_.mj();
   mjData& d = *data_;
   const int T = config_.horizon;
@@ -98,7 +116,6 @@ void FrankaSimulator::Rollout(const JointVector& q0, const Eigen::Vector3d& goal
 
   mj_resetData(&m, &d);
   for (int j = 0; j < kFrankaJoints; ++j) d.qpos[j] = q0[j];
-  const Eigen::Matrix3d rotation = DownwardTcpRotation();
   const JointVector& torque_limit = model_.limits().torque;
   const int site = model_.tcp_site();
   mjtNum* hand_force = d.xfrc_applied + 6 * model_.hand_body();
@@ -112,7 +129,17 @@ void FrankaSimulator::Rollout(const JointVector& q0, const Eigen::Vector3d& goal
   for (int k = 0; k <= last_control_step; ++k) {
     for (int s = 0; s < config_.physics_substeps; ++s) {
       mj_step1(&m, &d);
-      if (s == 0) control = controller_.Compute(d, goal, rotation);
+      if (s == 0) {
+        if (check) {
+          const std::string objection = check(Eigen::Map<const JointVector>(d.qpos));
+          if (!objection.empty()) {
+            Reject(episode, objection);
+            episode->warnings = WarningCount(d);
+            return;
+          }
+        }
+        control = control_law(d);
+      }
       JointVector torque = control;
       switch (scheme) {
         case Augmentation::kPerJointNoise:

@@ -7,12 +7,14 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "core/config.h"
 #include "core/random.h"
 #include "sim/franka_controller.h"
+#include "sim/franka_joint_motion.h"
 #include "sim/franka_model.h"
 
 namespace flowplan::sim {
@@ -123,12 +125,27 @@ class FrankaSimulator {
   void Rollout(const JointVector& q0, const Eigen::Vector3d& goal, Augmentation scheme, Rng& rng,
                FrankaEpisode* episode);
 
+  /// Why a configuration q (rad) may not be part of an episode; empty if it may.
+  using StateCheck = std::function<std::string(const JointVector& q)>;
+
+  /// Rolls out from `motion`'s start at rest, tracking `motion` with the
+  /// computed-torque controller of `joint_motion` (the torque noise, force and
+  /// rejection rules of Rollout apply). `check` is asked at every control step;
+  /// its first objection rejects the episode with that reason.
+  void RolloutJoints(const MinimumJerkMotion& motion, const JointMotionConfig& joint_motion, const StateCheck& check,
+                     Augmentation scheme, Rng& rng, FrankaEpisode* episode);
+
   /// Sizes `episode`'s arrays for config.horizon states and zeroes them.
   void Clear(FrankaEpisode* episode) const;
 
  private:
   void Reject(FrankaEpisode* episode, const std::string& reason);
   void CheckState(FrankaEpisode* episode);
+  // The rollout loop: `control_law(d)` gives the torques at each control step
+  // (after mj_step1), `check(q)` may object to its configuration.
+  template <class Control>
+  void Simulate(const JointVector& q0, Control control_law, const StateCheck& check, Augmentation scheme, Rng& rng,
+                FrankaEpisode* episode);
 
   const FrankaModel& model_;
   FrankaRolloutConfig config_;

@@ -8,6 +8,7 @@
 #include "datasets/generate_config.h"
 #include "datasets/generator.h"
 #include "datasets/trajectory_dataset.h"
+#include "sim/franka_self_collision.h"
 #include "tests/support/scratch_dir.h"
 
 namespace flowplan::datasets {
@@ -105,6 +106,61 @@ TEST(FrankaDatasetTest, ReachDrawsReachablePointsInTheBox) {
   }
 }
 
+TEST(FrankaDatasetTest, JointMotionsStayInsideTheLimitsAndClearOfTheArmAndTheFloor) {
+  FrankaTaskConfig config;
+  FrankaTask task(FrankaGoals::kJoint, config);
+  EXPECT_TRUE(task.Families().empty());
+  EXPECT_EQ(task.Layout().point_dim, 7);
+  const TrajectoryDataset d = GenerateDataset(task, Options(12, 2));
+  ASSERT_GE(d.num_episodes, 11);  // a rollout may still be rejected as too fast
+  const sim::FrankaModel model = sim::LoadFrankaModel();
+  const sim::FrankaLimits& limits = model.limits();
+  const sim::FrankaCollisionModel collision_model(config.floor_height);
+  sim::FrankaCollisionChecker checker(collision_model);
+  double largest_move = 0.0, final_speed = 0.0;
+  for (int64_t i = 0; i < d.num_episodes; ++i) {
+    const double* start = &d.commanded_start[static_cast<size_t>(7 * i)];
+    const double* goal = &d.commanded_goal[static_cast<size_t>(7 * i)];
+    const float* states = &d.states[static_cast<size_t>(i * 64 * 14)];
+    for (int j = 0; j < 7; ++j) {
+      EXPECT_GE(start[j], limits.q_lower[j] + config.joint_margin);
+      EXPECT_LE(goal[j], limits.q_upper[j] - config.joint_margin);
+      EXPECT_NEAR(states[j], start[j], 1e-6) << "episode " << i;     // starts at the start
+      EXPECT_EQ(states[7 + j], 0.0f);                                 // at rest
+      EXPECT_NEAR(states[63 * 14 + j], goal[j], 0.05) << "episode " << i << ", joint " << j + 1;
+      EXPECT_LT(std::abs(states[63 * 14 + 7 + j]), 0.6);             // held at the goal, under torque noise
+      final_speed += std::abs(states[63 * 14 + 7 + j]) / (7.0 * static_cast<double>(d.num_episodes));
+      largest_move = std::max(largest_move, std::abs(goal[j] - start[j]));
+    }
+    for (int t = 0; t < 64; ++t) {
+      sim::JointVector q;
+      for (int j = 0; j < 7; ++j) {
+        q[j] = states[t * 14 + j];
+        ASSERT_LE(std::abs(states[t * 14 + 7 + j]), limits.velocity[j]);
+      }
+      EXPECT_EQ(checker.FirstCollision(q), "") << "episode " << i << ", state " << t;
+    }
+  }
+  EXPECT_GT(largest_move, 1.0);  // spread over the joint space, not a neighbourhood
+  EXPECT_LT(final_speed, 0.1);   // rad/s, mean over episodes and joints
+  const std::string one = (flowplan::testing::ScratchDir() / "joint_1_thread.h5").string();
+  const std::string two = (flowplan::testing::ScratchDir() / "joint_2_threads.h5").string();
+  WriteDataset(one, GenerateDataset(task, Options(6, 1)));
+  WriteDataset(two, GenerateDataset(task, Options(6, 2)));
+  EXPECT_EQ(ReadFile(one), ReadFile(two));
+}
+
+TEST(FrankaDatasetTest, JointSettingsThatCannotWorkNameTheirKey) {
+  FrankaTaskConfig config;
+  config.joint_margin = 1.6;  // joint 4's range is 3.0 rad
+  EXPECT_THAT([&] { FrankaTask(FrankaGoals::kJoint, config, "generate.franka"); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("generate.franka.joint_margin: expected less than half of joint 4")));
+  config = FrankaTaskConfig{};
+  config.joint_motion.min_duration = 4.0;
+  EXPECT_THAT([&] { FrankaTask(FrankaGoals::kJoint, config, "generate.franka"); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("generate.franka.joint_motion.min_duration: expected at most")));
+}
+
 TEST(FrankaDatasetTest, UnreachableBoxRejectsEveryEpisodeWithAReason) {
   FrankaTaskConfig config;
   config.reach_lower = {1.5, 0.0, 0.5};
@@ -185,6 +241,11 @@ TEST(FrankaDatasetTest, ShippedConfigsLoadAndGenerate) {
               generate.franka.rollout.augmentation.scheme == sim::Augmentation::kRandomForce)
         << path;
   }
+  const std::string joint = std::string(FLOWPLAN_SOURCE_DIR) + "/configs/franka_joint.yaml";
+  GenerateConfig generate;
+  config::Apply(config::ParseYamlFile(joint)["generate"], generate, joint);
+  EXPECT_EQ(generate.dataset, DatasetKind::kFrankaJoint);
+  EXPECT_GT(GenerateDataset(*MakeTask(generate), Options(4, 2)).num_episodes, 0);
 }
 
 }  // namespace
