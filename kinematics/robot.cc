@@ -154,6 +154,32 @@ torch::Tensor Robot::Clearance(const torch::Tensor& q, const geometry::SceneRows
   return jit::CallFunction("sphere_clearance", {centres, SphereRadii(), scene}).toTensor();
 }
 
+SphereClearance Robot::NearestObstacles(const torch::Tensor& q, const geometry::SceneRows& scene) const {
+  const torch::Tensor centres = SphereCentres(q.to(torch::kFloat64));
+  const auto out = jit::CallFunction("sphere_nearest_obstacle", {centres, SphereRadii(), scene}).toTuple();
+  return {out->elements()[0].toTensor(), out->elements()[1].toTensor()};
+}
+
+torch::Tensor Robot::MotionBound() const {
+  const RobotDescription& d = description_;
+  const int64_t J = d.num_joints, S = d.num_spheres();
+  if (d.kind == RobotKind::kPoint) return torch::ones({J, S}, torch::kFloat64);
+  auto norm = [](const std::array<double, 3>& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); };
+  torch::Tensor bound = torch::zeros({J, S}, torch::kFloat64);
+  for (int64_t s = 0; s < S; ++s) {
+    const RobotSphere& sphere = d.spheres[static_cast<size_t>(s)];
+    // Walking up from the sphere's link: `reach` is the longest the chain from
+    // the current link's origin to the centre can be.
+    double reach = norm(sphere.centre);
+    for (int l = sphere.link; l >= 0; l = d.links[static_cast<size_t>(l)].parent) {
+      const RobotLink& link = d.links[static_cast<size_t>(l)];
+      if (link.joint >= 0) bound[link.joint][s] = reach;  // the hinge's axis passes through this link's origin
+      reach += norm(link.pos);
+    }
+  }
+  return bound;
+}
+
 torch::Tensor Robot::PointClearance(const torch::Tensor& points, const geometry::SceneRows& scene) {
   return jit::CallFunction("scene_distance_only", {points.to(torch::kFloat64), scene}).toTensor();
 }

@@ -44,6 +44,12 @@ struct IkSettings {
   double orientation_tolerance = kIkOrientationTolerance;
 };
 
+/// Each collision sphere's distance to the nearest obstacle of a scene.
+struct SphereClearance {
+  torch::Tensor clearance;  // (M, S) float64: signed distance of the sphere's surface (negative: overlap; +inf: no obstacle)
+  torch::Tensor obstacle;   // (M, S) int64: index of that obstacle in the scene's numbering (-1: no obstacle)
+};
+
 /// Immutable after construction and safe to share between threads.
 class Robot {
  public:
@@ -74,6 +80,17 @@ class Robot {
   /// the smallest signed distance between a collision sphere and the obstacle
   /// (negative: they overlap). float64.
   torch::Tensor Clearance(const torch::Tensor& q, const geometry::SceneRows& scene) const;
+
+  /// Per collision sphere of q (M, J): its clearance from the nearest obstacle of `scene`, and which that is.
+  SphereClearance NearestObstacles(const torch::Tensor& q, const geometry::SceneRows& scene) const;
+
+  /// (J, S) float64: a bound, valid at every configuration, on how far collision
+  /// sphere s's centre moves (world units) per unit of joint j: the distance of
+  /// the centre from joint j's axis is at most the summed lengths of the link
+  /// offsets between them (0 where joint j does not move sphere s; 1 for a point
+  /// robot, whose sphere is its position). Along a joint-space segment Δq the
+  /// centre stays within Σ_j bound[j, s] |Δq_j| of where it started.
+  torch::Tensor MotionBound() const;
 
   /// Signed distance (M, K) of points (M, W) to every obstacle of `scene`. float64.
   static torch::Tensor PointClearance(const torch::Tensor& points, const geometry::SceneRows& scene);
