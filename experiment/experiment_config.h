@@ -12,12 +12,14 @@
 #include "eval/stitching.h"
 #include "geometry/scene.h"
 #include "guidance/guide.h"
+#include "hybrid/hybrid_planner.h"
 #include "models/model_config.h"
 #include "objectives/objective.h"
 #include "planning/sampler_config.h"
 #include "problems/blocked_problems.h"
 #include "sim/franka_execution.h"
 #include "trainer/trainer_config.h"
+#include "validity/plan_check.h"
 
 namespace flowplan::experiment {
 
@@ -38,6 +40,8 @@ struct ExperimentConfig {
   geometry::Scene scene;
   sim::ExecutionConfig execute;
   classical::RrtConnectConfig rrt_connect;
+  validity::CheckConfig check;
+  hybrid::HybridConfig hybrid;
   distributed::DistributedConfig distributed;
   problems::BlockedProblemsConfig problems;
 
@@ -62,6 +66,9 @@ struct ExperimentConfig {
     v.Field("execute", execute, "tracking of plans in MuJoCo (`flowplan plan --execute`)");
     v.Field("rrt_connect", rrt_connect,
             "the classical reference planner (`flowplan plan --rrt-connect`, for the robot and trajectories of generate.*)");
+    v.Field("check", check,
+            "what a valid plan is: every plan a report calls a success passed this check (validity/plan_check.h)");
+    v.Field("hybrid", hybrid, "the hybrid planner (`flowplan plan --hybrid`): learned proposals, RRT-Connect fallback");
     v.Field("problems", problems, "random planning problems with blocked straight paths (`flowplan problems`)");
     v.Field("distributed", distributed,
             "data-parallel training when launched as several processes (torchrun or Slurm environment)");

@@ -1,4 +1,5 @@
-// `flowplan plan`: the command, and the order of its steps (plan_*.cc).
+// `flowplan plan`: the command, and the order of its steps (plan_*.cc);
+// `flowplan plan --problems FILE` is plan_problems.cc.
 
 #include "experiment/plan.h"
 
@@ -19,8 +20,13 @@ void RunPlan(const PlanArgs& args) {
   if (args.num_samples < 1) throw Error("-n: expected at least one plan, got " + std::to_string(args.num_samples));
   if (!(args.goal_tolerance > 0)) throw Error("--goal-tolerance: expected a positive distance");
   if (!(args.max_speed_ratio > 0)) throw Error("--max-speed-ratio: expected a positive ratio");
+  if (args.batch < 1) throw Error("--batch: expected at least one plan per call, got " + std::to_string(args.batch));
   const PlanSubject subject = LoadPlanSubject(args);
   const int threads = ConfigureThreads(subject.config);
+  if (!args.problems.empty()) {
+    RunPlanProblems(args, subject, threads);
+    return;
+  }
   const PlanInputs inputs = ResolvePlanInputs(args, subject);
   if (args.execute && (!subject.robot->is_arm() || subject.robot->workspace_dim() != 3)) {
     throw Error("--execute: execution in MuJoCo needs the Franka; this planner's robot is \"" +
@@ -45,7 +51,7 @@ void RunPlan(const PlanArgs& args) {
                                 : fmt::format("guidance scale {}, splitting {}", subject.config.guidance.scale,
                                               config::EnumName(subject.config.sampler.splitting)));
   const auto started = std::chrono::steady_clock::now();
-  const planning::PlanResult result = planning::PlanInChunks(*subject.planner, request, threads);
+  const planning::PlanResult result = planning::PlanInChunks(*subject.planner, request, threads, args.batch);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   const int64_t lost = args.num_samples - result.found.sum().item<int64_t>();
   if (lost > 0) {
@@ -58,7 +64,7 @@ void RunPlan(const PlanArgs& args) {
                                   : std::string());
   }
 
-  const PlanScores scores = ScorePlans(result.plans, subject, inputs);
+  const PlanScores scores = ScorePlans(result, subject, inputs);
   const std::vector<sim::ExecutionResult> executed =
       args.execute ? ExecutePlans(result.plans, subject, inputs, threads) : std::vector<sim::ExecutionResult>{};
   const PlanCounts counts =
@@ -66,13 +72,14 @@ void RunPlan(const PlanArgs& args) {
   h5_file.Commit();
   const std::string figure = args.plot ? DrawPlanFigure(prefix) : "not drawn (--no-plot)";
   if (args.plot && figure.rfind("not drawn", 0) == 0) spdlog::warn("{}.png {}; the plans and report are written", prefix, figure);
-  spdlog::info("{} plans in {:.2f} s: success {}/{} (TCP clear, goal within {} m), {}/{} (whole robot clear){}; "
-               "wrote {}.h5, {}.json, {}",
-               args.num_samples, wall, counts.tcp, args.num_samples, args.goal_tolerance, counts.arm, args.num_samples,
+  spdlog::info("{} plans in {:.2f} s: success {}/{} (passed the plan checker: check.*){}; clear at every state "
+               "with the goal within {} m: {}/{} by the TCP, {}/{} by the whole robot; wrote {}.h5, {}.json, {}",
+               args.num_samples, wall, counts.success, args.num_samples,
                executed.empty() ? std::string()
-                                : fmt::format(", executed {}/{} (feasible, no contact, goal reached)", counts.executed,
+                                : fmt::format(", executed {}/{} (valid, no contact, goal reached)", counts.executed,
                                               args.num_samples),
-               prefix, prefix, figure);
+               args.goal_tolerance, counts.tcp_clear, args.num_samples, counts.arm_clear, args.num_samples, prefix,
+               prefix, figure);
 }
 
 }  // namespace
@@ -86,6 +93,20 @@ Command AddPlanCommand(CLI::App& app) {
   plan->add_option("--planner", a.planner_file, "an exported planner file (instead of --ckpt)")->check(CLI::ExistingFile);
   plan->add_flag("--rrt-connect", a.rrt_connect,
                  "plan with OMPL's RRT-Connect (rrt_connect.*) for the robot and trajectories of --config's generate.*");
+  plan->add_flag("--hybrid", a.hybrid,
+                 "with --ckpt or --planner: the learned planner proposes hybrid.proposals plans, the plan checker "
+                 "(check.*) keeps the valid ones and returns the best by guidance cost, then length; RRT-Connect "
+                 "(rrt_connect.*) plans when none is valid");
+  plan->add_option("--problems", a.problems,
+                   "a problem file (`flowplan problems`, `flowplan scenes import`): plan -n plans for every problem in "
+                   "its own scene with one loaded planner; write PREFIX.json and PREFIX.h5")
+      ->check(CLI::ExistingFile);
+  plan->add_option("--limit", a.limit, "with --problems: plan the first N problems only (0: all)")
+      ->check(CLI::NonNegativeNumber);
+  plan->add_option("--batch", a.batch,
+                   "plans per planning call (a learned planner plans a call's plans as one batch; its time per plan "
+                   "is then the call's time divided by them)")
+      ->capture_default_str();
   plan->add_option("--config", a.overlay_path, "YAML applied over the planner's config")->check(CLI::ExistingFile);
   plan->add_option("--start", a.start, "start: J comma-separated positions (at rest) or a full state of D values");
   plan->add_option("--goal", a.goal, "goal, as --start");

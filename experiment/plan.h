@@ -16,8 +16,11 @@
 #include "geometry/scene_rows.h"
 #include "kinematics/robot.h"
 #include "kinematics/trajectory_info.h"
+#include "datasets/h5.h"
 #include "planning/planner.h"
 #include "sim/franka_execution.h"
+#include "validity/plan_check.h"
+#include "validity/plan_quality.h"
 
 namespace flowplan::experiment {
 
@@ -25,6 +28,7 @@ struct PlanArgs {
   std::string ckpt;                    // --ckpt: a run folder or checkpoint file
   std::string planner_file;            // --planner: an exported planner file (instead of --ckpt)
   bool rrt_connect = false;            // --rrt-connect: OMPL's RRT-Connect for the robot of generate.*
+  bool hybrid = false;                 // --hybrid: the learned planner proposes, RRT-Connect falls back
   std::string overlay_path;            // --config: YAML applied over the planner's config
   std::vector<std::string> overrides;  // key=value, e.g. guidance.scale=2
   std::string start, goal;             // --start/--goal: J positions (at rest) or D state values
@@ -37,6 +41,9 @@ struct PlanArgs {
   std::vector<std::string> radii;      // --radius R (every sphere) or K=R (sphere K)
   int num_samples = 64;                // -n
   int64_t seed = 0;                    // --seed
+  std::string problems;                // --problems: a problem file; plans every problem in its own scene
+  int64_t limit = 0;                   // --limit: the first N problems (0: all)
+  int64_t batch = 16;                  // --batch: plans per planning call
   std::string out;                     // --out: output prefix (default: RUN_DIR/plan)
   bool execute = false;                // --execute: track the plans in MuJoCo
   bool plot = true;                    // --no-plot clears it
@@ -67,10 +74,12 @@ struct PlanInputs {
 /// The scores of N plans against K obstacles.
 struct PlanScores {
   torch::Tensor tcp;            // (N, T, W) float64
-  torch::Tensor tcp_clearance;  // (N, K): smallest signed distance of the TCP path to each obstacle
+  torch::Tensor tcp_clearance;  // (N, K): smallest signed distance of the TCP path's states to each obstacle
   torch::Tensor arm_clearance;  // (N, K): the same for the robot's collision spheres
   torch::Tensor goal_distance;  // (N,)
   torch::Tensor speed_ratio;    // (N,): largest joint speed the positions imply, over its limit
+  std::vector<validity::PlanVerdict> verdicts;  // (N,) the plan checker's (check.*): the one success
+  std::vector<validity::PlanQuality> quality;   // (N,)
 };
 
 /// plan_subject.cc: the planner of --ckpt, --planner or --rrt-connect.
@@ -82,25 +91,53 @@ PlanSubject LoadPlanSubject(const PlanArgs& args);
 ///   that is unreachable, outside the joint limits or inside an obstacle.
 PlanInputs ResolvePlanInputs(const PlanArgs& args, const PlanSubject& subject);
 
-/// plan_report.cc: scores plans (N, T, D).
-PlanScores ScorePlans(const torch::Tensor& plans, const PlanSubject& subject, const PlanInputs& inputs);
+/// plan_report.cc: scores the plans (N, T, D) of `result`.
+PlanScores ScorePlans(const planning::PlanResult& result, const PlanSubject& subject, const PlanInputs& inputs);
 
 /// plan_execute.cc: tracks every plan in MuJoCo, on `threads` workers.
 /// @throws flowplan::Error unless the robot is the built-in Franka.
 std::vector<sim::ExecutionResult> ExecutePlans(const torch::Tensor& plans, const PlanSubject& subject,
                                                const PlanInputs& inputs, int threads);
 
-/// How many plans succeeded, counted three ways.
+/// How many plans succeeded (passed the plan checker; executed: and then
+/// tracked in MuJoCo without contact to the goal), and how many were clear
+/// at their states, counted by the TCP and the whole arm (the counts of the
+/// sphere benchmarks, which check states only).
 struct PlanCounts {
-  int64_t tcp = 0, arm = 0, executed = 0;
+  int64_t success = 0, executed = 0, tcp_clear = 0, arm_clear = 0;
+  PlanCounts& operator+=(const PlanCounts& other);
 };
 
+/// plan_report.cc: the JSON list of the plans' records, and their counts.
+std::string SamplesJson(const PlanArgs& args, const planning::PlanResult& result, const PlanScores& scores,
+                        const std::vector<sim::ExecutionResult>& executed, PlanCounts* counts);
+
+/// plan_report.cc: {"median": …, "p95": …} of the planning time per plan (s) of results.
+std::string TimingJson(const std::vector<const planning::PlanResult*>& results);
+
+/// plan_report.cc: the plans, their TCPs, the scene, start and goal (and the
+/// executions) under `group` ("/" or "/problems/NAME/") of an open file.
+void WritePlansH5(datasets::h5::File& file, const std::string& group, const PlanSubject& subject,
+                  const PlanInputs& inputs, const planning::PlanResult& result, const PlanScores& scores,
+                  const std::vector<sim::ExecutionResult>& executed);
+
 /// plan_report.cc: the plans and executions as PREFIX.h5 (into `h5_temp`, the
-/// temporary name of PREFIX.h5), the report as PREFIX.json; returns the successes.
+/// temporary name of PREFIX.h5), the report as PREFIX.json; returns the counts.
 PlanCounts WritePlanFiles(const std::string& h5_temp, const std::string& prefix, const PlanArgs& args,
-                    const PlanSubject& subject, const PlanInputs& inputs, const planning::PlanResult& result,
-                    const PlanScores& scores, const std::vector<sim::ExecutionResult>& executed, double wall_seconds,
-                    int threads);
+                          const PlanSubject& subject, const PlanInputs& inputs, const planning::PlanResult& result,
+                          const PlanScores& scores, const std::vector<sim::ExecutionResult>& executed,
+                          double wall_seconds, int threads);
+
+/// plan_problems.cc: `flowplan plan --problems FILE`: every problem of the file
+/// planned by the one planner of `subject`, checked, optionally executed;
+/// PREFIX.json, PREFIX.h5.
+void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threads);
+
+/// plan_inputs.cc: why `state` (D,) cannot be planned from or to (outside the
+/// joint limits, or a collision sphere closer than check.margin to an
+/// obstacle), or empty.
+std::string RefusalOf(const std::string& name, const torch::Tensor& state, const PlanSubject& subject,
+                      const geometry::SceneRows& rows);
 
 /// plan_report.cc: draws PREFIX.png from PREFIX.h5 with scripts/plot.py; returns
 /// the figure's path, or why it was not drawn.

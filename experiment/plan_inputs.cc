@@ -130,6 +130,17 @@ void CheckOutsideObstacles(const std::string& name, const torch::Tensor& state, 
 
 }  // namespace
 
+std::string RefusalOf(const std::string& name, const torch::Tensor& state, const PlanSubject& subject,
+                      const geometry::SceneRows& rows) {
+  // A plan of this one state, from and to it: what the checker says of it is what no plan through it can avoid.
+  const validity::PlanChecker checker(subject.robot, subject.trajectory.dt, subject.config.check);
+  const validity::PlanVerdict verdict = checker.Check(state.view({1, 1, -1}), state, state, rows)[0];
+  if (verdict.valid()) return "";
+  std::string reason = verdict.reason;
+  if (reason.rfind("state 0: ", 0) == 0) reason = reason.substr(9);
+  return "the " + name + " cannot be part of a valid plan: " + reason;
+}
+
 PlanInputs ResolvePlanInputs(const PlanArgs& args, const PlanSubject& subject) {
   PlanInputs inputs;
   const int W = static_cast<int>(subject.robot->workspace_dim());

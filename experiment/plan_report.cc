@@ -3,6 +3,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 
@@ -31,6 +33,18 @@ std::string Numbers(const torch::Tensor& values) {
 
 std::string Bool(bool value) { return value ? "true" : "false"; }
 
+/// The planner's settings for the report: RRT-Connect's, or the guidance and splitting of a learned planner (a hybrid
+/// has both, and its own).
+std::string SettingsJson(const PlanArgs& args, const PlanSubject& subject) {
+  const std::string rrt = "\"rrt_connect\": " + JsonString(config::ToYaml(subject.config.rrt_connect));
+  const std::string learned = "\"guidance\": " + JsonString(config::ToYaml(subject.config.guidance)) +
+                              ", \"splitting\": " + JsonString(config::EnumName(subject.config.sampler.splitting));
+  const std::string check = "\"check\": " + JsonString(config::ToYaml(subject.config.check));
+  if (args.rrt_connect) return rrt + ", " + check;
+  if (args.hybrid) return learned + ", " + rrt + ", \"hybrid\": " + JsonString(config::ToYaml(subject.config.hybrid)) + ", " + check;
+  return learned + ", " + check;
+}
+
 /// {"spheres": [[…], …], …}: the scene's rows.
 std::string SceneJson(const geometry::SceneRows& rows) {
   std::string out;
@@ -42,23 +56,20 @@ std::string SceneJson(const geometry::SceneRows& rows) {
   return "{" + out + "}";
 }
 
-/// Whether plan i succeeds counted by its TCP, by the whole robot, and as executed.
-struct Outcome {
-  bool tcp_collision, arm_collision, feasible, success_tcp, success_arm, success_executed;
+/// Plan i counted at its states by its TCP and by the whole robot (the sphere benchmarks' counts), and feasible.
+struct StateCounts {
+  bool tcp_collision, arm_collision, feasible, tcp_clear, arm_clear;
 };
 
-Outcome Judge(int64_t i, const PlanArgs& args, const PlanScores& scores, const std::vector<sim::ExecutionResult>& executed) {
-  Outcome o{};
+StateCounts CountAtStates(int64_t i, const PlanArgs& args, const PlanScores& scores) {
+  StateCounts o{};
   const bool obstacles = scores.tcp_clearance.size(1) > 0;
   o.tcp_collision = obstacles && scores.tcp_clearance[i].min().item<double>() < 0;
   o.arm_collision = obstacles && scores.arm_clearance[i].min().item<double>() < 0;
   o.feasible = scores.speed_ratio[i].item<double>() <= args.max_speed_ratio;
   const bool reached = scores.goal_distance[i].item<double>() <= args.goal_tolerance && o.feasible;
-  o.success_tcp = reached && !o.tcp_collision;
-  o.success_arm = reached && !o.arm_collision;
-  // The plan itself must be feasible too: an infeasible plan is not what the arm tracked, however its execution ended.
-  o.success_executed = !executed.empty() && executed[i].contacts.empty() &&
-                       executed[i].goal_distance <= args.goal_tolerance && o.feasible;
+  o.tcp_clear = reached && !o.tcp_collision;
+  o.arm_clear = reached && !o.arm_collision;
   return o;
 }
 
@@ -75,33 +86,43 @@ std::string ExecutedJson(const sim::ExecutionResult& e, bool success) {
          ", \"simulator_warnings\": " + std::to_string(e.warnings) + ", \"success\": " + Bool(success) + "}";
 }
 
-void WriteH5(const std::string& path, const PlanArgs& args, const PlanSubject& subject, const PlanInputs& inputs,
-             const planning::PlanResult& result, const PlanScores& scores,
-             const std::vector<sim::ExecutionResult>& executed) {
+std::string QualityJson(const validity::PlanQuality& q) {
+  return "{\"joint_path_length\": " + JsonNumber(q.joint_path_length) +
+         ", \"tcp_path_length\": " + JsonNumber(q.tcp_path_length) +
+         ", \"max_speed_ratio\": " + JsonNumber(q.max_speed_ratio) +
+         ", \"mean_squared_jerk\": " + JsonNumber(q.mean_squared_jerk) + ", \"duration_s\": " + JsonNumber(q.duration) +
+         "}";
+}
+
+}  // namespace
+
+PlanCounts& PlanCounts::operator+=(const PlanCounts& other) {
+  success += other.success;
+  executed += other.executed;
+  tcp_clear += other.tcp_clear;
+  arm_clear += other.arm_clear;
+  return *this;
+}
+
+void WritePlansH5(datasets::h5::File& file, const std::string& group, const PlanSubject& subject,
+                  const PlanInputs& inputs, const planning::PlanResult& result, const PlanScores& scores,
+                  const std::vector<sim::ExecutionResult>& executed) {
   const kinematics::TrajectoryInfo& info = subject.trajectory;
   const int64_t N = result.plans.size(0), T = info.horizon, D = info.state_dim(), W = scores.tcp.size(2);
-  auto file = datasets::h5::File::Create(path);
   const torch::Tensor plans = result.plans.contiguous(), tcp = scores.tcp.to(torch::kFloat32).contiguous();
-  file.WriteFloat32("/plans", {N, T, D}, plans.data_ptr<float>());
-  file.WriteFloat32("/tcp", {N, T, W}, tcp.data_ptr<float>());
-  file.CreateGroup("/scene");
+  file.WriteFloat32(group + "plans", {N, T, D}, plans.data_ptr<float>());
+  file.WriteFloat32(group + "tcp", {N, T, W}, tcp.data_ptr<float>());
+  file.CreateGroup(group + "scene");
   for (const auto& entry : inputs.rows) {
     const torch::Tensor rows = entry.value().to(torch::kFloat64).contiguous();
-    file.WriteFloat64("/scene/" + entry.key(), rows.sizes().vec(), rows.data_ptr<double>());
+    file.WriteFloat64(group + "scene/" + entry.key(), rows.sizes().vec(), rows.data_ptr<double>());
   }
-  file.WriteFloat32("/start", {D}, inputs.start.contiguous().data_ptr<float>());
-  file.WriteFloat32("/goal", {D}, inputs.goal.contiguous().data_ptr<float>());
+  file.WriteFloat32(group + "start", {D}, inputs.start.contiguous().data_ptr<float>());
+  file.WriteFloat32(group + "goal", {D}, inputs.goal.contiguous().data_ptr<float>());
   const torch::Tensor goal_tcp = inputs.goal_tcp.to(torch::kFloat32).contiguous();
-  file.WriteFloat32("/goal_tcp", {W}, goal_tcp.data_ptr<float>());
-  file.SetAttribute("/", "env", info.env);
-  file.SetAttribute("/", "dt", info.dt);
-  file.SetAttribute("/", "state_labels", Join(info.state_labels, ","));
-  file.SetAttribute("/", "robot", kinematics::RobotToYaml(info.robot));
-  file.SetAttribute("/", "planner", subject.source);
-  file.SetAttribute("/", "seed", args.seed);
-  file.SetAttribute("/", "guidance_scale", subject.config.guidance.scale);
-  file.SetAttribute("/", "goal_tolerance", args.goal_tolerance);
-  file.SetAttribute("/", "obstacle_names", Join(inputs.scene.Names(), ","));
+  file.WriteFloat32(group + "goal_tcp", {W}, goal_tcp.data_ptr<float>());
+  file.SetAttribute(group == "/" ? "/" : group.substr(0, group.size() - 1), "obstacle_names",
+                    Join(inputs.scene.Names(), ","));
   if (!executed.empty()) {
     const int64_t Te = executed[0].num_states;
     std::vector<float> states, executed_tcp;
@@ -109,16 +130,14 @@ void WriteH5(const std::string& path, const PlanArgs& args, const PlanSubject& s
       states.insert(states.end(), e.states.begin(), e.states.end());
       executed_tcp.insert(executed_tcp.end(), e.tcp.begin(), e.tcp.end());
     }
-    file.CreateGroup("/executed");
-    file.WriteFloat32("/executed/states", {N, Te, 2 * subject.robot->num_joints()}, states.data());
-    file.WriteFloat32("/executed/tcp", {N, Te, 3}, executed_tcp.data());
+    file.CreateGroup(group + "executed");
+    file.WriteFloat32(group + "executed/states", {N, Te, 2 * subject.robot->num_joints()}, states.data());
+    file.WriteFloat32(group + "executed/tcp", {N, Te, 3}, executed_tcp.data());
   }
-  file.Close();
 }
 
-}  // namespace
-
-PlanScores ScorePlans(const torch::Tensor& plans, const PlanSubject& subject, const PlanInputs& inputs) {
+PlanScores ScorePlans(const planning::PlanResult& result, const PlanSubject& subject, const PlanInputs& inputs) {
+  const torch::Tensor& plans = result.plans;
   const kinematics::Robot& robot = *subject.robot;
   const int64_t N = plans.size(0), T = plans.size(1), J = robot.num_joints(), W = robot.workspace_dim();
   const int64_t K = geometry::CountObstacles(inputs.rows);
@@ -133,64 +152,116 @@ PlanScores ScorePlans(const torch::Tensor& plans, const PlanSubject& subject, co
     scores.arm_clearance = std::get<0>(robot.Clearance(q, inputs.rows).view({N, T, K}).min(1));
   }
   scores.goal_distance = (scores.tcp.select(1, T - 1) - inputs.goal_tcp.view({1, W})).norm(2, -1);
-  // Joint speeds the positions imply between consecutive states, relative to the limits.
+  scores.quality = validity::MeasurePlans(plans, robot, subject.trajectory.dt, subject.config.check.joint_tolerance);
   scores.speed_ratio = torch::zeros({N}, torch::kFloat64);
-  const auto& limits = robot.description().velocity_limit;
-  if (!limits.empty()) {
-    const torch::Tensor positions = q.view({N, T, J});
-    const torch::Tensor speed = (positions.slice(1, 1, T) - positions.slice(1, 0, T - 1)).abs() / subject.trajectory.dt;
-    scores.speed_ratio =
-        std::get<0>((speed / torch::tensor(limits, torch::kFloat64).view({1, 1, J})).flatten(1).max(1));
-  }
+  for (int64_t i = 0; i < N; ++i) scores.speed_ratio[i] = scores.quality[static_cast<size_t>(i)].max_speed_ratio;
+  const validity::PlanChecker checker(subject.robot, subject.trajectory.dt, subject.config.check);
+  scores.verdicts = checker.Check(plans, inputs.start, inputs.goal, inputs.rows, result.found);
   return scores;
 }
 
-PlanCounts WritePlanFiles(const std::string& h5_temp, const std::string& prefix, const PlanArgs& args,
-                    const PlanSubject& subject, const PlanInputs& inputs, const planning::PlanResult& result,
-                    const PlanScores& scores, const std::vector<sim::ExecutionResult>& executed, double wall_seconds,
-                    int threads) {
-  WriteH5(h5_temp, args, subject, inputs, result, scores, executed);
+std::string SamplesJson(const PlanArgs& args, const planning::PlanResult& result, const PlanScores& scores,
+                        const std::vector<sim::ExecutionResult>& executed, PlanCounts* counts) {
   const int64_t N = result.plans.size(0);
-  int64_t tcp_ok = 0, arm_ok = 0, exec_ok = 0;
   std::string samples;
   for (int64_t i = 0; i < N; ++i) {
-    const Outcome o = Judge(i, args, scores, executed);
-    tcp_ok += o.success_tcp;
-    arm_ok += o.success_arm;
-    exec_ok += o.success_executed;
-    std::string s = "{\"index\": " + std::to_string(i) + ", \"tcp_clearance\": " + Numbers(scores.tcp_clearance[i]) +
+    const size_t n = static_cast<size_t>(i);
+    const StateCounts o = CountAtStates(i, args, scores);
+    const validity::PlanVerdict& verdict = scores.verdicts[n];
+    // Executed: tracked without contact to the goal, and valid as planned (a plan that fails the check is not
+    // what the arm may be asked to track, however its execution ended).
+    const bool executed_ok = !executed.empty() && executed[n].contacts.empty() &&
+                             executed[n].goal_distance <= args.goal_tolerance && verdict.valid();
+    counts->success += verdict.valid();
+    counts->executed += executed_ok;
+    counts->tcp_clear += o.tcp_clear;
+    counts->arm_clear += o.arm_clear;
+    std::string s = "{\"index\": " + std::to_string(i) + ", \"success\": " + Bool(verdict.valid()) +
+                    ", \"failure\": " + JsonString(config::EnumName(verdict.failure)) +
+                    ", \"reason\": " + JsonString(verdict.reason) + ", \"clearance\": " + JsonNumber(verdict.clearance) +
+                    ", \"motion_checks\": " + std::to_string(verdict.motion_checks) +
+                    ", \"planning_time_s\": " + JsonNumber(result.call_seconds[n] / static_cast<double>(result.call_plans[n])) +
+                    ", \"call_seconds\": " + JsonNumber(result.call_seconds[n]) +
+                    ", \"plans_in_call\": " + std::to_string(result.call_plans[n]) +
+                    (result.route.empty() ? std::string() : ", \"route\": " + JsonString(result.route[n])) +
+                    ", \"found\": " + Bool(result.found[i].item<bool>()) +
+                    ",\n      \"quality\": " + QualityJson(scores.quality[n]) +
+                    ",\n      \"tcp_clearance\": " + Numbers(scores.tcp_clearance[i]) +
                     ", \"arm_clearance\": " + Numbers(scores.arm_clearance[i]) +
                     ", \"goal_distance\": " + JsonNumber(scores.goal_distance[i].item<double>()) +
                     ", \"speed_ratio\": " + JsonNumber(scores.speed_ratio[i].item<double>()) +
                     ", \"feasible\": " + Bool(o.feasible) + ", \"tcp_collision\": " + Bool(o.tcp_collision) +
-                    ", \"arm_collision\": " + Bool(o.arm_collision) + ", \"success_tcp\": " + Bool(o.success_tcp) +
-                    ", \"success_arm\": " + Bool(o.success_arm) +
-                    ", \"planning_time_s\": " + JsonNumber(result.call_seconds[static_cast<size_t>(i)]) +
-                    ", \"plans_in_call\": " + std::to_string(result.call_plans[static_cast<size_t>(i)]) +
-                    ", \"found\": " + (result.found[i].item<bool>() ? "true" : "false");
-    if (!executed.empty()) s += ", \"executed\": " + ExecutedJson(executed[i], o.success_executed);
+                    ", \"arm_collision\": " + Bool(o.arm_collision) + ", \"tcp_clear\": " + Bool(o.tcp_clear) +
+                    ", \"arm_clear\": " + Bool(o.arm_clear);
+    if (!executed.empty()) s += ",\n      \"executed\": " + ExecutedJson(executed[n], executed_ok);
     samples += (i ? ",\n    " : "    ") + s + "}";
   }
+  return "[\n" + samples + "\n  ]";
+}
+
+std::string TimingJson(const std::vector<const planning::PlanResult*>& results) {
+  std::vector<double> per_plan;
+  bool batched = false;
+  for (const planning::PlanResult* r : results) {
+    for (size_t i = 0; i < r->call_seconds.size(); ++i) {
+      per_plan.push_back(r->call_seconds[i] / static_cast<double>(r->call_plans[i]));
+      batched = batched || r->call_plans[i] > 1;
+    }
+  }
+  std::sort(per_plan.begin(), per_plan.end());
+  // The q-quantile by linear interpolation between order statistics (numpy's default).
+  auto quantile = [&](double q) {
+    if (per_plan.empty()) return std::nan("");
+    const double at = q * static_cast<double>(per_plan.size() - 1);
+    const size_t below = static_cast<size_t>(std::floor(at));
+    const size_t above = std::min(below + 1, per_plan.size() - 1);
+    return per_plan[below] + (at - static_cast<double>(below)) * (per_plan[above] - per_plan[below]);
+  };
+  return "{\"median\": " + JsonNumber(quantile(0.5)) + ", \"p95\": " + JsonNumber(quantile(0.95)) +
+         ", \"plans\": " + std::to_string(per_plan.size()) +
+         ", \"per\": " + JsonString(batched ? "plan, the wall time of a call divided by its plans (batched)"
+                                                : "plan, the wall time of the call that made it") + "}";
+}
+
+PlanCounts WritePlanFiles(const std::string& h5_temp, const std::string& prefix, const PlanArgs& args,
+                          const PlanSubject& subject, const PlanInputs& inputs, const planning::PlanResult& result,
+                          const PlanScores& scores, const std::vector<sim::ExecutionResult>& executed,
+                          double wall_seconds, int threads) {
+  {
+    const kinematics::TrajectoryInfo& info = subject.trajectory;
+    auto file = datasets::h5::File::Create(h5_temp);
+    WritePlansH5(file, "/", subject, inputs, result, scores, executed);
+    file.SetAttribute("/", "env", info.env);
+    file.SetAttribute("/", "dt", info.dt);
+    file.SetAttribute("/", "state_labels", Join(info.state_labels, ","));
+    file.SetAttribute("/", "robot", kinematics::RobotToYaml(info.robot));
+    file.SetAttribute("/", "planner", subject.source);
+    file.SetAttribute("/", "seed", args.seed);
+    file.SetAttribute("/", "guidance_scale", subject.config.guidance.scale);
+    file.SetAttribute("/", "goal_tolerance", args.goal_tolerance);
+    file.Close();
+  }
+  const int64_t N = result.plans.size(0);
+  PlanCounts counts;
+  const std::string samples = SamplesJson(args, result, scores, executed, &counts);
   auto rate = [&](int64_t count) { return JsonNumber(static_cast<double>(count) / static_cast<double>(N)); };
   std::vector<std::string> names;
   for (const std::string& name : inputs.scene.Names()) names.push_back(JsonString(name));
-  const std::string settings =
-      args.rrt_connect ? "\"rrt_connect\": " + JsonString(config::ToYaml(subject.config.rrt_connect))
-                       : "\"guidance\": " + JsonString(config::ToYaml(subject.config.guidance)) +
-                             ", \"splitting\": " + JsonString(config::EnumName(subject.config.sampler.splitting));
   const std::string json =
       "{\"planner\": " + JsonString(subject.source) + ", \"env\": " + JsonString(subject.trajectory.env) +
       ", \"num_samples\": " + std::to_string(N) + ", \"seed\": " + std::to_string(args.seed) +
       ",\n  \"start\": " + Numbers(inputs.start) + ", \"goal\": " + Numbers(inputs.goal) +
       ", \"goal_tcp\": " + Numbers(inputs.goal_tcp) + ",\n  \"scene\": " + SceneJson(inputs.rows) +
       ", \"obstacles\": [" + Join(names, ", ") + "], \"goal_tolerance\": " + JsonNumber(args.goal_tolerance) +
-      ", \"max_speed_ratio\": " + JsonNumber(args.max_speed_ratio) + ",\n  " + settings +
-      ",\n  \"success_rate_tcp\": " + rate(tcp_ok) + ", \"success_rate_arm\": " + rate(arm_ok) +
-      (executed.empty() ? std::string() : ", \"success_rate_executed\": " + rate(exec_ok)) +
+      ", \"max_speed_ratio\": " + JsonNumber(args.max_speed_ratio) + ",\n  " + SettingsJson(args, subject) +
+      ",\n  \"success_rate\": " + rate(counts.success) +
+      (executed.empty() ? std::string() : ", \"success_rate_executed\": " + rate(counts.executed)) +
+      ", \"tcp_clear_rate\": " + rate(counts.tcp_clear) + ", \"arm_clear_rate\": " + rate(counts.arm_clear) +
+      ",\n  \"planning_time_s\": " + TimingJson({&result}) +
       ", \"wall_time_s\": " + JsonNumber(wall_seconds) + ", \"threads\": " + std::to_string(threads) +
-      ",\n  \"samples\": [\n" + samples + "\n  ]}\n";
+      ",\n  \"samples\": " + samples + "}\n";
   WriteFileAtomically(prefix + ".json", json);
-  return {tcp_ok, arm_ok, exec_ok};
+  return counts;
 }
 
 std::string DrawPlanFigure(const std::string& prefix) {

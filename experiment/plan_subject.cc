@@ -9,6 +9,7 @@
 #include "experiment/command_line.h"
 #include "experiment/plan.h"
 #include "experiment/trained_planner.h"
+#include "hybrid/hybrid_planner.h"
 #include "planning/learned_planner.h"
 
 namespace flowplan::experiment {
@@ -87,15 +88,31 @@ PlanSubject FromRrtConnect(const PlanArgs& args) {
   return subject;
 }
 
+/// --hybrid: the learned planner of `subject` proposes, RRT-Connect (rrt_connect.*) falls back, the plan checker
+/// (check.*) decides.
+void MakeHybrid(PlanSubject& subject) {
+  std::unique_ptr<planning::LearnedPlanner> proposer(dynamic_cast<planning::LearnedPlanner*>(subject.planner.release()));
+  FLOWPLAN_DEMAND(proposer != nullptr);
+  auto fallback = std::make_unique<classical::RrtConnectPlanner>(subject.trajectory, subject.config.rrt_connect);
+  validity::PlanChecker checker(subject.robot, subject.trajectory.dt, subject.config.check);
+  subject.planner = std::make_unique<hybrid::HybridPlanner>(std::move(proposer), std::move(fallback),
+                                                            std::move(checker), subject.config.hybrid);
+  subject.source = "hybrid(" + subject.source + ", rrt_connect)";
+}
+
 }  // namespace
 
 PlanSubject LoadPlanSubject(const PlanArgs& args) {
   const int given = !args.ckpt.empty() + !args.planner_file.empty() + args.rrt_connect;
   if (given != 1) throw Error("plan: expected one of --ckpt RUN_DIR, --planner FILE or --rrt-connect");
+  if (args.hybrid && args.rrt_connect) {
+    throw Error("--hybrid: a learned planner (--ckpt or --planner) proposes; RRT-Connect is the fallback");
+  }
   PlanSubject subject = !args.planner_file.empty() ? FromFile(args)
                         : args.rrt_connect         ? FromRrtConnect(args)
                                                    : FromCheckpoint(args);
   subject.robot = kinematics::MakeRobot(subject.trajectory.robot, subject.source + ": robot");
+  if (args.hybrid) MakeHybrid(subject);
   return subject;
 }
 

@@ -87,6 +87,21 @@ torch::Tensor LearnedPlanner::PlanWithNoise(const torch::Tensor& start, const to
   return jit::Call(module_, "plan", {start, goal, noise}, kwargs).toTensor().to(torch::kCPU);
 }
 
+torch::Tensor LearnedPlanner::GuidanceCost(const torch::Tensor& plans, const geometry::SceneRows& scene,
+                                           const PlanSettings& settings) const {
+  if (!plans.defined() || plans.dim() != 3 || plans.size(2) != state_dim()) {
+    throw Error("guidance cost: plans: expected (B, T, " + std::to_string(state_dim()) + "), got " +
+                (plans.defined() ? ShapeText(plans.sizes().vec()) : "(undefined)"));
+  }
+  c10::Dict<std::string, double> values;
+  for (const auto& [key, value] : settings.values) values.insert(key, value);
+  const c10::IValue opts =
+      jit::Call(module_, "call_settings", {c10::IValue(), settings.values.empty() ? c10::IValue() : c10::IValue(values)});
+  const torch::jit::Module guide = module_.attr("sampler").toModule().attr("guide").toModule();
+  torch::NoGradGuard no_grad;
+  return jit::Call(guide, "value", {plans.to(torch::kFloat32), scene, opts}).toTensor().to(torch::kFloat64);
+}
+
 PlanResult LearnedPlanner::Plan(const PlanRequest& request) const {
   const auto started = std::chrono::steady_clock::now();
   CheckEnds(request.start, request.goal, state_dim(), "plan");

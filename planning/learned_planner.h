@@ -50,6 +50,12 @@ class LearnedPlanner : public Planner {
                               const geometry::SceneRows& scene = geometry::SceneRows(),
                               const PlanSettings& settings = {}) const;
 
+  /// The guidance cost (B,) float64 of raw plans (B, T, D) in `scene` with
+  /// this call's settings: the weighted sum of the cost terms the planner
+  /// guides with (what best of N ranks by), whatever the scale.
+  torch::Tensor GuidanceCost(const torch::Tensor& plans, const geometry::SceneRows& scene,
+                             const PlanSettings& settings = {}) const;
+
   int64_t horizon() const override { return info_.horizon; }
   int64_t state_dim() const override { return info_.state_dim(); }
 

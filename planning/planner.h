@@ -47,6 +47,9 @@ struct PlanResult {
   /// plan per call. call_seconds / call_plans is the time per plan.
   std::vector<double> call_seconds;
   std::vector<int64_t> call_plans;
+  /// (B,) how each plan was made, for planners with more than one way (the
+  /// hybrid: "proposal 3 of 8", "rrt_connect"); empty otherwise.
+  std::vector<std::string> route;
 };
 
 class Planner {

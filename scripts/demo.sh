@@ -70,7 +70,7 @@ done
   --out "$run/plan_guided.png" --title "particle: guided (blue) and unguided (grey) plans around a disc"
 guided_summary=$("$PYTHON" - "$run" <<'PY'
 import json, sys
-rates = {m: json.load(open(f"{sys.argv[1]}/plan_{m}.json"))["success_rate_arm"] for m in ("unguided", "guided")}
+rates = {m: json.load(open(f"{sys.argv[1]}/plan_{m}.json"))["arm_clear_rate"] for m in ("unguided", "guided")}
 print(f"  plans whose disc stays clear of the obstacle: unguided {rates['unguided']:.0%}, guided {rates['guided']:.0%} (64 each)")
 if rates["guided"] <= rates["unguided"]:
     sys.exit("guidance did not help: " + str(rates))

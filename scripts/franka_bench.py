@@ -126,9 +126,9 @@ MPD_BUDGETS = [("mpd_g10", "MPD, 10 gradient steps (1 per guided step, 3 noise-f
                ("mpd_paper_weights", "MPD, MPD's cost weights (collision 1e-2, GP prior 1e-7)",
                 ["guidance.collision_weight=0.01", "guidance.smoothness_weight=1e-7"])]
 PAPER_RADIUS = {"mpd": 0.03, "vae": 0.05, "fp": 0.15, "fp_split": 0.20}
-WAYS = [("success_rate_tcp", "TCP"), ("success_rate_arm", "whole arm"), ("success_rate_executed", "executed")]
+WAYS = [("tcp_clear_rate", "TCP"), ("arm_clear_rate", "whole arm"), ("success_rate_executed", "executed")]
 # The paper's count: the TCP clear of the sphere and the last TCP at the goal, whatever the joint speeds.
-ANY_SPEED = ("success_rate_tcp_any_speed", "TCP, any speed")
+ANY_SPEED = ("tcp_clear_rate_any_speed", "TCP, any speed")
 SCENE = "configs/scenes/franka_sphere.yaml"
 START_TCP, GOAL_TCP = "0.5,-0.3,0.2", "0.5,0.3,0.2"
 
@@ -912,8 +912,8 @@ def curve_table(bench, summary):
                     cells.append(f"{report['test']['mean']:.2f} ± {report['test']['stddev']:.2f}")
                 else:
                     point[os.path.basename(out)[:-len(".json")].rsplit("_", 1)[1]] = {
-                        "tcp": report["success_rate_tcp"], "arm": report["success_rate_arm"]}
-                    cells.append(f"{report['success_rate_tcp']:.0%} / {report['success_rate_arm']:.0%}")
+                        "tcp": report["tcp_clear_rate"], "arm": report["arm_clear_rate"]}
+                    cells.append(f"{report['tcp_clear_rate']:.0%} / {report['arm_clear_rate']:.0%}")
             summary["curve"].setdefault(row, {})[step] = point
             loss = "" if point["val_loss"] is None else f"{point['val_loss']:.4f}"
             text.append(f"| {row} | {step} | {loss} | " + " | ".join(cells) + " |")

@@ -29,7 +29,7 @@ import sys
 import yaml
 
 LABELS = {"fp": "FP", "fp_split": "FP + split", "rrt_connect": "RRT-Connect", "mpd": "MPD", "vae": "VAE planner"}
-WAYS = [("success_rate_tcp", "TCP"), ("success_rate_arm", "whole arm"), ("success_rate_executed", "executed")]
+WAYS = [("tcp_clear_rate", "TCP"), ("arm_clear_rate", "whole arm"), ("success_rate_executed", "executed")]
 
 
 def main():
@@ -114,7 +114,7 @@ def summarize(out, planners, count):
             report = json.load(open(prefix + ".json"))
             for key, _ in WAYS:
                 rates[key].append(report[key])
-            solved += report["success_rate_arm"] > 0
+            solved += report["arm_clear_rate"] > 0
             times += [s["planning_time_s"] for s in report["samples"]]
             wall += report["wall_time_s"]
             plans += report["num_samples"]

@@ -155,7 +155,7 @@ def run(planner, grid_entry, problems, plans, seed, limits):
         per_problem.append(int(good.sum()))
     total = plans * len(problems)
     return {"label": label, "settings": settings, "guide_at": guide_at, "schedule": schedule,
-            "success_arm": ok / total, "problems_solved": sum(1 for c in per_problem if c > 0) / len(problems),
+            "arm_clear": ok / total, "problems_solved": sum(1 for c in per_problem if c > 0) / len(problems),
             "seconds_per_plan": seconds / total, "per_problem": per_problem}
 
 
@@ -225,7 +225,7 @@ def main():
                 rows.append(cached(os.path.join(args.out, "rows", f"validation_{name}_{k}.json"), entry,
                                    lambda: run(planner, entry, val, args.plans, 1, limits[name])))
                 r = rows[-1]
-                print(f"validation {name} | {r['label']}: {r['success_arm']:.1%} of plans, "
+                print(f"validation {name} | {r['label']}: {r['arm_clear']:.1%} of plans, "
                       f"{r['problems_solved']:.0%} of problems, {1e3 * r['seconds_per_plan']:.1f} ms/plan", flush=True)
             out["planners"][name] = rows
         return out
@@ -235,13 +235,13 @@ def main():
     fp_names = [n for n in planners if n.startswith("fp")]
     others = [n for n in planners if not n.startswith("fp")]
     fp_rows = [(n, r) for n in fp_names for r in validation["planners"][n]]
-    best_any = max(fp_rows, key=lambda nr: (nr[1]["success_arm"], -nr[1]["seconds_per_plan"]))
+    best_any = max(fp_rows, key=lambda nr: (nr[1]["arm_clear"], -nr[1]["seconds_per_plan"]))
     chosen = {"fp_best": {"planner": best_any[0], "label": best_any[1]["label"]}}
     for other in others:
         budget = validation["planners"][other][0]["seconds_per_plan"]
         within = [nr for nr in fp_rows if nr[1]["seconds_per_plan"] <= budget]
         if within:
-            pick = max(within, key=lambda nr: (nr[1]["success_arm"], -nr[1]["seconds_per_plan"]))
+            pick = max(within, key=lambda nr: (nr[1]["arm_clear"], -nr[1]["seconds_per_plan"]))
             chosen[f"fp_within_{other}_time"] = {"planner": pick[0], "label": pick[1]["label"]}
 
     def held_out():
@@ -261,7 +261,7 @@ def main():
                               lambda: run(planners[name], entry, test, args.plans, 2, limits[name])))
             row |= {"planner": name, "role": key}
             out["rows"].append(row)
-            print(f"test {key} ({name} | {label}): {row['success_arm']:.1%} of plans, {row['problems_solved']:.0%} "
+            print(f"test {key} ({name} | {label}): {row['arm_clear']:.1%} of plans, {row['problems_solved']:.0%} "
                   f"of problems, {1e3 * row['seconds_per_plan']:.1f} ms/plan", flush=True)
         return out
 
@@ -281,16 +281,16 @@ def write_report(out, validation, test_result):
     n = validation["problems"] * validation["plans_per_problem"]
     for name, rows in validation["planners"].items():
         for r in rows:
-            lo, hi = wilson(r["success_arm"], n)
-            lines.append(f"| {name} | {r['label']} | {r['success_arm']:.1%} | {lo:.1%}–{hi:.1%} | "
+            lo, hi = wilson(r["arm_clear"], n)
+            lines.append(f"| {name} | {r['label']} | {r['arm_clear']:.1%} | {lo:.1%}–{hi:.1%} | "
                          f"{r['problems_solved']:.0%} | {1e3 * r['seconds_per_plan']:.1f} |")
     n = test_result["problems"] * test_result["plans_per_problem"]
     lines += ["", f"Test (held out): {test_result['problems']} problems x {test_result['plans_per_problem']} plans.", "",
               "| role | planner | setting | success (whole arm) | 95 % interval | problems solved | time per plan (ms) |",
               "|---|---|---|---|---|---|---|"]
     for r in test_result["rows"]:
-        lo, hi = wilson(r["success_arm"], n)
-        lines.append(f"| {r['role']} | {r['planner']} | {r['label']} | {r['success_arm']:.1%} | {lo:.1%}–{hi:.1%} | "
+        lo, hi = wilson(r["arm_clear"], n)
+        lines.append(f"| {r['role']} | {r['planner']} | {r['label']} | {r['arm_clear']:.1%} | {lo:.1%}–{hi:.1%} | "
                      f"{r['problems_solved']:.0%} | {1e3 * r['seconds_per_plan']:.1f} |")
     with open(os.path.join(out, "selection.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
@@ -301,7 +301,7 @@ def write_report(out, validation, test_result):
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
     colours = {name: f"C{i}" for i, name in enumerate(validation["planners"])}
     for name, rows in validation["planners"].items():
-        points = sorted((1e3 * r["seconds_per_plan"], 100 * r["success_arm"]) for r in rows)
+        points = sorted((1e3 * r["seconds_per_plan"], 100 * r["arm_clear"]) for r in rows)
         axes[0].scatter([x for x, _ in points], [y for _, y in points], s=16, color=colours[name], alpha=0.5)
         # The planner's curve: its best success at each time per plan or less (one point per budget).
         front, best = [], -1.0
@@ -311,8 +311,8 @@ def write_report(out, validation, test_result):
                 best = y
         axes[0].step([x for x, _ in front], [y for _, y in front], where="post", color=colours[name], label=name)
     for r in test_result["rows"]:
-        axes[1].scatter([1e3 * r["seconds_per_plan"]], [100 * r["success_arm"]], color=colours[r["planner"]], s=24)
-        axes[1].annotate(f"{r['planner']}: {r['label']}", (1e3 * r["seconds_per_plan"], 100 * r["success_arm"]),
+        axes[1].scatter([1e3 * r["seconds_per_plan"]], [100 * r["arm_clear"]], color=colours[r["planner"]], s=24)
+        axes[1].annotate(f"{r['planner']}: {r['label']}", (1e3 * r["seconds_per_plan"], 100 * r["arm_clear"]),
                          fontsize=7, xytext=(4, -10), textcoords="offset points")
     axes[0].set_title("validation: every setting; line: best within a time", fontsize=10)
     axes[1].set_title("held-out test: chosen settings, defaults", fontsize=10)

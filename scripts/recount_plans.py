@@ -147,8 +147,8 @@ def recount(prefix):
                                   initial=0.0)) if same_inf else float("inf")
     reached = (goal <= report["goal_tolerance"]) & (ratio <= report["max_speed_ratio"])
     mine = {"tcp": int(np.sum(reached & (tcp_gap >= 0))), "arm": int(np.sum(reached & (arm_gap >= 0)))}
-    theirs = {"tcp": int(sum(s["success_tcp"] for s in report["samples"])),
-              "arm": int(sum(s["success_arm"] for s in report["samples"]))}
+    theirs = {"tcp": int(sum(s["tcp_clear"] for s in report["samples"])),
+              "arm": int(sum(s["arm_clear"] for s in report["samples"]))}
     return {"file": prefix, "plans": n, "recounted": mine, "flowplan": theirs, "largest_difference": worst,
             "agrees": mine == theirs and all(v <= TOLERANCE for v in worst.values())}
 

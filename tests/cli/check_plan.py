@@ -5,8 +5,10 @@ Recomputes every plan's TCP path (Franka: modified Denavit-Hartenberg parameters
 written here, sharing no code with flowplan; particle: the position), the TCP
 clearance to every obstacle (spheres, boxes, cylinders, capsules: signed
 distances written here from the shapes' definitions, by nearest points), the
-goal distance and the TCP success flags, and compares them with what flowplan
-wrote.
+goal distance, the TCP clear flags and the quality metrics (path lengths,
+largest speed ratio, mean squared jerk, duration), checks what a plan called a
+success must satisfy (speeds within check.max_speed_ratio, every state's
+whole-arm clearance, the ends), and compares them with what flowplan wrote.
 """
 import json
 import sys
@@ -72,21 +74,24 @@ def distance(kind, row, p):
     return box_distance(np.stack([radial, local[:, W - 1]], 1), np.array([row[W], 0.5 * row[W + 1]]))
 
 
-with h5py.File(sys.argv[1], "r") as f, open(sys.argv[2]) as report_file:
-    report = json.load(report_file)
-    plans, tcp = f["plans"][...].astype(np.float64), f["tcp"][...]
-    obstacles = [(kind, row) for kind in ("spheres", "boxes", "cylinders", "capsules") if kind in f["scene"]
-                 for row in f["scene"][kind][...]]
-    names = f.attrs["obstacle_names"].split(",") if obstacles else []
-    assert names == report["obstacles"] == [f"{k}[{i}]" for k in ("spheres", "boxes", "cylinders", "capsules")
-                                            for i in range(len(f["scene"][k]) if k in f["scene"] else 0)], names
-    goal_tcp, env = f["goal_tcp"][...], f.attrs["env"]
+def check(f, group, report, samples):
+    """Checks the plans of one request: the HDF5 group `group` and its `samples` of the report."""
+    g = f[group]
+    plans, tcp = g["plans"][...].astype(np.float64), g["tcp"][...]
+    obstacles = [(kind, row) for kind in ("spheres", "boxes", "cylinders", "capsules") if kind in g["scene"]
+                 for row in g["scene"][kind][...]]
+    names = g.attrs["obstacle_names"].split(",") if obstacles else []
+    assert names == [f"{k}[{i}]" for k in ("spheres", "boxes", "cylinders", "capsules")
+                     for i in range(len(g["scene"][k]) if k in g["scene"] else 0)], names
+    goal_tcp, env = g["goal_tcp"][...], f.attrs["env"]
     mine = franka_tcp(plans[..., :7]) if env == "franka" else plans[..., :2]
     assert np.abs(mine - tcp).max() < 1e-4, np.abs(mine - tcp).max()
-    samples = report["samples"]
     assert len(samples) == len(plans) == report["num_samples"]
     tolerance, max_ratio, dt = report["goal_tolerance"], report["max_speed_ratio"], f.attrs["dt"]
     limits = np.array([2.175] * 4 + [2.61] * 3) if env == "franka" else None
+    J = 7 if env == "franka" else 2
+    check = {k: float(v) for k, v in (line.split(": ") for line in report["check"].strip().splitlines())}
+    start, goal_state = g["start"][...], g["goal"][...]
     for i, sample in enumerate(samples):
         goal = np.linalg.norm(mine[i, -1] - goal_tcp)
         assert abs(goal - sample["goal_distance"]) < 1e-4, (goal, sample["goal_distance"])
@@ -99,12 +104,49 @@ with h5py.File(sys.argv[1], "r") as f, open(sys.argv[2]) as report_file:
             ratio = np.max(np.abs(np.diff(plans[i, :, :7], axis=0)) / dt / limits)
         assert abs(ratio - sample["speed_ratio"]) < 1e-4 * max(1, ratio), (ratio, sample["speed_ratio"])
         assert sample["feasible"] == (ratio <= max_ratio)
-        assert sample["success_tcp"] == (not collides and goal <= tolerance and ratio <= max_ratio)
+        assert sample["tcp_clear"] == (not collides and goal <= tolerance and ratio <= max_ratio)
         # The whole robot reaches at least as far as its TCP.
         assert all(a <= t + 1e-6 for a, t in zip(sample["arm_clearance"], sample["tcp_clearance"]))
         if "executed" in sample:
-            executed = f["executed/tcp"][i]
+            executed = g["executed/tcp"][i]
             assert abs(np.linalg.norm(executed[-1] - goal_tcp) - sample["executed"]["goal_distance"]) < 1e-3
-    rate = np.mean([s["success_tcp"] for s in samples])
-    assert abs(rate - report["success_rate_tcp"]) < 1e-6
+            assert not sample["executed"]["success"] or sample["success"], sample  # executed successes passed the check
+        q = plans[i, :, :J]
+        quality = sample["quality"]
+        assert abs(np.linalg.norm(np.diff(q, axis=0), axis=1).sum() - quality["joint_path_length"]) < 1e-4
+        assert abs(np.linalg.norm(np.diff(mine[i], axis=0), axis=1).sum() - quality["tcp_path_length"]) < 1e-4
+        assert abs(ratio - quality["max_speed_ratio"]) < 1e-4 * max(1, ratio)
+        jerk = np.mean((np.diff(q, n=3, axis=0) / dt ** 3) ** 2)
+        assert abs(jerk - quality["mean_squared_jerk"]) < 1e-4 * max(1.0, jerk), (jerk, quality)
+        away = np.nonzero(np.abs(q - q[-1]).max(1) > check["joint_tolerance"])[0]
+        assert abs((away[-1] + 1 if len(away) else 0) * dt - quality["duration_s"]) < 1e-6, quality  # 7 digits
+        if sample["success"]:
+            assert sample["found"] and sample["failure"] == "none" and sample["reason"] == ""
+            assert ratio <= check["max_speed_ratio"] + 1e-6, (ratio, check)
+            assert all(a >= check["margin"] - 1e-6 for a in sample["arm_clearance"]), sample["arm_clearance"]
+            assert np.abs(q[0] - start[:J]).max() <= check["joint_tolerance"] + 1e-6
+            assert np.abs(q[-1] - goal_state[:J]).max() <= check["joint_tolerance"] + 1e-6
+        else:
+            assert sample["failure"] != "none" and sample["reason"], sample
+
+
+with h5py.File(sys.argv[1], "r") as f, open(sys.argv[2]) as report_file:
+    report = json.load(report_file)
+    if "problems" in report:  # flowplan plan --problems
+        planned = [p for p in report["problems"] if p["status"] == "planned"]
+        assert report["planned"] == len(planned) and report["refused"] == report["num_problems"] - len(planned)
+        for p in report["problems"]:
+            assert p["status"] in ("planned", "refused"), p
+            assert (p["status"] == "refused") == bool(p["reason"]), p
+        for p in planned:
+            check(f, "problems/" + p["name"], report, p["samples"])
+            assert abs(np.mean([s["success"] for s in p["samples"]]) - p["success_rate"]) < 1e-6
+        successes = sum(s["success"] for p in planned for s in p["samples"])
+        assert abs(successes / (report["num_problems"] * report["num_samples"]) - report["success_rate"]) < 1e-6
+    else:
+        assert f.attrs["obstacle_names"] == ",".join(report["obstacles"])
+        check(f, "/", report, report["samples"])
+        rate = np.mean([s["tcp_clear"] for s in report["samples"]])
+        assert abs(rate - report["tcp_clear_rate"]) < 1e-6
+        assert abs(np.mean([s["success"] for s in report["samples"]]) - report["success_rate"]) < 1e-6
 print("plan files ok")

@@ -67,10 +67,10 @@ for c in summary["sweep"]:
     report = json.load(open(os.path.join(root, "sweep", f"{c['planner']}_r{c['radius']:g}.json")))
     plans = report["samples"]
     clear = [not p["tcp_collision"] and p["goal_distance"] <= report["goal_tolerance"] for p in plans]
-    assert c["success_rate_tcp_any_speed"] == sum(clear) / len(plans), c
-    assert c["success_rate_tcp_any_speed"] >= c["success_rate_tcp"], c
+    assert c["tcp_clear_rate_any_speed"] == sum(clear) / len(plans), c
+    assert c["tcp_clear_rate_any_speed"] >= c["tcp_clear_rate"], c
     if all(p["feasible"] for p in plans):
-        assert c["success_rate_tcp_any_speed"] == c["success_rate_tcp"], c
+        assert c["tcp_clear_rate_any_speed"] == c["tcp_clear_rate"], c
 assert all(f"{p}/TCP, any speed" in summary["largest_radius_90"] for p in planners), summary["largest_radius_90"]
 # The tables' aggregates, recomputed here: a seeded row is the mean of its seeds' report means ± their sample
 # standard deviation; the largest radius is the last of the radii from 0 up that all reach 90 %.
@@ -81,8 +81,8 @@ for label, value in list(summary["table1"].items()) + list(summary["table2"].ite
     assert abs(value["mean_of_seeds"] - statistics.mean(means)) < 1e-9, (label, value, means)
     assert abs(value["std_of_seed_means"] - statistics.stdev(means)) < 1e-9, (label, value, means)
 for p in planners:
-    for key, way in [("success_rate_tcp", "TCP"), ("success_rate_arm", "whole arm"),
-                     ("success_rate_executed", "executed"), ("success_rate_tcp_any_speed", "TCP, any speed")]:
+    for key, way in [("tcp_clear_rate", "TCP"), ("arm_clear_rate", "whole arm"),
+                     ("success_rate_executed", "executed"), ("tcp_clear_rate_any_speed", "TCP, any speed")]:
         rates = {c["radius"]: (0.0 if c["refused"] else c[key]) for c in summary["sweep"] if c["planner"] == p}
         reached = [r for r in sorted(rates) if all(rates[q] >= 0.9 for q in sorted(rates) if q <= r)]
         assert summary["largest_radius_90"][f"{p}/{way}"] == (reached[-1] if reached else None), (p, way, rates)
@@ -90,7 +90,7 @@ assert sorted(summary["problems"]["planners"]) == sorted(planners), summary["pro
 assert summary["recount"]["differ"] == 0 and summary["recount"]["plans"] > 0, summary["recount"]
 # RRT-Connect checks the whole arm itself: at 0.1 m every plan it returns is clear.
 rrt = next(c for c in summary["sweep"] if c["planner"] == "rrt_connect" and c["radius"] == 0.1)
-assert rrt["success_rate_arm"] == 1.0, rrt
+assert rrt["arm_clear_rate"] == 1.0, rrt
 # The training table carries each cross row's test- and training-pair stitching error from its own report.
 cross = [row for row in summary["train"] if row.startswith("cross_")]
 assert len(cross) == 19 and sorted(summary["stitching"]) == sorted(cross), summary["stitching"]
@@ -120,7 +120,7 @@ for row, points in summary["curve"].items():
     losses = [json.loads(line) for line in open(os.path.join(root, "train", row, "metrics.jsonl"))]
     assert points["20"]["val_loss"] == next(r["val_loss"] for r in losses if r.get("step") == 20 and "val_loss" in r)
     plans = json.load(open(os.path.join(root, "curve", f"{row}_k10_r0.1.json")))
-    assert points["10"]["r0.1"]["arm"] == sum(p["success_arm"] for p in plans["samples"]) / len(plans["samples"])
+    assert points["10"]["r0.1"]["arm"] == sum(p["arm_clear"] for p in plans["samples"]) / len(plans["samples"])
 # The select stage: FP and FP + split exported with the paper's sampler (the grids' base row), as the driver's sweep
 # rows plan; every planner's grid on the validation problems; FP's best setting chosen from validation alone, then
 # reported on the test problems beside every other planner's default.
@@ -133,7 +133,7 @@ assert "sampler.final_iterations=0" in open(os.path.join(root, "sweep", "fp_r0.1
 validation = json.load(open(os.path.join(root, "select", "validation.json")))
 assert sorted(validation["planners"]) == ["fp", "fp_split", "mpd", "paper_mpd"], sorted(validation["planners"])
 fp_rows = [(n, r) for n in ("fp", "fp_split") for r in validation["planners"][n]]
-best = max(fp_rows, key=lambda nr: (nr[1]["success_arm"], -nr[1]["seconds_per_plan"]))
+best = max(fp_rows, key=lambda nr: (nr[1]["arm_clear"], -nr[1]["seconds_per_plan"]))
 assert summary["select"]["chosen"]["fp_best"] == {"planner": best[0], "label": best[1]["label"]}, summary["select"]
 roles = {r["role"] for r in summary["select"]["test"]}
 assert {"mpd_default", "paper_mpd_default"} <= roles, roles
@@ -254,7 +254,7 @@ cell = os.path.join(root, "sweep", "fp_r0")
 tampered = os.path.join(scratch, "tampered")
 shutil.copy(cell + ".h5", tampered + ".h5")
 report = json.load(open(cell + ".json"))
-report["samples"][0]["success_tcp"] = not report["samples"][0]["success_tcp"]
+report["samples"][0]["tcp_clear"] = not report["samples"][0]["tcp_clear"]
 json.dump(report, open(tampered + ".json", "w"))
 
 

@@ -221,7 +221,7 @@ TEST(FrankaPlanTest, RandomBlockedProblemsAreSolvedByRrtConnectThroughTheProblem
                       " --flowplan " + FLOWPLAN_BINARY + " --set data.path=" + data));
   const Outcome summary = RunCommand(std::string(FLOWPLAN_PYTHON) + " -c \"import json; s = json.load(open('" + out +
                                      "/summary.json')); r = s['planners']['rrt_connect']; "
-                                     "print(s['problems'], r['success_rate_arm'], r['problems_solved_arm'])\"");
+                                     "print(s['problems'], r['arm_clear_rate'], r['problems_solved_arm'])\"");
   ExpectOk(summary);
   // The classical planner checks the whole arm against the spheres itself: every plan is clear.
   EXPECT_EQ(summary.output, "2 1.0 1.0\n");
@@ -253,11 +253,11 @@ TEST(FrankaPlanTest, PlansFromTcpPointsExecutesInMujocoAndRejectsUnreachableTarg
   // 0.10 m sphere.
   const Outcome rrt = Flowplan("plan --rrt-connect" + config + " data.path=" + path("none.h5") + " --start-tcp 0.5,-0.3,0.2 --goal-tcp 0.5,0.3,0.2 --scene " +
                                Source("configs/scenes/franka_sphere.yaml") + " --radius 0.1 -n 2 --execute --out " +
-                               path("rrt") + " --max-speed-ratio 3");  // 16 states: a fast move around the sphere
+                               path("rrt") + " --max-speed-ratio 3 check.max_speed_ratio=3");  // 16 states: a fast move around the sphere
   ExpectOk(rrt);
   const std::string rrt_report = ReadText(path("rrt.json"));
   EXPECT_THAT(rrt_report, HasSubstr("\"planner\": \"rrt_connect\""));
-  EXPECT_THAT(rrt_report, HasSubstr("\"success_rate_tcp\": 1, \"success_rate_arm\": 1, \"success_rate_executed\": 1"));
+  EXPECT_THAT(rrt_report, HasSubstr("\"success_rate\": 1, \"success_rate_executed\": 1, \"tcp_clear_rate\": 1, \"arm_clear_rate\": 1"));
   const Outcome check_rrt = RunCommand(CheckPlan(path("rrt")));
   EXPECT_EQ(check_rrt.exit_code, 0) << check_rrt.output;
   ExpectCleanFailure(Flowplan(plan.substr(0, plan.find("--goal-tcp")) + "--goal-tcp 2,0,0.5"),
@@ -282,7 +282,7 @@ TEST(FrankaPlanTest, BoxesAndCylindersBetweenJointGoalsForTheLearnedPlannerAndRr
   ExpectOk(Flowplan("train" + config));
   const std::string shapes = " --start -0.55,0.35,0,-2.2,0,2.55,0.23 --goal 0.55,0.35,0,-2.2,0,2.55,1.33"
                              " --box 0.5,0,0.15,0.5,0.04,0.3,0.9990482,0,0,0.0436194 --cylinder 0.25,0.1,0.2,0.04,0.4 "
-                             "--max-speed-ratio 3 -n 2 --no-plot scene.spheres=[]";  // not the preset's sphere
+                             "--max-speed-ratio 3 check.max_speed_ratio=3 -n 2 --no-plot scene.spheres=[]";  // not the preset's sphere
   ExpectOk(Flowplan("plan --ckpt " + path("run") + shapes + " --out " + path("learned")));
   const Outcome check = RunCommand(CheckPlan(path("learned")));
   EXPECT_EQ(check.exit_code, 0) << check.output;
@@ -290,9 +290,70 @@ TEST(FrankaPlanTest, BoxesAndCylindersBetweenJointGoalsForTheLearnedPlannerAndRr
   ExpectOk(rrt);
   const std::string report = ReadText(path("rrt.json"));
   EXPECT_THAT(report, HasSubstr("\"obstacles\": [\"boxes[0]\", \"cylinders[0]\"]"));
-  EXPECT_THAT(report, HasSubstr("\"success_rate_arm\": 1, \"success_rate_executed\": 1"));
+  EXPECT_THAT(report, HasSubstr("\"success_rate\": 1, \"success_rate_executed\": 1"));
+  EXPECT_THAT(report, HasSubstr("\"arm_clear_rate\": 1"));
   const Outcome check_rrt = RunCommand(CheckPlan(path("rrt")));
   EXPECT_EQ(check_rrt.exit_code, 0) << check_rrt.output;
+}
+
+TEST(FrankaPlanTest, AProblemFileIsPlannedByOneProcessWithRefusalsAsAStatusAndTheHybridNamesEachPlansRoute) {
+  const fs::path dir = flowplan::testing::ScratchDir();
+  auto path = [&](const std::string& name) { return (dir / name).string(); };
+  const std::string config = " --config " + Source("configs/franka_reach.yaml") + " generate.out=" + path("data.h5") +
+                             " data.path=" + path("data.h5") + " run_dir=" + path("run") +
+                             " generate.episodes=16 generate.franka.horizon=16 model.unet.down_dims=[8,16]"
+                             " train.steps=2 train.batch_size=4 train.eval_every=0 sampler.steps=2 --log-level warn";
+  ExpectOk(Flowplan("generate" + config));
+  ExpectOk(Flowplan("train" + config));
+  // Free space; a board between the ends; a start inside a sphere (refused, not an error).
+  std::ofstream(path("problems.yaml"))
+      << "source: test\nproblems:\n"
+         "  - {name: free, start_q: [0, -0.785, 0, -2.356, 0, 1.571, 0.785], goal_q: [0.4, -0.5, 0, -2.0, 0, 1.6, 0.785],"
+         " scene: {}}\n"
+         "  - {name: board, start_q: [-0.55, 0.35, 0, -2.2, 0, 2.55, 0.23], goal_q: [0.55, 0.35, 0, -2.2, 0, 2.55, 1.33],"
+         " scene: {boxes: [{centre: [0.5, 0, 0.15], size: [0.5, 0.04, 0.3]}]}}\n"
+         "  - {name: inside, start_q: [0, -0.785, 0, -2.356, 0, 1.571, 0.785], goal_q: [0.4, -0.5, 0, -2.0, 0, 1.6, 0.785],"
+         " scene: {spheres: [{centre: [0.307, 0, 0.487], radius: 0.05}]}}\n";
+  const std::string fast = " check.max_speed_ratio=3 --max-speed-ratio 3 -n 2";  // 16 states
+  ExpectOk(Flowplan("plan --rrt-connect" + config + " data.path=" + path("none.h5") + " --problems " +
+                    path("problems.yaml") + " --execute --out " + path("rrt") + fast));
+  const std::string rrt = ReadText(path("rrt.json"));
+  EXPECT_THAT(rrt, HasSubstr("\"num_problems\": 3, \"planned\": 2, \"refused\": 1, \"num_samples\": 2"));
+  EXPECT_THAT(rrt, HasSubstr("{\"name\": \"inside\", \"status\": \"refused\", \"reason\": \"the start cannot be part "
+                             "of a valid plan: "));
+  EXPECT_THAT(rrt, HasSubstr("\"success_rate\": 0.6666667, \"problems_solved\": 0.6666667, \"success_rate_executed\": "
+                             "0.6666667"));
+  Outcome check = RunCommand(CheckPlan(path("rrt")));
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+
+  // The hybrid: a two-step network's proposals are not valid plans, so RRT-Connect makes them, and says so.
+  ExpectOk(Flowplan("plan --ckpt " + path("run") + " --hybrid hybrid.proposals=3 --problems " + path("problems.yaml") +
+                    " --limit 2 --out " + path("hybrid") + fast));
+  const std::string hybrid = ReadText(path("hybrid.json"));
+  EXPECT_THAT(hybrid, HasSubstr("\"planner\": \"hybrid("));
+  EXPECT_THAT(hybrid, HasSubstr("\"num_problems\": 2, \"planned\": 2, \"refused\": 0"));
+  EXPECT_THAT(hybrid, HasSubstr("\"success_rate\": 1, \"problems_solved\": 1"));
+  EXPECT_THAT(hybrid, HasSubstr("\"route\": \"rrt_connect\""));
+  EXPECT_THAT(hybrid, HasSubstr("\"per\": \"plan, the wall time of the call that made it\""));
+  check = RunCommand(CheckPlan(path("hybrid")));
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  // The learned planner alone: its plans are checked and fail, with reasons.
+  ExpectOk(Flowplan("plan --ckpt " + path("run") + " --problems " + path("problems.yaml") + " --out " + path("fp") + fast));
+  EXPECT_THAT(ReadText(path("fp.json")), HasSubstr("\"success\": false, \"failure\": \""));
+  check = RunCommand(CheckPlan(path("fp")));
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+
+  ExpectCleanFailure(Flowplan("plan --ckpt " + path("run") + " --problems " + path("problems.yaml") +
+                              " --start 0,0,0,-2,0,2,0"),
+                     "--problems: every problem gives its own start, goal and scene");
+  ExpectCleanFailure(Flowplan("plan --rrt-connect --hybrid" + config + " --problems " + path("problems.yaml")),
+                     "--hybrid: a learned planner (--ckpt or --planner) proposes");
+  std::ofstream(path("short.yaml")) << "problems:\n  - {name: short, start_q: [0, 0], goal_q: [0, 0], scene: {}}\n";
+  ExpectCleanFailure(Flowplan("plan --ckpt " + path("run") + " --problems " + path("short.yaml") + " --out " +
+                              path("short") + config.substr(config.find(" --log-level"))),
+                     "problems[0] (short): start_q: expected 7 joint positions for this planner's robot, got 2");
+  EXPECT_FALSE(fs::exists(path("short.json")));
+  EXPECT_FALSE(fs::exists(path("short.h5")));
 }
 
 TEST(SceneImportTest, AMoveItFolderImportsAndRrtConnectPlansItsSceneInMujoco) {
@@ -339,11 +400,12 @@ TEST(SceneImportTest, AMoveItFolderImportsAndRrtConnectPlansItsSceneInMujoco) {
                              " --log-level warn";
   const Outcome rrt = Flowplan("plan --rrt-connect" + config + " --start 0,-0.3,0,-2.2,0,2,0.8 --goal 0.75,-0.3,0,-2.2,0,2,0.8"
                                " --scene " + path("scenes/scene0001.yaml") + " -n 2 --execute --no-plot --max-speed-ratio 3"
-                               " scene.spheres=[] --out " + path("rrt"));
+                               " check.max_speed_ratio=3 scene.spheres=[] --out " + path("rrt"));
   ExpectOk(rrt);
   const std::string report = ReadText(path("rrt.json"));
   EXPECT_THAT(report, HasSubstr("\"obstacles\": [\"boxes[0]\", \"boxes[1]\", \"cylinders[0]\"]"));
-  EXPECT_THAT(report, HasSubstr("\"success_rate_arm\": 1, \"success_rate_executed\": 1"));
+  EXPECT_THAT(report, HasSubstr("\"success_rate\": 1, \"success_rate_executed\": 1"));
+  EXPECT_THAT(report, HasSubstr("\"arm_clear_rate\": 1"));
 
   // A malformed file in the folder: one error naming it and the entry, nothing written.
   std::string bad = scene;

@@ -1,0 +1,81 @@
+#include "hybrid/hybrid_planner.h"
+
+#include <chrono>
+#include <limits>
+
+#include "core/error.h"
+#include "core/random.h"
+#include "validity/plan_quality.h"
+
+namespace flowplan::hybrid {
+
+HybridPlanner::HybridPlanner(std::unique_ptr<planning::LearnedPlanner> proposer,
+                             std::unique_ptr<classical::RrtConnectPlanner> fallback, validity::PlanChecker checker,
+                             HybridConfig config)
+    : proposer_(std::move(proposer)), fallback_(std::move(fallback)), checker_(std::move(checker)), config_(config) {
+  if (proposer_->horizon() != fallback_->horizon() || proposer_->state_dim() != fallback_->state_dim()) {
+    throw Error("hybrid: the learned planner plans (" + std::to_string(proposer_->horizon()) + ", " +
+                std::to_string(proposer_->state_dim()) + ") trajectories and RRT-Connect (" +
+                std::to_string(fallback_->horizon()) + ", " + std::to_string(fallback_->state_dim()) + ")");
+  }
+  if (config_.proposals < 1) throw Error("hybrid.proposals: expected at least one proposal");
+}
+
+planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) const {
+  planning::CheckEnds(request.start, request.goal, state_dim(), "plan");
+  const int64_t B = request.start.size(0), N = config_.proposals, D = state_dim();
+  planning::PlanResult result;
+  result.plans = torch::empty({B, horizon(), D}, torch::kFloat32);
+  result.found = torch::zeros({B}, torch::kBool);
+  result.call_seconds.assign(static_cast<size_t>(B), 0.0);
+  result.call_plans.assign(static_cast<size_t>(B), 1);
+  result.route.assign(static_cast<size_t>(B), "none");
+  for (int64_t b = 0; b < B; ++b) {
+    const auto began = std::chrono::steady_clock::now();
+    planning::PlanRequest one = request;
+    one.start = request.start.slice(0, b, b + 1);
+    one.goal = request.goal.slice(0, b, b + 1);
+    one.seed = StreamSeed(request.seed, static_cast<uint64_t>(b));
+    planning::PlanRequest proposals = one;
+    proposals.start = one.start.expand({N, D}).contiguous();
+    proposals.goal = one.goal.expand({N, D}).contiguous();
+    const planning::PlanResult proposed = proposer_->Plan(proposals);
+    const std::vector<validity::PlanVerdict> verdicts =
+        checker_.Check(proposed.plans, one.start[0], one.goal[0], request.scene, proposed.found);
+    int64_t best = -1;
+    bool any_valid = false;
+    for (const auto& v : verdicts) any_valid = any_valid || v.valid();
+    if (any_valid) {
+      const torch::Tensor cost = proposer_->GuidanceCost(proposed.plans, request.scene, request.settings);
+      const std::vector<validity::PlanQuality> quality =
+          validity::MeasurePlans(proposed.plans, checker_.robot(), proposer_->info().dt, checker_.config().joint_tolerance);
+      double best_cost = std::numeric_limits<double>::infinity(), best_length = best_cost;
+      for (int64_t n = 0; n < N; ++n) {
+        if (!verdicts[static_cast<size_t>(n)].valid()) continue;
+        const double c = cost[n].item<double>(), length = quality[static_cast<size_t>(n)].joint_path_length;
+        if (best < 0 || c < best_cost || (c == best_cost && length < best_length)) {
+          best = n;
+          best_cost = c;
+          best_length = length;
+        }
+      }
+      result.plans[b] = proposed.plans[best];
+      result.found[b] = true;
+      result.route[static_cast<size_t>(b)] = "proposal " + std::to_string(best + 1) + " of " + std::to_string(N);
+    } else {
+      planning::PlanRequest classical = one;
+      classical.settings = {};  // RRT-Connect takes its settings from its config
+      const planning::PlanResult fallback = fallback_->Plan(classical);
+      result.plans[b] = fallback.plans[0];
+      const validity::PlanVerdict verdict =
+          checker_.Check(fallback.plans, one.start[0], one.goal[0], request.scene, fallback.found)[0];
+      result.found[b] = verdict.valid();
+      result.route[static_cast<size_t>(b)] = verdict.valid() ? "rrt_connect" : "none";
+    }
+    result.call_seconds[static_cast<size_t>(b)] =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  }
+  return result;
+}
+
+}  // namespace flowplan::hybrid

@@ -1,0 +1,56 @@
+#pragma once
+
+// The hybrid planner: valid or nothing. A learned planner proposes N plans for
+// a request in one call; the plan checker (validity/plan_check.h) keeps the
+// valid ones and the best of them by guidance cost, then by joint-space path
+// length, is returned; when none is valid, RRT-Connect plans the request, and
+// its plan is checked too. Every plan says which way it was made
+// (PlanResult::route): "proposal k of N", "rrt_connect", or "none" when neither
+// gave a valid plan (found = false; the plan returned is then RRT-Connect's,
+// or the straight line it falls back to).
+
+#include <memory>
+
+#include "classical/rrt_connect.h"
+#include "core/config.h"
+#include "planning/learned_planner.h"
+#include "planning/planner.h"
+#include "validity/plan_check.h"
+
+namespace flowplan::hybrid {
+
+/// The `hybrid` section of an experiment config.
+struct HybridConfig {
+  int64_t proposals = 8;  // N: plans the learned planner proposes per request, in one call
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("proposals", proposals, "plans the learned planner proposes per request, in one call",
+            config::Positive());
+  }
+};
+
+class HybridPlanner : public planning::Planner {
+ public:
+  /// @throws flowplan::Error if the proposer's and RRT-Connect's trajectories differ.
+  HybridPlanner(std::unique_ptr<planning::LearnedPlanner> proposer,
+                std::unique_ptr<classical::RrtConnectPlanner> fallback, validity::PlanChecker checker,
+                HybridConfig config);
+
+  /// Each of the B requests on its own: N proposals (one call, seeded from
+  /// StreamSeed(request.seed, b)), checked; RRT-Connect (the same seed) when
+  /// none is valid. call_seconds[b] is the wall time of request b, all of it
+  /// (proposals, checks, fallback), and call_plans[b] = 1.
+  planning::PlanResult Plan(const planning::PlanRequest& request) const override;
+
+  int64_t horizon() const override { return proposer_->horizon(); }
+  int64_t state_dim() const override { return proposer_->state_dim(); }
+
+ private:
+  std::unique_ptr<planning::LearnedPlanner> proposer_;
+  std::unique_ptr<classical::RrtConnectPlanner> fallback_;
+  validity::PlanChecker checker_;
+  HybridConfig config_;
+};
+
+}  // namespace flowplan::hybrid
