@@ -17,6 +17,7 @@
 #include "objectives/objective.h"
 #include "planning/sampler_config.h"
 #include "problems/blocked_problems.h"
+#include "render/franka_renderer.h"
 #include "sim/franka_execution.h"
 #include "trainer/trainer_config.h"
 #include "validity/plan_check.h"
@@ -42,6 +43,7 @@ struct ExperimentConfig {
   classical::RrtConnectConfig rrt_connect;
   validity::CheckConfig check;
   hybrid::HybridConfig hybrid;
+  render::RenderConfig render;
   distributed::DistributedConfig distributed;
   problems::BlockedProblemsConfig problems;
 
@@ -69,6 +71,7 @@ struct ExperimentConfig {
     v.Field("check", check,
             "what a valid plan is: every plan a report calls a success passed this check (validity/plan_check.h)");
     v.Field("hybrid", hybrid, "the hybrid planner (`flowplan plan --hybrid`): learned proposals, RRT-Connect fallback");
+    v.Field("render", render, "pictures of plans (`flowplan render`): size and camera");
     v.Field("problems", problems, "random planning problems with blocked straight paths (`flowplan problems`)");
     v.Field("distributed", distributed,
             "data-parallel training when launched as several processes (torchrun or Slurm environment)");

@@ -222,6 +222,40 @@ void CheckRows(const SceneRows& rows, int W, const std::string& where) {
   }
 }
 
+Scene SceneOf(const SceneRows& rows, int W, const std::string& where) {
+  CheckRows(rows, W, where);
+  Scene scene;
+  auto row = [](const torch::Tensor& rows, int64_t k) {
+    const torch::Tensor r = rows[k].to(torch::kFloat64).contiguous();
+    return std::vector<double>(r.data_ptr<double>(), r.data_ptr<double>() + r.numel());
+  };
+  auto part = [](const std::vector<double>& v, size_t from, size_t count) {
+    return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(from),
+                               v.begin() + static_cast<std::ptrdiff_t>(from + count));
+  };
+  const size_t w = static_cast<size_t>(W);
+  for (const auto& entry : rows) {
+    const torch::Tensor& table = entry.value();
+    for (int64_t k = 0; k < table.size(0); ++k) {
+      const std::vector<double> v = row(table, k);
+      if (entry.key() == "spheres") {
+        scene.spheres.push_back({part(v, 0, w), v[w]});
+      } else if (entry.key() == "boxes") {
+        BoxObstacle b{part(v, 0, w), part(v, w, w), {}, NAN};
+        if (W == 3) b.quaternion = part(v, 2 * w, 4); else b.angle = v[2 * w];
+        scene.boxes.push_back(b);
+      } else if (entry.key() == "cylinders") {
+        CylinderObstacle c{part(v, 0, w), v[w], v[w + 1], {}, NAN};
+        if (W == 3) c.quaternion = part(v, w + 2, 4); else c.angle = v[w + 2];
+        scene.cylinders.push_back(c);
+      } else {
+        scene.capsules.push_back({part(v, 0, w), part(v, w, w), v[2 * w]});
+      }
+    }
+  }
+  return scene;
+}
+
 SceneRows SphereRows(const torch::Tensor& spheres) {
   SceneRows rows;
   if (spheres.defined() && spheres.size(0) > 0) rows.insert("spheres", spheres);

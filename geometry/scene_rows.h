@@ -28,6 +28,11 @@ int64_t CountObstacles(const SceneRows& rows);
 /// quaternions. @throws flowplan::Error "<where>: boxes: row 0: expected ...".
 void CheckRows(const SceneRows& rows, int workspace_dim, const std::string& where);
 
+/// The scene of checked rows (the inverse of Rows, e.g. for a plan file's
+/// scene): 3-D boxes and cylinders keep their quaternions, 2-D ones their angles.
+/// @throws flowplan::Error as CheckRows.
+Scene SceneOf(const SceneRows& rows, int workspace_dim, const std::string& where);
+
 /// The rows of a sphere tensor (K, W + 1) (the older form of a scene).
 SceneRows SphereRows(const torch::Tensor& spheres);
 

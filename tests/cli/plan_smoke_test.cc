@@ -325,6 +325,15 @@ TEST(FrankaPlanTest, AProblemFileIsPlannedByOneProcessWithRefusalsAsAStatusAndTh
                              "0.6666667"));
   Outcome check = RunCommand(CheckPlan(path("rrt")));
   EXPECT_EQ(check.exit_code, 0) << check.output;
+  // One of those plans executed and drawn: a video Pillow opens, frame by frame, and a picture.
+  ExpectOk(Flowplan("render " + path("rrt.h5") + " --problem board --index 1 --out " + path("board") +
+                    " render.width=160 render.height=120 --log-level warn"));
+  const Outcome frames = RunCommand(std::string(FLOWPLAN_PYTHON) + " -c \"from PIL import Image; g = Image.open('" +
+                                    path("board.gif") + "'); p = Image.open('" + path("board.png") +
+                                    "'); print(g.n_frames, g.size, p.size)\"");
+  EXPECT_EQ(frames.output, "31 (160, 120) (160, 120)\n");  // 16 states and 1 s held at 15 Hz
+  ExpectCleanFailure(Flowplan("render " + path("rrt.h5") + " --log-level warn"),
+                     "no plans; this is a --problems file: give --problem NAME, one of board, free");
 
   // The hybrid: a two-step network's proposals are not valid plans, so RRT-Connect makes them, and says so.
   ExpectOk(Flowplan("plan --ckpt " + path("run") + " --hybrid hybrid.proposals=3 --problems " + path("problems.yaml") +

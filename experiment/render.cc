@@ -1,0 +1,130 @@
+// `flowplan render`: one plan of a plan file (`flowplan plan`, or one problem
+// of `flowplan plan --problems`) executed in MuJoCo among its scene's shapes
+// and drawn by MuJoCo's renderer, offscreen: PREFIX.gif, the execution frame by
+// frame at the plan's rate with the TCP's trail, and PREFIX.png, the arm at
+// eight states of the plan at once with the planned TCP path.
+
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+#include <memory>
+
+#include "core/error.h"
+#include "core/format.h"
+#include "datasets/h5.h"
+#include "experiment/command_line.h"
+#include "experiment/commands.h"
+#include "experiment/experiment_config.h"
+#include "kinematics/robot.h"
+#include "render/franka_renderer.h"
+#include "render/image_files.h"
+#include "sim/franka_execution.h"
+
+namespace flowplan::experiment {
+namespace {
+
+struct RenderArgs {
+  std::string plans;                   // the plan file (HDF5)
+  std::string problem;                 // --problem: a problem of a --problems file
+  int64_t index = 0;                   // --index: which plan
+  std::string out;                     // --out: PREFIX.gif and PREFIX.png
+  std::string config_path;             // --config: render.* and execute.*
+  std::vector<std::string> overrides;  // key=value
+};
+
+void RunRender(const RenderArgs& args) {
+  const ExperimentConfig config = LoadExperiment(args.config_path, args.overrides);
+  config.execute.Validate();
+  const auto file = datasets::h5::File::OpenReadOnly(args.plans);
+  const std::string group = args.problem.empty() ? "/" : "/problems/" + args.problem + "/";
+  if (!file.Exists(group + "plans")) {
+    std::string hint;
+    if (file.Exists("/problems")) hint = "; this is a --problems file: give --problem NAME, one of " + Join(file.ListGroup("/problems"));
+    throw Error(args.plans + ": no plans" + (args.problem.empty() ? "" : " of problem \"" + args.problem + "\"") + hint);
+  }
+  const std::string where = args.plans + ":" + group;
+  if (file.GetStringAttribute("/", "env") != "franka") throw Error(args.plans + ": env: render draws the Franka's plans");
+  const sim::FrankaModel franka = sim::LoadFrankaModel();
+  const kinematics::RobotDescription robot =
+      kinematics::RobotFromYaml(file.GetStringAttribute("/", "robot"), args.plans + ": robot");
+  auto geometry = [](kinematics::RobotDescription d) {
+    d.velocity_limit.clear();
+    return kinematics::RobotToYaml(d);
+  };
+  if (geometry(robot) != geometry(franka.description())) {
+    throw Error(args.plans + ": robot: render needs the built-in Franka's kinematics and geometry");
+  }
+  std::vector<int64_t> shape;
+  const std::vector<float> plans = file.ReadFloat32(group + "plans", &shape);
+  const int64_t N = shape[0], T = shape[1], D = shape[2];
+  if (args.index < 0 || args.index >= N) {
+    throw Error("--index: expected a plan index in [0, " + std::to_string(N) + "), got " + std::to_string(args.index));
+  }
+  if (D != 2 * sim::kFrankaJoints) throw Error(where + "plans: expected 14 state dimensions, got " + std::to_string(D));
+  geometry::SceneRows rows;
+  for (const std::string& kind : geometry::ObstacleKinds()) {
+    if (!file.Exists(group + "scene/" + kind)) continue;
+    std::vector<int64_t> rows_shape;
+    const std::vector<double> values = file.ReadFloat64(group + "scene/" + kind, &rows_shape);
+    rows.insert(kind, torch::tensor(values, torch::kFloat64).view(rows_shape));
+  }
+  const geometry::Scene scene = geometry::SceneOf(rows, 3, where + "scene");
+  std::vector<int64_t> goal_shape;
+  const std::vector<float> goal = file.ReadFloat32(group + "goal_tcp", &goal_shape);
+  const double dt = file.GetDoubleAttribute("/", "dt");
+
+  const std::vector<double> plan(plans.begin() + args.index * T * D, plans.begin() + (args.index + 1) * T * D);
+  const sim::FrankaModel world = sim::MakeFrankaScene(scene, 1.0 / config.execute.control_hz);
+  sim::FrankaExecutor executor(world, static_cast<int>(scene.size()), config.execute);
+  const sim::ExecutionResult executed = executor.Execute(plan, T, dt, Eigen::Vector3d(goal[0], goal[1], goal[2]));
+
+  render::FrankaRenderer renderer(scene, config.render);
+  auto joints = [](const double* state) { return sim::JointVector(Eigen::Map<const sim::JointVector>(state)); };
+  std::vector<render::Image> frames;
+  std::vector<Eigen::Vector3d> trail;
+  for (int64_t t = 0; t < executed.num_states; ++t) {
+    trail.emplace_back(executed.tcp[3 * t], executed.tcp[3 * t + 1], executed.tcp[3 * t + 2]);
+    frames.push_back(renderer.Render(joints(&executed.states[static_cast<size_t>(t * D)]), trail));
+  }
+  const std::string prefix =
+      !args.out.empty() ? args.out
+                        : (std::filesystem::path(args.plans).replace_extension("").string() +
+                           (args.problem.empty() ? "" : "_" + args.problem) + "_" + std::to_string(args.index));
+  EnsureParentFolder(prefix);
+  render::WriteGif(prefix + ".gif", frames, dt);
+
+  const kinematics::Robot kinematics(robot, args.plans + ": robot");
+  const torch::Tensor q = torch::tensor(plan, torch::kFloat64).view({T, D}).slice(1, 0, sim::kFrankaJoints);
+  const torch::Tensor tcp = kinematics.Tcp(q);
+  std::vector<Eigen::Vector3d> path;
+  for (int64_t t = 0; t < T; ++t) path.emplace_back(tcp[t][0].item<double>(), tcp[t][1].item<double>(), tcp[t][2].item<double>());
+  std::vector<sim::JointVector> poses;
+  constexpr int kPoses = 8;
+  for (int k = 0; k < kPoses; ++k) {
+    const int64_t t = k * (T - 1) / (kPoses - 1);
+    poses.push_back(joints(&plan[static_cast<size_t>(t * D)]));
+  }
+  render::WritePng(prefix + ".png", renderer.RenderPoses(poses, path));
+  spdlog::info("wrote {}.gif ({} frames of {} x {}, the plan executed in MuJoCo: {} contact{}, goal {:.3g} m away) "
+               "and {}.png (the plan at {} states)",
+               prefix, frames.size(), config.render.width, config.render.height, executed.contacts.size(),
+               executed.contacts.size() == 1 ? "" : "s", executed.goal_distance, prefix, kPoses);
+}
+
+}  // namespace
+
+Command AddRenderCommand(CLI::App& app) {
+  auto args = std::make_shared<RenderArgs>();
+  CLI::App* command = app.add_subcommand(
+      "render", "draw one plan of a plan file executed in MuJoCo among its scene's shapes: PREFIX.gif (a video, "
+                "offscreen through OSMesa) and PREFIX.png (the plan at eight states) (render.*, execute.*)");
+  command->add_option("plans", args->plans, "a plan file of `flowplan plan` (PREFIX.h5)")->required()->check(CLI::ExistingFile);
+  command->add_option("--problem", args->problem, "the problem, in a file of `flowplan plan --problems`");
+  command->add_option("--index", args->index, "which plan of the file (or of the problem)")->capture_default_str();
+  command->add_option("--out", args->out, "output prefix (default: the plan file's, with the problem and index)");
+  command->add_option("--config", args->config_path, "YAML with render.* and execute.* settings")->check(CLI::ExistingFile);
+  command->add_option("overrides", args->overrides, kOverrideHelp);
+  return {command, [args] { RunRender(*args); }};
+}
+
+}  // namespace flowplan::experiment

@@ -1,0 +1,174 @@
+#include "render/franka_renderer.h"
+
+#include <GL/osmesa.h>
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+#include "sim/franka_execution.h"
+
+namespace flowplan::render {
+namespace {
+
+constexpr int kMaxGeoms = 20000;
+
+/// The lowest point (m) of any obstacle of `scene`, bounded from below by its bounding sphere; +inf for none.
+double LowestObstaclePoint(const geometry::Scene& scene) {
+  double lowest = INFINITY;
+  auto norm = [](const std::vector<double>& v) {
+    double s = 0.0;
+    for (double x : v) s += x * x;
+    return std::sqrt(s);
+  };
+  for (const auto& s : scene.spheres) lowest = std::min(lowest, s.centre[2] - s.radius);
+  for (const auto& b : scene.boxes) lowest = std::min(lowest, b.centre[2] - 0.5 * norm(b.size));
+  for (const auto& c : scene.cylinders) lowest = std::min(lowest, c.centre[2] - std::hypot(c.radius, 0.5 * c.height));
+  for (const auto& c : scene.capsules) lowest = std::min(lowest, std::min(c.a[2], c.b[2]) - c.radius);
+  return lowest;
+}
+
+}  // namespace
+
+struct FrankaRenderer::Gl {
+  OSMesaContext context = nullptr;
+  std::vector<unsigned char> buffer;  // the window OSMesa draws into (MuJoCo renders into its own offscreen buffer)
+  mjvScene scene;
+  mjrContext render;
+  mjvOption option;
+  mjvCamera camera;
+  ~Gl() {
+    mjr_freeContext(&render);
+    mjv_freeScene(&scene);
+    if (context != nullptr) OSMesaDestroyContext(context);
+  }
+};
+
+FrankaRenderer::FrankaRenderer(const geometry::Scene& scene, const RenderConfig& config)
+    : config_(config), model_(sim::CopyModel(sim::MakeFrankaScene(scene, 0.001).mj())), data_(sim::MakeData(*model_)) {
+  floor_height_ = std::min(0.0, LowestObstaclePoint(scene)) - 0.002;
+  mjModel& m = *model_;
+  for (int g = 0; g < m.ngeom; ++g) {
+    const bool arm = m.geom_bodyid[g] > 0;
+    const std::array<float, 3>& colour = arm ? kArmColour : kObstacleColour;
+    for (int c = 0; c < 3; ++c) m.geom_rgba[4 * g + c] = colour[c];
+    m.geom_rgba[4 * g + 3] = 1.0f;
+  }
+  m.vis.global.offwidth = config.width;
+  m.vis.global.offheight = config.height;
+  m.vis.quality.shadowsize = 2048;
+
+  gl_ = std::make_unique<Gl>();
+  mjv_defaultScene(&gl_->scene);
+  mjr_defaultContext(&gl_->render);
+  gl_->context = OSMesaCreateContextExt(OSMESA_RGBA, 24, 8, 0, nullptr);
+  if (gl_->context == nullptr) throw Error("render: OSMesa could not create an OpenGL context");
+  gl_->buffer.assign(4 * static_cast<size_t>(config.width) * config.height, 0);
+  if (!OSMesaMakeCurrent(gl_->context, gl_->buffer.data(), GL_UNSIGNED_BYTE, config.width, config.height)) {
+    throw Error("render: OSMesa could not make its OpenGL context current");
+  }
+  mjv_makeScene(&m, &gl_->scene, kMaxGeoms);
+  mjr_makeContext(&m, &gl_->render, mjFONTSCALE_100);
+  mjr_setBuffer(mjFB_OFFSCREEN, &gl_->render);
+  if (gl_->render.currentBuffer != mjFB_OFFSCREEN || gl_->render.offWidth < config.width ||
+      gl_->render.offHeight < config.height) {
+    throw Error("render: MuJoCo could not make an offscreen buffer of " + std::to_string(config.width) + " x " +
+                std::to_string(config.height));
+  }
+  mjv_defaultOption(&gl_->option);
+  for (int group = 0; group < mjNGROUP; ++group) gl_->option.geomgroup[group] = 1;
+  mjv_defaultCamera(&gl_->camera);
+  gl_->camera.type = mjCAMERA_FREE;
+  for (int i = 0; i < 3; ++i) gl_->camera.lookat[i] = config.lookat[i];
+  gl_->camera.distance = config.distance;
+  gl_->camera.azimuth = config.azimuth;
+  gl_->camera.elevation = config.elevation;
+}
+
+FrankaRenderer::~FrankaRenderer() = default;
+
+Image FrankaRenderer::Render(const sim::JointVector& q, const std::vector<Eigen::Vector3d>& trail) {
+  return Draw({q}, trail);
+}
+
+Image FrankaRenderer::RenderPoses(const std::vector<sim::JointVector>& poses,
+                                  const std::vector<Eigen::Vector3d>& trail) {
+  return Draw(poses, trail);
+}
+
+Image FrankaRenderer::Draw(const std::vector<sim::JointVector>& poses, const std::vector<Eigen::Vector3d>& trail) {
+  FLOWPLAN_DEMAND(!poses.empty());
+  const mjModel& m = *model_;
+  mjData& d = *data_;
+  mjvScene& scene = gl_->scene;
+  OSMesaMakeCurrent(gl_->context, gl_->buffer.data(), GL_UNSIGNED_BYTE, config_.width, config_.height);
+  // The last pose is the scene's own (static geoms, lights, camera); earlier ones are added, fainter.
+  auto pose = [&](const sim::JointVector& q) {
+    for (int j = 0; j < sim::kFrankaJoints; ++j) d.qpos[j] = q[j];
+    mj_kinematics(&m, &d);
+  };
+  pose(poses.back());
+  mjv_updateScene(&m, &d, &gl_->option, nullptr, &gl_->camera, mjCAT_ALL, &scene);
+  for (size_t i = 0; i + 1 < poses.size(); ++i) {
+    const int before = scene.ngeom;
+    pose(poses[i]);
+    mjv_addGeoms(&m, &d, &gl_->option, nullptr, mjCAT_DYNAMIC, &scene);
+    const float alpha = 0.15f + 0.45f * static_cast<float>(i + 1) / static_cast<float>(poses.size());
+    for (int g = before; g < scene.ngeom; ++g) scene.geoms[g].rgba[3] = alpha;
+  }
+  auto add = [&](int type, const mjtNum size[3], const mjtNum pos[3], const std::array<float, 4>& rgba) {
+    if (scene.ngeom >= scene.maxgeom) return;
+    const float colour[4] = {rgba[0], rgba[1], rgba[2], rgba[3]};
+    mjv_initGeom(&scene.geoms[scene.ngeom], type, size, pos, nullptr, colour);
+    scene.geoms[scene.ngeom].category = mjCAT_DECOR;
+    ++scene.ngeom;
+  };
+  const mjtNum floor_size[3] = {2.0, 2.0, 0.05};
+  const mjtNum floor_at[3] = {0.3, 0.0, floor_height_};
+  add(mjGEOM_PLANE, floor_size, floor_at, {0.42f, 0.43f, 0.45f, 1.0f});
+  const mjtNum dot[3] = {0.01, 0.01, 0.01};
+  for (const Eigen::Vector3d& p : trail) {
+    const mjtNum at[3] = {p.x(), p.y(), p.z()};
+    add(mjGEOM_SPHERE, dot, at, {kTrailColour[0], kTrailColour[1], kTrailColour[2], 1.0f});
+  }
+  // A light from above besides the headlight.
+  if (scene.nlight < mjMAXLIGHT) {
+    mjvLight& light = scene.lights[scene.nlight++];
+    light = mjvLight{};
+    light.pos[0] = 0.5f;
+    light.pos[2] = 2.5f;
+    light.dir[0] = -0.2f;
+    light.dir[2] = -1.0f;
+    light.directional = 1;
+    light.castshadow = 1;
+    for (int c = 0; c < 3; ++c) {
+      light.diffuse[c] = 0.55f;
+      light.specular[c] = 0.2f;
+    }
+  }
+  const mjrRect viewport = {0, 0, config_.width, config_.height};
+  mjr_render(viewport, &scene, &gl_->render);
+  Image image;
+  image.width = config_.width;
+  image.height = config_.height;
+  std::vector<uint8_t> bottom_up(3 * static_cast<size_t>(config_.width) * config_.height);
+  mjr_readPixels(bottom_up.data(), nullptr, viewport, &gl_->render);
+  image.rgb.resize(bottom_up.size());
+  const size_t row = 3 * static_cast<size_t>(config_.width);
+  for (int y = 0; y < config_.height; ++y) {
+    std::copy_n(&bottom_up[static_cast<size_t>(config_.height - 1 - y) * row], row, &image.rgb[static_cast<size_t>(y) * row]);
+  }
+  // Mono rendering looks from between the two eyes of the scene's stereo pair.
+  const mjvGLCamera c = mjv_averageCamera(&scene.camera[0], &scene.camera[1]);
+  camera_.position = {c.pos[0], c.pos[1], c.pos[2]};
+  camera_.forward = {c.forward[0], c.forward[1], c.forward[2]};
+  camera_.up = {c.up[0], c.up[1], c.up[2]};
+  camera_.frustum_center = c.frustum_center;
+  camera_.frustum_bottom = c.frustum_bottom;
+  camera_.frustum_top = c.frustum_top;
+  camera_.frustum_near = c.frustum_near;
+  return image;
+}
+
+}  // namespace flowplan::render

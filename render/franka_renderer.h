@@ -1,0 +1,84 @@
+#pragma once
+
+// Pictures of the Franka among a scene's obstacles from MuJoCo's own renderer,
+// offscreen and headless: an OSMesa context (Mesa's software rasteriser,
+// Debian's libosmesa6) holds the OpenGL state MuJoCo draws into, so no display,
+// GPU or window system is needed. The arm is drawn by its collision capsules
+// (the model has no meshes), the obstacles by their real shapes, the floor as
+// a plane, and a path's TCP as a trail of small spheres.
+
+#include <Eigen/Core>
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "core/config.h"
+#include "geometry/scene.h"
+#include "render/image_files.h"
+#include "sim/franka_model.h"
+#include "sim/mujoco_util.h"
+
+namespace flowplan::render {
+
+/// The `render` section of an experiment config: the picture and the camera.
+struct RenderConfig {
+  int width = 640;
+  int height = 480;
+  std::array<double, 3> lookat = {0.35, 0.0, 0.35};  // m, the point the camera looks at
+  double distance = 2.0;                              // m from it
+  double azimuth = 145.0;                             // deg, about the world z axis
+  double elevation = -25.0;                           // deg, negative: from above
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("width", width, "picture width (pixels)", config::InRange(16, 4096));
+    v.Field("height", height, "picture height (pixels)", config::InRange(16, 4096));
+    v.Field("lookat", lookat, "point the camera looks at (m)");
+    v.Field("distance", distance, "camera distance from lookat (m)", config::Positive());
+    v.Field("azimuth", azimuth, "camera azimuth about the world z axis (deg)");
+    v.Field("elevation", elevation, "camera elevation (deg; negative looks down)", config::InRange(-90.0, 90.0));
+  }
+};
+
+/// Colours of the pictures (RGB in [0, 1]); tests look for them.
+inline constexpr std::array<float, 3> kArmColour = {0.62f, 0.68f, 0.80f};
+inline constexpr std::array<float, 3> kObstacleColour = {0.85f, 0.18f, 0.16f};
+inline constexpr std::array<float, 3> kTrailColour = {0.10f, 0.80f, 0.20f};
+
+/// The camera as OpenGL sees it, for projecting world points to pixels.
+struct CameraView {
+  Eigen::Vector3d position, forward, up;  // world
+  double frustum_center, frustum_bottom, frustum_top, frustum_near;
+};
+
+class FrankaRenderer {
+ public:
+  /// Builds the scene's model and an offscreen context of config.width × height.
+  /// @throws flowplan::Error if the scene is not 3-D or no OpenGL context can be made.
+  FrankaRenderer(const geometry::Scene& scene, const RenderConfig& config);
+  ~FrankaRenderer();
+  FrankaRenderer(const FrankaRenderer&) = delete;
+  FrankaRenderer& operator=(const FrankaRenderer&) = delete;
+
+  /// The arm at q (rad), with an optional trail of points (m, e.g. the TCP path so far).
+  Image Render(const sim::JointVector& q, const std::vector<Eigen::Vector3d>& trail = {});
+
+  /// The arm at every configuration of `poses` at once, the earlier ones fainter, with the trail.
+  Image RenderPoses(const std::vector<sim::JointVector>& poses, const std::vector<Eigen::Vector3d>& trail);
+
+  /// The camera of the last picture.
+  const CameraView& camera() const { return camera_; }
+
+ private:
+  struct Gl;  // the OSMesa context, its buffer and MuJoCo's render context
+  Image Draw(const std::vector<sim::JointVector>& poses, const std::vector<Eigen::Vector3d>& trail);
+
+  RenderConfig config_;
+  sim::MjModelPtr model_;  // the scene's model, recoloured for pictures
+  sim::MjDataPtr data_;
+  std::unique_ptr<Gl> gl_;
+  CameraView camera_{};
+  double floor_height_ = 0.0;
+};
+
+}  // namespace flowplan::render

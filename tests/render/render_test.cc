@@ -1,0 +1,151 @@
+// The offscreen renderer: an obstacle's and the arm's pixels where a pinhole
+// projection written here puts them, and the PNG and GIF files decoded by
+// Pillow (an independent reader) to the pixels that were written.
+
+#include "render/franka_renderer.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "render/image_files.h"
+#include "sim/mujoco_util.h"
+#include "tests/support/command.h"
+#include "tests/support/scratch_dir.h"
+
+namespace flowplan::render {
+namespace {
+
+/// The pixel (column, row from the top) of world point p, by OpenGL's perspective projection of `view`.
+Eigen::Vector2d Project(const CameraView& view, const Eigen::Vector3d& p, int width, int height) {
+  const Eigen::Vector3d right = view.forward.cross(view.up).normalized();
+  const Eigen::Vector3d d = p - view.position;
+  const double z = d.dot(view.forward), x = d.dot(right), y = d.dot(view.up);
+  const double half_height = 0.5 * (view.frustum_top - view.frustum_bottom);
+  const double half_width = half_height * width / height;
+  const double u = (view.frustum_near * x / z - (view.frustum_center - half_width)) / (2 * half_width);
+  const double v = (view.frustum_near * y / z - view.frustum_bottom) / (2 * half_height);
+  return {u * width, (1.0 - v) * height};
+}
+
+geometry::Scene OneSphere(const Eigen::Vector3d& centre, double radius) {
+  geometry::Scene scene;
+  scene.spheres.push_back({{centre.x(), centre.y(), centre.z()}, radius});
+  return scene;
+}
+
+TEST(FrankaRendererTest, TheObstacleAndTheArmAreWhereAProjectionPutsThem) {
+  const Eigen::Vector3d sphere(0.45, 0.45, 0.3);
+  RenderConfig config;
+  config.width = 320;
+  config.height = 240;
+  FrankaRenderer renderer(OneSphere(sphere, 0.08), config);
+  const sim::JointVector ready = sim::FrankaReadyPose();
+  const Image image = renderer.Render(ready);
+  ASSERT_EQ(image.width, 320);
+  ASSERT_EQ(image.rgb.size(), 320u * 240u * 3u);
+  auto pixel = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector2d at = Project(renderer.camera(), p, config.width, config.height);
+    EXPECT_TRUE(at.x() >= 2 && at.x() < config.width - 2 && at.y() >= 2 && at.y() < config.height - 2) << at.transpose();
+    return image.At(static_cast<int>(at.x()), static_cast<int>(at.y()));
+  };
+  // The sphere's centre: red.
+  const uint8_t* red = pixel(sphere);
+  EXPECT_GT(red[0], red[1] + 60);
+  EXPECT_GT(red[0], red[2] + 60);
+  // A point inside the forearm's capsule, from MuJoCo's kinematics: the arm's blue-grey.
+  const sim::FrankaModel model = sim::LoadFrankaModel();
+  sim::MjDataPtr d = sim::MakeData(model.mj());
+  for (int j = 0; j < 7; ++j) d->qpos[j] = ready[j];
+  mj_kinematics(&model.mj(), d.get());
+  const int geom = mj_name2id(&model.mj(), mjOBJ_GEOM, "link5_c0");
+  ASSERT_GE(geom, 0);
+  const Eigen::Vector3d forearm(d->geom_xpos[3 * geom], d->geom_xpos[3 * geom + 1], d->geom_xpos[3 * geom + 2]);
+  const uint8_t* arm = pixel(forearm);
+  EXPECT_GT(arm[2], arm[0] + 8) << int(arm[0]) << " " << int(arm[1]) << " " << int(arm[2]);
+  EXPECT_GT(arm[2], 60);
+  // The same pixels differ once the sphere moves away: what was drawn there was the sphere.
+  FrankaRenderer elsewhere(OneSphere({0.45, -0.45, 0.3}, 0.08), config);
+  const Image moved = elsewhere.Render(ready);
+  const Eigen::Vector2d at = Project(renderer.camera(), sphere, config.width, config.height);
+  const uint8_t* now = moved.At(static_cast<int>(at.x()), static_cast<int>(at.y()));
+  EXPECT_LT(now[0], red[0] - 40);
+  // A trail of points is drawn in its colour.
+  const Eigen::Vector3d mark(0.3, -0.35, 0.4);
+  const Image trail = renderer.Render(ready, {mark});
+  const Eigen::Vector2d m = Project(renderer.camera(), mark, config.width, config.height);
+  int greens = 0;  // the dot is a few pixels wide: look around its centre
+  for (int dx = -1; dx <= 1; ++dx) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      const uint8_t* p = trail.At(static_cast<int>(m.x()) + dx, static_cast<int>(m.y()) + dy);
+      greens += p[1] > p[0] + 30 && p[1] > p[2] + 30;
+    }
+  }
+  EXPECT_GE(greens, 3);
+  const uint8_t* before = image.At(static_cast<int>(m.x()), static_cast<int>(m.y()));
+  EXPECT_FALSE(before[1] > before[0] + 30 && before[1] > before[2] + 30);  // not green without the trail
+}
+
+TEST(ImageFilesTest, PillowReadsBackThePngExactlyAndTheGifWithinItsPalette) {
+  RenderConfig config;
+  config.width = 160;
+  config.height = 120;
+  FrankaRenderer renderer(OneSphere({0.45, 0.45, 0.3}, 0.08), config);
+  std::vector<Image> frames;
+  sim::JointVector q = sim::FrankaReadyPose();
+  for (int k = 0; k < 3; ++k) {
+    q[0] += 0.3;
+    frames.push_back(renderer.Render(q));
+  }
+  const std::string dir = flowplan::testing::ScratchDir().string();
+  WritePng(dir + "/still.png", frames[0]);
+  WriteGif(dir + "/clip.gif", frames, 1.0 / 15.0);
+  // Pillow prints the frame count, the duration, and the RGB of three pixels of each frame.
+  const std::string script =
+      "import sys\nfrom PIL import Image, ImageSequence\n"
+      "png = Image.open(sys.argv[1]).convert('RGB')\n"
+      "print(png.size[0], png.size[1], *png.getpixel((80, 60)), *png.getpixel((10, 10)))\n"
+      "gif = Image.open(sys.argv[2])\n"
+      "print(gif.n_frames, gif.info.get('duration'), gif.info.get('loop'))\n"
+      "for frame in ImageSequence.Iterator(gif):\n"
+      "    f = frame.convert('RGB')\n"
+      "    print(*f.getpixel((80, 60)), *f.getpixel((10, 10)), *f.getpixel((120, 90)))\n";
+  std::ofstream(dir + "/read.py") << script;
+  const flowplan::testing::Outcome out =
+      flowplan::testing::RunCommand(std::string(FLOWPLAN_PYTHON) + " " + dir + "/read.py " + dir + "/still.png " + dir +
+                                    "/clip.gif");
+  ASSERT_EQ(out.exit_code, 0) << out.output;
+  std::istringstream lines(out.output);
+  int w, h;
+  lines >> w >> h;
+  EXPECT_EQ(w, 160);
+  EXPECT_EQ(h, 120);
+  for (const auto& [x, y] : {std::pair{80, 60}, std::pair{10, 10}}) {
+    for (int c = 0; c < 3; ++c) {
+      int v;
+      lines >> v;
+      EXPECT_EQ(v, frames[0].At(x, y)[c]) << "png pixel " << x << "," << y;
+    }
+  }
+  int n, duration, loop;
+  lines >> n >> duration >> loop;
+  EXPECT_EQ(n, 3);
+  EXPECT_EQ(duration, 70);  // 1/15 s in GIF's hundredths
+  EXPECT_EQ(loop, 0);       // forever
+  for (int k = 0; k < 3; ++k) {
+    for (const auto& [x, y] : {std::pair{80, 60}, std::pair{10, 10}, std::pair{120, 90}}) {
+      for (int c = 0; c < 3; ++c) {
+        int v;
+        lines >> v;
+        EXPECT_NEAR(v, frames[static_cast<size_t>(k)].At(x, y)[c], 12) << "gif frame " << k << " pixel " << x << "," << y;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace flowplan::render
