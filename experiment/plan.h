@@ -133,6 +133,10 @@ PlanCounts WritePlanFiles(const std::string& h5_temp, const std::string& prefix,
 /// PREFIX.json, PREFIX.h5.
 void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threads);
 
+/// plan_problems.cc: the HDF5 group of problem NAME in a --problems file: "/problems/" and the name with '/'
+/// and '.' made '_' (a family's "shelf/3" is /problems/shelf_3).
+std::string ProblemGroup(const std::string& name);
+
 /// plan_inputs.cc: why `state` (D,) cannot be planned from or to (outside the
 /// joint limits, or a collision sphere closer than check.margin to an
 /// obstacle), or empty.

@@ -6,8 +6,8 @@
 //                 "success_rate" (of every plan asked for; a refused problem's plans count as failures),
 //                 "problems_solved" (share with at least one success), "success_rate_executed",
 //                 "planning_time_s" {median, p95, plans, per}, "problems": [{"name", "status": "planned" |
-//                 "refused", "reason", "success_rate", "samples": [...]}]}
-//   PREFIX.h5    /problems/NAME/{plans, tcp, scene/…, start, goal, goal_tcp, executed/…} per planned problem
+//                 "refused", "reason", "group" (its HDF5 group), "success_rate", "samples": [...]}]}
+//   PREFIX.h5    ProblemGroup(NAME)/{plans, tcp, scene/…, start, goal, goal_tcp, executed/…} per planned problem
 
 #include <spdlog/spdlog.h>
 
@@ -48,15 +48,15 @@ PlanInputs ProblemInputs(const problems::Problem& problem, const PlanSubject& su
   return inputs;
 }
 
-std::string GroupName(const std::string& name) {
+}  // namespace
+
+std::string ProblemGroup(const std::string& name) {
   std::string out = name;
   for (char& c : out) {
     if (c == '/' || c == '.') c = '_';
   }
-  return out;
+  return "/problems/" + out;
 }
-
-}  // namespace
 
 void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threads) {
   const bool single = !args.start.empty() || !args.goal.empty() || !args.start_tcp.empty() || !args.goal_tcp.empty() ||
@@ -125,7 +125,7 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
     const PlanScores scores = ScorePlans(result, subject, in);
     const std::vector<sim::ExecutionResult> executed =
         args.execute ? ExecutePlans(result.plans, subject, in, threads) : std::vector<sim::ExecutionResult>{};
-    const std::string group = "/problems/" + GroupName(problem.name);
+    const std::string group = ProblemGroup(problem.name);
     file.CreateGroup(group);
     WritePlansH5(file, group + "/", subject, in, result, scores, executed);
     PlanCounts counts;
@@ -137,7 +137,7 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
                  executed.empty() ? std::string() : fmt::format(", executed {}/{}", counts.executed, N),
                  result.call_seconds[0] / static_cast<double>(result.call_plans[0]));
     entries += std::string(entries.empty() ? "" : ",\n  ") + entry +
-               ", \"status\": \"planned\", \"reason\": \"\", \"success_rate\": " +
+               ", \"status\": \"planned\", \"reason\": \"\", \"group\": " + JsonString(group) + ", \"success_rate\": " +
                JsonNumber(static_cast<double>(counts.success) / static_cast<double>(N)) +
                (executed.empty() ? std::string()
                                  : ", \"success_rate_executed\": " +

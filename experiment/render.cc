@@ -15,6 +15,7 @@
 #include "experiment/command_line.h"
 #include "experiment/commands.h"
 #include "experiment/experiment_config.h"
+#include "experiment/plan.h"
 #include "kinematics/robot.h"
 #include "render/franka_renderer.h"
 #include "render/image_files.h"
@@ -36,7 +37,7 @@ void RunRender(const RenderArgs& args) {
   const ExperimentConfig config = LoadExperiment(args.config_path, args.overrides);
   config.execute.Validate();
   const auto file = datasets::h5::File::OpenReadOnly(args.plans);
-  const std::string group = args.problem.empty() ? "/" : "/problems/" + args.problem + "/";
+  const std::string group = args.problem.empty() ? "/" : ProblemGroup(args.problem) + "/";
   if (!file.Exists(group + "plans")) {
     std::string hint;
     if (file.Exists("/problems")) hint = "; this is a --problems file: give --problem NAME, one of " + Join(file.ListGroup("/problems"));

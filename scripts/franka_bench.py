@@ -26,6 +26,11 @@ where it stopped (a stopped training resumes from its newest checkpoint):
   select      ROOT/select/                  guidance chosen on validation problems (seed 101) and reported on
                                             held-out test problems (seed 202): scripts/guidance_select.py on FP,
                                             FP + split, MPD and the paper's MPD, exported from the reach rows
+  train-joint ROOT/train/joint_*/done.json  `flowplan train` of FP, MPD and the VAE on franka_joint (configs/
+                                            franka_joint.yaml: motions between random configurations)
+  families    ROOT/families/                every planner on the scene families and the paper's sphere scene,
+                                            checked and executed, guidance chosen on validation problems
+                                            (scripts/bench_families.py)
   recount     ROOT/results/recount.json     scripts/recount_plans.py on every saved plan (always redone)
   results     ROOT/results/*.md|json|png    tables and plots (always redone from what exists)
 
@@ -49,6 +54,8 @@ the order given (e.g. --rows cross_mpd,cross_fp_s0 --only train-cross,stitching)
 without entering any request (their results do not depend on it): two drivers
 with --threads 1 and different --rows share a root on two cores. The select
 stage plans on one thread always: it compares times per plan.
+--adopt ROW=RUN takes a run folder trained outside the driver as training row ROW, if its resolved config is
+the one the row's command makes (paths and threads aside) and it finished its steps.
 --quick runs every stage at toy size (ROOT defaults to runs/franka_bench_quick).
 The sizes of the full run and how they were chosen: docs/results.md.
 """
@@ -65,6 +72,8 @@ import subprocess
 import sys
 import time
 
+import bench_families
+
 REACH_CONFIG = "configs/franka_reach.yaml"
 PAPER_MPD_CONFIG = "configs/franka_reach_paper_mpd.yaml"
 # franka_cross data sets: name, config, augmentation scheme as the paper names it.
@@ -74,7 +83,8 @@ CROSS_SETS = [("franka_cross", "configs/franka_cross.yaml", "per-joint noise"),
               ("franka_cross_random_pos", "configs/franka_cross_random_pos.yaml", "random positions"),
               ("franka_cross_random_forces", "configs/franka_cross_random_forces.yaml", "random forces")]
 # Every data set: name, config.
-DATA_SETS = [(name, config) for name, config, _ in CROSS_SETS] + [("franka_reach", REACH_CONFIG)]
+DATA_SETS = [(name, config) for name, config, _ in CROSS_SETS] + [("franka_reach", REACH_CONFIG),
+                                                                  ("franka_joint", bench_families.JOINT_CONFIG)]
 SEEDS = [0, 1, 2]
 # Table 1 on franka_cross: label, row name prefix, overrides, seeds.
 TABLE1 = [("FP", "cross_fp", [], SEEDS),
@@ -136,13 +146,15 @@ FULL = {"episodes": None, "train": [], "plans_per_pair": 64, "radii": [round(0.0
         "sweep_plans": 64, "scales": [0.5, 1.0, 1.75, 2.5, 3.5, 5.0],
         "scale_radii": [0.1, 0.125, 0.15, 0.175, 0.2, 0.225, 0.25],
         "problems": 100, "problem_plans": 8, "example_radii": [0.1, 0.2], "example_plans": 8,
-        "curve_steps": [2000, 5000, 10000], "select_problems": 100, "select_plans": 8}
+        "curve_steps": [2000, 5000, 10000], "select_problems": 100, "select_plans": 8,
+        "family_val_problems": 10, "family_val_plans": 2, "family_test_problems": 20, "family_test_plans": 4}
 QUICK = {"episodes": 256,
          "train": ["train.steps=20", "train.batch_size=16", "train.eval_every=0", "train.checkpoint_every=10",
                    "train.log_every=10", "train.val_batch_size=16"],
          "plans_per_pair": 4, "radii": [0.0, 0.1, 0.2, 0.3], "sweep_plans": 4, "scales": [1.0, 2.5],
          "scale_radii": [0.15], "problems": 2, "problem_plans": 2, "example_radii": [0.1], "example_plans": 2,
-         "curve_steps": [10, 20], "select_problems": 2, "select_plans": 2}
+         "curve_steps": [10, 20], "select_problems": 2, "select_plans": 2,
+         "family_val_problems": 1, "family_val_plans": 1, "family_test_problems": 1, "family_test_plans": 1}
 
 
 def train_rows():
@@ -164,6 +176,11 @@ def train_rows():
                          ["model.name=state_vae", "objective.name=vae", "train.batch_size=16"], 0)
     # The Flow Planner paper's MPD baseline as its code runs it (docs/results.md, "Two MPDs").
     rows["reach_paper_mpd"] = (PAPER_MPD_CONFIG, "franka_reach", [], 0)
+    # The general planners of the scene families (configs/franka_joint.yaml).
+    joint = bench_families.JOINT_CONFIG
+    rows["joint_fp"] = (joint, "franka_joint", [], 0)
+    rows["joint_mpd"] = (joint, "franka_joint", ["objective.name=ddpm"], 0)
+    rows["joint_vae"] = (joint, "franka_joint", ["model.name=state_vae", "objective.name=vae", "train.batch_size=16"], 0)
     return rows
 
 
@@ -339,6 +356,52 @@ class Bench:
 
     def train_long(self):
         self.train([row for row in train_rows() if row.startswith("long_")])
+
+    def train_joint(self):
+        self.train([row for row in train_rows() if row.startswith("joint_")])
+
+    def families(self):
+        bench_families.Families(self, sys.modules[__name__]).run()
+
+    def adopt(self, row, run):
+        """Takes RUN, trained outside the driver, as training ROW: its resolved config must be the one ROW's command
+        makes (run_dir, data.path and threads aside), and it must have trained all its steps."""
+        import yaml
+        if row not in train_rows():
+            sys.exit(f"--adopt: unknown row {row!r}")
+        target = self.path("train", row)
+        if os.path.exists(os.path.join(target, "done.json")):
+            return
+        command, request = self.train_command(row)
+        probe = self.path("adopt", row)
+        shutil.rmtree(probe, ignore_errors=True)
+        # The config the row's command resolves to, from `flowplan config show` of the same arguments.
+        shown = subprocess.run([self.flowplan, "config", "show", *command[2:]], capture_output=True, text=True)
+        if shown.returncode != 0:
+            sys.exit(f"--adopt {row}: {shown.stderr.strip()}")
+        ignore = lambda c: {k: v for k, v in c.items() if k not in ("run_dir", "threads")} | {
+            "data": {k: v for k, v in c["data"].items() if k != "path"}}
+        wanted, theirs = yaml.safe_load(shown.stdout), yaml.safe_load(open(os.path.join(run, "config.yaml")))
+        if ignore(wanted) != ignore(theirs):
+            different = sorted(k for k in set(wanted) | set(theirs) if ignore(wanted).get(k) != ignore(theirs).get(k))
+            sys.exit(f"--adopt {row}: {run}/config.yaml differs from the row's config in {', '.join(different)}")
+        metrics = [json.loads(line) for line in open(os.path.join(run, "metrics.jsonl"))]
+        steps = max(m.get("step", 0) for m in metrics)
+        # Its training time from the logged rates: each logged row covers the steps since the one before.
+        seconds, before = 0.0, 0
+        for m in metrics:
+            if "steps_per_s" in m:
+                seconds += (m["step"] - before) / m["steps_per_s"]
+                before = m["step"]
+        if steps != wanted["train"]["steps"]:
+            sys.exit(f"--adopt {row}: {run} trained {steps} of {wanted['train']['steps']} steps")
+        shutil.copytree(run, target)
+        write_text(os.path.join(target, "request.txt"), request)
+        config, data, overrides, seed = train_rows()[row]
+        write_json(os.path.join(target, "done.json"), {"row": row, "config": config, "data": data, "overrides": overrides,
+                                                       "seed": seed, "steps": steps, "adopted_from": run,
+                                                       "train_seconds": round(seconds, 1), "request": request})
+        print(f"adopted {run} as {row}", flush=True)
 
     def train(self, rows):
         for row in self.selected(rows):
@@ -630,6 +693,7 @@ class Bench:
             text.append(f"Independent recount (scripts/recount_plans.py, its own kinematics) of {r['plans']} saved plans "
                         f"in {r['files']} files: {r['differ']} files with a different TCP or whole-arm count.\n")
         text += select_table(self, summary)
+        text += bench_families.Families(self, sys.modules[__name__]).results(summary)
         text += curve_table(self, summary)
         text.append(training_table(self, summary))
         summary["left_out"] = sorted(set(self.left_out))
@@ -1034,7 +1098,7 @@ def training_table(bench, summary):
 
 
 STAGES = ["data", "train-reach", "sweep", "scales", "budget", "problems", "examples", "train-cross", "stitching",
-          "train-long", "curve", "select", "recount", "results"]
+          "train-long", "curve", "select", "train-joint", "families", "recount", "results"]
 
 
 def main():
@@ -1044,6 +1108,8 @@ def main():
                         "runs/franka_bench_quick)")
     parser.add_argument("--only", help=f"comma-separated stages to run ({', '.join(STAGES)})")
     parser.add_argument("--rows", help="comma-separated training rows to train and evaluate, in this order")
+    parser.add_argument("--adopt", action="append", default=[], metavar="ROW=RUN",
+                        help="take a finished run folder as training row ROW (its config must be the row's)")
     parser.add_argument("--threads", type=int, help="threads of the training and curve stages (default: the configs' "
                         "threads, all cores); results do not depend on it, e.g. two drivers with --threads 1 each")
     parser.add_argument("--flowplan", default=os.environ.get("FLOWPLAN"),
@@ -1064,6 +1130,7 @@ def main():
             sys.exit(f"--rows: unknown row {unknown[0]!r} (rows: {', '.join(train_rows())})")
     if not os.access(args.flowplan, os.X_OK):
         sys.exit(f"--flowplan: {os.path.abspath(args.flowplan)} is not an executable (build first: make build)")
+    adoptions = [(row, os.path.abspath(run)) for row, _, run in (a.partition("=") for a in args.adopt)]
     args.root = os.path.relpath(os.path.abspath(args.root), repo)
     args.flowplan = os.path.relpath(os.path.abspath(args.flowplan), repo)
     os.chdir(repo)
@@ -1076,6 +1143,8 @@ def main():
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, stop)
+    for row, run in adoptions:
+        bench.adopt(row, run)
     try:
         for stage in stages:
             started = time.time()

@@ -139,7 +139,7 @@ with h5py.File(sys.argv[1], "r") as f, open(sys.argv[2]) as report_file:
             assert p["status"] in ("planned", "refused"), p
             assert (p["status"] == "refused") == bool(p["reason"]), p
         for p in planned:
-            check(f, "problems/" + p["name"], report, p["samples"])
+            check(f, p["group"], report, p["samples"])
             assert abs(np.mean([s["success"] for s in p["samples"]]) - p["success_rate"]) < 1e-6
         successes = sum(s["success"] for p in planned for s in p["samples"])
         assert abs(successes / (report["num_problems"] * report["num_samples"]) - report["success_rate"]) < 1e-6

@@ -4,8 +4,9 @@
 usage: franka_bench_quick_test.py FLOWPLAN_BINARY SCRATCH_DIR
 
 1. The quick run fills every table (both stitching tables, the radius sweep of
-   all five planners, the guidance-scale sweep, the random scenes) and the
-   independent recount agrees with flowplan's counts.
+   all five planners, the guidance-scale sweep, the random scenes, the scene
+   families with guidance chosen on validation problems) and the independent
+   recount agrees with flowplan's counts.
 2. Run again, it redoes nothing but the recount and the tables, also with the
    output folder moved; an output made by another request (a changed command,
    config or model) is made again; a row trained by another request stops every
@@ -121,6 +122,36 @@ for row, points in summary["curve"].items():
     assert points["20"]["val_loss"] == next(r["val_loss"] for r in losses if r.get("step") == 20 and "val_loss" in r)
     plans = json.load(open(os.path.join(root, "curve", f"{row}_k10_r0.1.json")))
     assert points["10"]["r0.1"]["arm"] == sum(p["arm_clear"] for p in plans["samples"]) / len(plans["samples"])
+# The families stage: every learned planner's guidance (and the hybrid's proposals) chosen from its validation rows
+# alone; every planner's test reports, checked by the independent plan-file script; the validation and test
+# problems differ (two seeds).
+families = summary["families"]
+assert sorted(families["chosen"]) == ["fp", "fp_split", "hybrid", "mpd", "vae"], families["chosen"]
+for planner, rows in families["validation"].items():
+    assert rows and families["chosen"][planner] == max(rows, key=lambda r: (r["success"], -r["median_time_s"]))["setting"]
+fp_grid = [r["setting"] for r in families["validation"]["fp"]]
+assert len(fp_grid) == 2 and fp_grid[0] != fp_grid[1], fp_grid
+test_cells = {f"{p}/{s}" for p in ("fp", "fp_split", "mpd", "vae", "rrt_connect", "hybrid")
+              for s in ("table", "shelf", "sphere")}
+assert sorted(families["test"]) == sorted(test_cells), sorted(families["test"])
+for cell in test_cells:
+    prefix = os.path.join(root, "families", "test", cell.replace("/", "_"))
+    checked = subprocess.run([sys.executable, os.path.join(repo, "tests", "cli", "check_plan.py"), prefix + ".h5",
+                              prefix + ".json"], capture_output=True, text=True)
+    assert checked.returncode == 0, (cell, checked.stdout + checked.stderr)
+    report = json.load(open(prefix + ".json"))
+    assert report["planning_time_s"]["per"] == "plan, the wall time of the call that made it", cell
+    assert families["test"][cell]["success"] == report["success_rate"], cell
+hybrid = json.load(open(os.path.join(root, "families", "test", "hybrid_sphere.json")))
+assert all(s["route"] == "rrt_connect" or s["route"].startswith("proposal") for p in hybrid["problems"]
+           for s in p["samples"] if s["success"]), hybrid
+assert "--hybrid" in open(os.path.join(root, "families", "test", "hybrid_sphere.request")).read()
+for family in ("table", "shelf"):
+    val = open(os.path.join(root, "families", "problems", f"val_{family}.yaml")).read()
+    test = open(os.path.join(root, "families", "problems", f"test_{family}.yaml")).read()
+    assert "seed: 101" in val and "seed: 202" in test and val.split("problems:")[1] != test.split("problems:")[1]
+assert os.path.exists(os.path.join(root, "results", "families_success_vs_time.png"))
+
 # The select stage: FP and FP + split exported with the paper's sampler (the grids' base row), as the driver's sweep
 # rows plan; every planner's grid on the validation problems; FP's best setting chosen from validation alone, then
 # reported on the test problems beside every other planner's default.

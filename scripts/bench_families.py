@@ -1,0 +1,295 @@
+"""The scene-family stage of scripts/franka_bench.py: every planner on the procedural scene families and on the
+paper's sphere scene, each plan checked by `flowplan`'s plan checker and executed in MuJoCo with the real shapes.
+
+  ROOT/families/problems/{val,test}_<family>.yaml   `flowplan problems --family` (validation seed 101, test seed 202)
+  ROOT/families/problems/test_sphere.yaml           the paper's scene: one sphere of each radius of SPHERE_RADII
+                                                    between the TCP points (0.5, -0.3, 0.2) and (0.5, 0.3, 0.2)
+  ROOT/families/val/<planner>_<k>_<family>.*        `flowplan plan --problems` of setting k of the planner's grid
+  ROOT/families/test/<planner>_<set>.*              the setting chosen on validation, on the test sets, executed
+
+Every learned planner chooses its guidance (the grid below) on the validation problems of all families pooled:
+the most valid plans, then the shorter median time per plan; the hybrid chooses its number of proposals the same way
+with the flow planner's chosen setting as its proposer. Test problems are never looked at before the choice. Every
+plan is made by its own call on one thread (`--batch 1`, `threads=1`; the hybrid's call proposes its N plans in one
+batch), so that the time per plan is the wall time of the call that made it, for every planner alike.
+"""
+import json
+import os
+
+FAMILIES = ["table", "shelf", "box", "cage", "under_table"]
+FAMILY_SEEDS = {"val": 101, "test": 202}
+SPHERE_RADII = [0.05, 0.1, 0.15]
+SPHERE_START_TCP, SPHERE_GOAL_TCP = "0.5,-0.3,0.2", "0.5,0.3,0.2"
+JOINT_CONFIG = "configs/franka_joint.yaml"
+# Guidance scales of the grid: the reach preset's 1.75 moves the joints of this planner too far (its data spans the
+# whole joint range, so a normalized step is several times larger in radians), see docs/results.md.
+SCALES = [0.05, 0.1, 0.2, 0.4]
+# Learned planners: name, label, training row, fixed overrides, validation grid (a list of override lists).
+LEARNED = [("fp", "FP", "joint_fp", ["sampler.splitting=none"],
+            [[f"guidance.scale={s}", f"sampler.final_iterations={g}"] for s in SCALES for g in (0, 10)]),
+           ("fp_split", "FP + split", "joint_fp", ["sampler.splitting=midpoint"],
+            [[f"guidance.scale={s}", f"sampler.final_iterations={g}"] for s in SCALES for g in (0, 10)]),
+           ("mpd", "MPD", "joint_mpd", [], [[f"guidance.scale={s}"] for s in SCALES]),
+           ("vae", "VAE planner", "joint_vae", ["sampler.latent.lr=0.02"], [[f"guidance.scale={s}"] for s in SCALES])]
+HYBRID_GRID = [["hybrid.proposals=2"], ["hybrid.proposals=8"]]
+LABELS = {name: label for name, label, *_ in LEARNED} | {"rrt_connect": "RRT-Connect", "hybrid": "hybrid (FP, RRT-Connect)"}
+PLANNERS = [name for name, *_ in LEARNED] + ["rrt_connect", "hybrid"]
+# Published anchors (docs/results.md says where they come from and how they differ from ours).
+CUROBO = "cuRobo: 99.85 % of 2,600 MotionBenchMaker problems, 31 ms median (GPU)"
+VAMP = "VAMP RRT-Connect: all 699 valid MotionBenchMaker problems, 35 µs median (one desktop CPU core)"
+
+
+class Families:
+    def __init__(self, bench, helpers):
+        """BENCH: the driver (its paths, requests, calls, sizes); HELPERS: its module (write_text, recorded, stale,
+        Unavailable)."""
+        self.bench = bench
+        self.write_text, self.recorded, self.stale = helpers.write_text, helpers.recorded, helpers.stale
+        self.Unavailable = helpers.Unavailable
+        size = bench.size
+        # Quick: two families, and grids of two settings for the flow planner and one for the others.
+        self.families = FAMILIES[:2] if bench.quick else FAMILIES
+        self.grids = {name: (grid[:2 if name == "fp" else 1] if bench.quick else grid) for name, *_, grid in LEARNED}
+        self.grids["hybrid"] = HYBRID_GRID[:1] if bench.quick else HYBRID_GRID
+        self.counts = {"val": size["family_val_problems"], "test": size["family_test_problems"]}
+        self.plans = {"val": size["family_val_plans"], "test": size["family_test_plans"]}
+
+    def path(self, *parts):
+        return self.bench.path("families", *parts)
+
+    # -- problem files ----------------------------------------------------------
+    def problems_command(self, split, family):
+        out = self.path("problems", f"{split}_{family}.yaml")
+        command = [self.bench.flowplan, "problems", "--family", family, "--out", out, f"seed={FAMILY_SEEDS[split]}",
+                   f"problems.count={self.counts[split]}"]
+        return out, command, self.bench.request(command)
+
+    def sphere_command(self):
+        """The paper's start and goal as joint configurations: RRT-Connect's report of one plan between them holds
+        the IK of both TCP points; the problem file is written from it."""
+        out = self.path("problems", "test_sphere.yaml")
+        report = self.path("problems", "sphere_ends")
+        command = [self.bench.flowplan, "plan", "--rrt-connect", "--config", JOINT_CONFIG,
+                   f"data.path={self.bench.path('data', 'franka_joint.h5')}", "--start-tcp", SPHERE_START_TCP,
+                   "--goal-tcp", SPHERE_GOAL_TCP, "scene.spheres=[]", "-n", "1", "--no-plot", "--log-level", "warn",
+                   "--out", report]
+        return out, report, command, self.bench.request(command, " ".join(map(str, SPHERE_RADII)))
+
+    def problem_sets(self):
+        sets = [(split, family) for split in ("val", "test") for family in self.families]
+        for split, family in sets:
+            out, command, request = self.problems_command(split, family)
+            with self.stale(lambda: self.recorded(out + ".request", request), out + ".lock",
+                            [out, out + ".request"]) as ours:
+                if ours:
+                    print(f"families: {split} problems of {family}", flush=True)
+                    self.bench.call(command + ["threads=2"])
+                    self.write_text(out + ".request", request)
+        out, report, command, request = self.sphere_command()
+        with self.stale(lambda: self.recorded(out + ".request", request), out + ".lock",
+                        [out, out + ".request", report + ".json", report + ".h5"]) as ours:
+            if ours:
+                import yaml
+                self.bench.call(command)
+                ends = json.load(open(report + ".json"))
+                problems = [{"name": f"sphere_r{r:g}", "start_q": ends["start"][:7], "goal_q": ends["goal"][:7],
+                             "scene": {"spheres": [{"centre": [0.5, 0.0, 0.2], "radius": r}]}} for r in SPHERE_RADII]
+                self.write_text(out, yaml.safe_dump({"source": "the paper's sphere scene", "problems": problems},
+                                                    default_flow_style=None, sort_keys=False))
+                self.write_text(out + ".request", request)
+
+    def set_request(self, split, family):
+        if family == "sphere":
+            out, _, _, request = self.sphere_command()
+        else:
+            out, _, request = self.problems_command(split, family)
+        if not self.recorded(out + ".request", request):
+            raise self.Unavailable(f"{out}: not made by the current request; run the families stage")
+        return out, request
+
+    # -- planning ---------------------------------------------------------------
+    def source(self, planner, setting):
+        """(`flowplan plan` arguments, the request of what they read) of PLANNER with SETTING (overrides)."""
+        bench = self.bench
+        if planner == "rrt_connect":
+            return (["--rrt-connect", "--config", JOINT_CONFIG, f"data.path={bench.path('data', 'franka_joint.h5')}"],
+                    bench.data_request("franka_joint"))
+        if planner == "hybrid":
+            proposer = self.chosen("fp")
+            if proposer is None:
+                return None
+            arguments, model = self.source("fp", proposer)
+            return arguments + ["--hybrid", *setting], model
+        _, _, row, fixed, _ = next(p for p in LEARNED if p[0] == planner)
+        return ["--ckpt", bench.path("train", row), *fixed, *setting], bench.model_request(row)
+
+    def cell_command(self, prefix, planner, setting, split, family, execute):
+        found = self.source(planner, setting)
+        if found is None:
+            return None
+        arguments, model = found
+        problems, problems_request = self.set_request(split, family)
+        command = [self.bench.flowplan, "plan", *arguments, "--problems", problems, "-n", str(self.plans[split]),
+                   "--batch", "1", "--seed", "1", "threads=1", *(["--execute"] if execute else []),
+                   "--log-level", "warn", "--out", prefix]
+        return command, self.bench.request(command, model, problems_request)
+
+    def cell(self, prefix, planner, setting, split, family, execute):
+        made = self.cell_command(prefix, planner, setting, split, family, execute)
+        if made is None:
+            return
+        command, request = made
+        with self.stale(lambda: self.recorded(prefix + ".request", request), prefix + ".lock",
+                        [prefix + ext for ext in (".json", ".h5", ".request")]) as ours:
+            if ours:
+                self.bench.call(command)
+                self.write_text(prefix + ".request", request)
+
+    def report(self, prefix, planner, setting, split, family, execute):
+        """The cell's report, if made by the current request, else None."""
+        try:
+            made = self.cell_command(prefix, planner, setting, split, family, execute)
+        except self.Unavailable:
+            return None
+        if made is None or not self.recorded(prefix + ".request", made[1]):
+            return None
+        return json.load(open(prefix + ".json"))
+
+    def val_prefix(self, planner, k, family):
+        return self.path("val", f"{planner}_{k}_{family}")
+
+    def validation(self, planner):
+        """[(setting, pooled success, median time, plans)] of PLANNER's grid on the validation problems made so far."""
+        rows = []
+        for k, setting in enumerate(self.grids[planner]):
+            reports = [self.report(self.val_prefix(planner, k, f), planner, setting, "val", f, False)
+                       for f in self.families]
+            if any(r is None for r in reports):
+                continue
+            samples = [s for r in reports for p in r["problems"] for s in p["samples"]]
+            asked = sum(r["num_problems"] * r["num_samples"] for r in reports)
+            times = sorted(s["planning_time_s"] for s in samples)
+            median = times[len(times) // 2] if times else float("inf")
+            rows.append((setting, sum(s["success"] for s in samples) / max(asked, 1), median, asked))
+        return rows
+
+    def chosen(self, planner):
+        """The setting of PLANNER's grid with the most valid validation plans, then the shorter median time; None
+        until every setting has been planned."""
+        rows = self.validation(planner)
+        if len(rows) < len(self.grids[planner]):
+            return None
+        return max(rows, key=lambda row: (row[1], -row[2]))[0]
+
+    def run(self):
+        self.problem_sets()
+        for planner in [name for name, *_ in LEARNED] + ["hybrid"]:
+            for k, setting in enumerate(self.grids[planner]):
+                for family in self.families:
+                    self.cell(self.val_prefix(planner, k, family), planner, setting, "val", family, False)
+            print(f"families: {planner} chose {self.chosen(planner)} on validation", flush=True)
+        for planner in PLANNERS:
+            setting = [] if planner == "rrt_connect" else self.chosen(planner)
+            for family in self.families + ["sphere"]:
+                self.cell(self.path("test", f"{planner}_{family}"), planner, setting, "test", family, True)
+            print(f"families: {planner} planned the test problems", flush=True)
+
+    # -- results ----------------------------------------------------------------
+    def results(self, summary):
+        text = ["### Scene families: every planner, checked and executed\n",
+                f"Validation: {self.counts['val']} problems per family (seed {FAMILY_SEEDS['val']}), "
+                f"{self.plans['val']} plans each; test: {self.counts['test']} problems per family (seed "
+                f"{FAMILY_SEEDS['test']}) and the paper's sphere scene (radii {', '.join(f'{r:g}' for r in SPHERE_RADII)} "
+                f"m), {self.plans['test']} plans each. A success passed `flowplan`'s plan checker (whole arm, motion "
+                "between states, joint position and speed limits, ends); executed: and then tracked in MuJoCo "
+                "without contact to within 3 cm of the goal. Time: per plan, the wall time of the call that made it "
+                "(one plan per call, one thread).\n", "Chosen on validation (pooled success, median time per plan):\n"]
+        summary["families"] = {"chosen": {}, "validation": {}, "test": {}}
+        for planner in [name for name, *_ in LEARNED] + ["hybrid"]:
+            rows = self.validation(planner)
+            choice = self.chosen(planner)
+            summary["families"]["chosen"][planner] = choice
+            summary["families"]["validation"][planner] = [
+                {"setting": s, "success": v, "median_time_s": t, "plans": n} for s, v, t, n in rows]
+            grid = "; ".join(f"{' '.join(s)}: {v:.0%}, {t:.3f} s" for s, v, t, _ in rows)
+            text.append(f"- {LABELS[planner]}: **{' '.join(choice) if choice else 'not chosen yet'}** ({grid})")
+        text.append("")
+        header = ("| planner | success | executed | median time (s) | p95 time (s) | joint path (rad) | TCP path (m) "
+                  "| max speed ratio | mean squared jerk (rad²/s⁶) | duration (s) | routes |")
+        points = {}
+        for family in self.families + ["sphere"]:
+            text += [f"**{family}**\n", header, "|---" * 11 + "|"]
+            for planner in PLANNERS:
+                setting = [] if planner == "rrt_connect" else self.chosen(planner)
+                report = None if setting is None else self.report(self.path("test", f"{planner}_{family}"), planner,
+                                                                  setting, "test", family, True)
+                if report is None:
+                    text.append(f"| {LABELS[planner]} | not run |" + " |" * 9)
+                    continue
+                row = summarize(report)
+                summary["families"]["test"][f"{planner}/{family}"] = row
+                points[(planner, family)] = (row["median_time_s"], row["success"])
+                text.append(f"| {LABELS[planner]} | {row['success']:.0%} | {row['executed']:.0%} | "
+                            f"{row['median_time_s']:.3f} | {row['p95_time_s']:.3f} | {row['joint_path']:.2f} | "
+                            f"{row['tcp_path']:.2f} | {row['speed_ratio']:.2f} | {row['jerk']:.3g} | "
+                            f"{row['duration_s']:.2f} | {row['routes']} |")
+            text.append("")
+        text += ["Path length, speed ratio, jerk and duration: medians over the valid plans (over all plans when none is "
+                 "valid). Routes: how the hybrid made its plans. Published anchors, not measured here: "
+                 f"{CUROBO}; {VAMP}.\n"]
+        plot_families(points, self.families + ["sphere"], self.bench.path("results", "families_success_vs_time.png"))
+        return text
+
+
+def summarize(report):
+    """Success rates, time quantiles and the medians of the quality metrics of one `--problems` report."""
+    samples = [s for p in report["problems"] for s in p["samples"]]
+    asked = report["num_problems"] * report["num_samples"]
+    valid = [s for s in samples if s["success"]]
+    pool = valid or samples
+
+    def median(values):
+        values = sorted(values)
+        return values[len(values) // 2] if values else float("nan")
+
+    routes = {}
+    for s in samples:
+        route = s.get("route")
+        if route is not None:
+            key = "proposal" if route.startswith("proposal") else route
+            routes[key] = routes.get(key, 0) + 1
+    return {"success": report["success_rate"], "executed": report.get("success_rate_executed", 0.0),
+            "problems_solved": report["problems_solved"], "refused": report["refused"], "plans": asked,
+            "median_time_s": report["planning_time_s"]["median"], "p95_time_s": report["planning_time_s"]["p95"],
+            "joint_path": median(s["quality"]["joint_path_length"] for s in pool),
+            "tcp_path": median(s["quality"]["tcp_path_length"] for s in pool),
+            "speed_ratio": median(s["quality"]["max_speed_ratio"] for s in pool),
+            "jerk": median(s["quality"]["mean_squared_jerk"] for s in pool),
+            "duration_s": median(s["quality"]["duration_s"] for s in pool),
+            "routes": ", ".join(f"{k} {v}" for k, v in sorted(routes.items())) or ""}
+
+
+def plot_families(points, sets, path):
+    """Success against median time per plan, one panel per scene set, one point per planner."""
+    if not points:
+        return
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    figure, axes = plt.subplots(1, len(sets), figsize=(3.2 * len(sets), 3.3), sharey=True)
+    for axis, family in zip(axes, sets):
+        for planner in PLANNERS:
+            if (planner, family) in points:
+                t, s = points[(planner, family)]
+                axis.scatter([max(t, 1e-4)], [100 * s], label=LABELS[planner], s=28)
+        axis.set_xscale("log")
+        axis.set_title(family)
+        axis.set_xlabel("median time per plan (s)")
+        axis.set_ylim(-5, 105)
+    axes[0].set_ylabel("valid plans (%)")
+    axes[-1].legend(fontsize=7, loc="lower right")
+    figure.tight_layout()
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    figure.savefig(path + ".tmp.png", dpi=80)
+    os.replace(path + ".tmp.png", path)
+    plt.close(figure)
