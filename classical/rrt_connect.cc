@@ -143,12 +143,14 @@ void QuietOmpl() {
 
 }  // namespace
 
-RrtConnectPlanner::RrtConnectPlanner(const kinematics::TrajectoryInfo& trajectory, RrtConnectConfig config)
+RrtConnectPlanner::RrtConnectPlanner(const kinematics::TrajectoryInfo& trajectory, RrtConnectConfig config,
+                                     validity::ConfigurationCheck configuration_check)
     : robot_(kinematics::MakeRobot(trajectory.robot, "rrt_connect: robot")),
       horizon_(trajectory.horizon),
       state_dim_(trajectory.state_dim()),
       dt_(trajectory.dt),
-      config_(config) {
+      config_(config),
+      configuration_check_(std::move(configuration_check)) {
   const int64_t J = robot_->num_joints();
   if (state_dim_ != J && state_dim_ != 2 * J) {
     throw Error("rrt_connect: states of " + std::to_string(state_dim_) + " dimensions; expected J = " +
@@ -167,9 +169,19 @@ RrtConnectPlanner::RrtConnectPlanner(const kinematics::TrajectoryInfo& trajector
 }
 
 torch::Tensor RrtConnectPlanner::Valid(const torch::Tensor& q, const geometry::SceneRows& scene) const {
-  const int64_t M = q.size(0);
-  if (geometry::CountObstacles(scene) == 0) return torch::ones({M}, torch::kBool);
-  return (robot_->Clearance(q, scene) >= config_.margin).all(1);
+  const int64_t M = q.size(0), J = q.size(1);
+  torch::Tensor valid = geometry::CountObstacles(scene) == 0 ? torch::ones({M}, torch::kBool)
+                                                             : (robot_->Clearance(q, scene) >= config_.margin).all(1);
+  if (configuration_check_) {
+    const torch::Tensor q64 = q.to(torch::kFloat64).contiguous();
+    const double* values = q64.data_ptr<double>();
+    for (int64_t m = 0; m < M; ++m) {
+      if (valid[m].item<bool>() && !configuration_check_(std::vector<double>(values + m * J, values + (m + 1) * J)).empty()) {
+        valid[m] = false;
+      }
+    }
+  }
+  return valid;
 }
 
 planning::PlanResult RrtConnectPlanner::Plan(const planning::PlanRequest& request) const {

@@ -14,6 +14,7 @@
 #include "kinematics/robot.h"
 #include "kinematics/trajectory_info.h"
 #include "planning/planner.h"
+#include "validity/plan_check.h"
 
 namespace flowplan::classical {
 
@@ -50,14 +51,17 @@ struct RrtConnectConfig {
 class RrtConnectPlanner : public planning::Planner {
  public:
   /// Plans trajectories like `trajectory`'s (T states dt apart, D = J or 2J)
-  /// for its robot, whose joint limits must be finite.
+  /// for its robot, whose joint limits must be finite. A configuration is
+  /// valid when `configuration_check` (may be empty; the Franka's self-collision
+  /// and floor) does not object either.
   /// @throws flowplan::Error naming what does not fit.
-  RrtConnectPlanner(const kinematics::TrajectoryInfo& trajectory, RrtConnectConfig config);
+  RrtConnectPlanner(const kinematics::TrajectoryInfo& trajectory, RrtConnectConfig config,
+                    validity::ConfigurationCheck configuration_check = {});
 
   planning::PlanResult Plan(const planning::PlanRequest& request) const override;
 
-  /// Whether configurations q (M, J) keep every sphere `margin` away from every obstacle of `scene`:
-  /// the robot's clearance (kinematics::Robot::Clearance), (M,) bool.
+  /// Whether configurations q (M, J) keep every sphere `margin` away from every obstacle of `scene`
+  /// (the robot's clearance, kinematics::Robot::Clearance) and pass the configuration check: (M,) bool.
   torch::Tensor Valid(const torch::Tensor& q, const geometry::SceneRows& scene) const;
 
   int64_t horizon() const override { return horizon_; }
@@ -68,6 +72,7 @@ class RrtConnectPlanner : public planning::Planner {
   int64_t horizon_, state_dim_;
   double dt_;
   RrtConnectConfig config_;
+  validity::ConfigurationCheck configuration_check_;
 };
 
 }  // namespace flowplan::classical

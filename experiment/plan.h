@@ -58,6 +58,7 @@ struct PlanSubject {
   kinematics::TrajectoryInfo trajectory;  // what it plans
   std::shared_ptr<const kinematics::Robot> robot;
   planning::PlanSettings settings;        // the call's settings (a learned planner's)
+  validity::ConfigurationCheck configuration_check;  // the built-in Franka's self-collision and floor; else empty
   std::string source;                     // what was loaded, for the report
   std::string run_folder;                 // default output folder
 };
@@ -93,6 +94,12 @@ PlanInputs ResolvePlanInputs(const PlanArgs& args, const PlanSubject& subject);
 
 /// plan_report.cc: scores the plans (N, T, D) of `result`.
 PlanScores ScorePlans(const planning::PlanResult& result, const PlanSubject& subject, const PlanInputs& inputs);
+
+/// plan_execute.cc: whether `robot` has the built-in Franka's kinematics and geometry (limits may differ).
+bool IsBuiltInFranka(const kinematics::RobotDescription& robot);
+
+/// The plan checker of `subject` (its robot, dt, check.* and configuration check).
+validity::PlanChecker MakePlanChecker(const PlanSubject& subject);
 
 /// plan_execute.cc: tracks every plan in MuJoCo, on `threads` workers.
 /// @throws flowplan::Error unless the robot is the built-in Franka.

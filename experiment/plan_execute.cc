@@ -11,12 +11,7 @@ namespace {
 
 /// Execution needs the built-in Franka: the planner's robot must have its kinematics and geometry (limits may differ).
 void CheckBuiltInFranka(const kinematics::Robot& robot) {
-  static const sim::FrankaModel model = sim::LoadFrankaModel();
-  auto geometry = [](kinematics::RobotDescription d) {
-    d.velocity_limit.clear();
-    return kinematics::RobotToYaml(d);
-  };
-  if (geometry(model.description()) != geometry(robot.description())) {
+  if (!IsBuiltInFranka(robot.description())) {
     throw Error("--execute: execution in MuJoCo needs the built-in Franka; this planner's robot is \"" +
                 robot.description().name + "\"" +
                 (robot.description().name == "franka_panda" ? " with other kinematics" : ""));
@@ -24,6 +19,19 @@ void CheckBuiltInFranka(const kinematics::Robot& robot) {
 }
 
 }  // namespace
+
+bool IsBuiltInFranka(const kinematics::RobotDescription& robot) {
+  static const sim::FrankaModel model = sim::LoadFrankaModel();
+  auto geometry = [](kinematics::RobotDescription d) {
+    d.velocity_limit.clear();
+    return kinematics::RobotToYaml(d);
+  };
+  return geometry(model.description()) == geometry(robot);
+}
+
+validity::PlanChecker MakePlanChecker(const PlanSubject& subject) {
+  return validity::PlanChecker(subject.robot, subject.trajectory.dt, subject.config.check, subject.configuration_check);
+}
 
 std::vector<sim::ExecutionResult> ExecutePlans(const torch::Tensor& plans, const PlanSubject& subject,
                                                const PlanInputs& inputs, int threads) {

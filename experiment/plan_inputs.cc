@@ -133,8 +133,7 @@ void CheckOutsideObstacles(const std::string& name, const torch::Tensor& state, 
 std::string RefusalOf(const std::string& name, const torch::Tensor& state, const PlanSubject& subject,
                       const geometry::SceneRows& rows) {
   // A plan of this one state, from and to it: what the checker says of it is what no plan through it can avoid.
-  const validity::PlanChecker checker(subject.robot, subject.trajectory.dt, subject.config.check);
-  const validity::PlanVerdict verdict = checker.Check(state.view({1, 1, -1}), state, state, rows)[0];
+  const validity::PlanVerdict verdict = MakePlanChecker(subject).Check(state.view({1, 1, -1}), state, state, rows)[0];
   if (verdict.valid()) return "";
   std::string reason = verdict.reason;
   if (reason.rfind("state 0: ", 0) == 0) reason = reason.substr(9);

@@ -12,6 +12,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <map>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -78,8 +79,16 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
   AtomicFile h5_file(prefix + ".h5");
   // Every problem's inputs are read before any planning, so that a bad entry fails at once.
   std::vector<PlanInputs> inputs;
+  std::map<std::string, std::string> groups;  // HDF5 group -> the problem that has it
   for (int64_t p = 0; p < count; ++p) {
     const problems::Problem& problem = set.problems[static_cast<size_t>(p)];
+    const std::string where = args.problems + ": problems[" + std::to_string(p) + "]";
+    if (problem.name.empty()) throw Error(where + ".name: expected a name");
+    const auto [at, fresh] = groups.emplace(ProblemGroup(problem.name), problem.name);
+    if (!fresh) {
+      throw Error(where + ".name: \"" + problem.name + "\" would share its report entry with \"" + at->second +
+                  "\"; give every problem its own name");
+    }
     inputs.push_back(ProblemInputs(problem, subject, args.problems + ": problems[" + std::to_string(p) + "] (" +
                                                          problem.name + ")"));
   }
@@ -133,9 +142,11 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
     total += counts;
     ++planned;
     solved += counts.success > 0;
-    spdlog::info("problem {}/{} {}: success {}/{}{}, {:.3g} s per plan", p + 1, count, problem.name, counts.success, N,
-                 executed.empty() ? std::string() : fmt::format(", executed {}/{}", counts.executed, N),
-                 result.call_seconds[0] / static_cast<double>(result.call_plans[0]));
+    double seconds = 0.0;  // the planning time of the problem's plans, per plan
+    for (size_t i = 0; i < result.call_seconds.size(); ++i) seconds += result.call_seconds[i] / result.call_plans[i];
+    spdlog::info("problem {}/{} {}: success {}/{}{}, {:.3g} s per plan (mean)", p + 1, count, problem.name,
+                 counts.success, N, executed.empty() ? std::string() : fmt::format(", executed {}/{}", counts.executed, N),
+                 seconds / static_cast<double>(N));
     entries += std::string(entries.empty() ? "" : ",\n  ") + entry +
                ", \"status\": \"planned\", \"reason\": \"\", \"group\": " + JsonString(group) + ", \"success_rate\": " +
                JsonNumber(static_cast<double>(counts.success) / static_cast<double>(N)) +

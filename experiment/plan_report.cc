@@ -155,8 +155,7 @@ PlanScores ScorePlans(const planning::PlanResult& result, const PlanSubject& sub
   scores.quality = validity::MeasurePlans(plans, robot, subject.trajectory.dt, subject.config.check.joint_tolerance);
   scores.speed_ratio = torch::zeros({N}, torch::kFloat64);
   for (int64_t i = 0; i < N; ++i) scores.speed_ratio[i] = scores.quality[static_cast<size_t>(i)].max_speed_ratio;
-  const validity::PlanChecker checker(subject.robot, subject.trajectory.dt, subject.config.check);
-  scores.verdicts = checker.Check(plans, inputs.start, inputs.goal, inputs.rows, result.found);
+  scores.verdicts = MakePlanChecker(subject).Check(plans, inputs.start, inputs.goal, inputs.rows, result.found);
   return scores;
 }
 

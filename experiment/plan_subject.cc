@@ -11,6 +11,7 @@
 #include "experiment/trained_planner.h"
 #include "hybrid/hybrid_planner.h"
 #include "planning/learned_planner.h"
+#include "sim/franka_self_collision.h"
 
 namespace flowplan::experiment {
 namespace fs = std::filesystem;
@@ -84,7 +85,6 @@ PlanSubject FromRrtConnect(const PlanArgs& args) {
   subject.trajectory = datasets::MakeTask(subject.config.generate)->Layout().info;
   subject.source = "rrt_connect";
   subject.run_folder = subject.config.run_dir;
-  subject.planner = std::make_unique<classical::RrtConnectPlanner>(subject.trajectory, subject.config.rrt_connect);
   return subject;
 }
 
@@ -93,10 +93,10 @@ PlanSubject FromRrtConnect(const PlanArgs& args) {
 void MakeHybrid(PlanSubject& subject) {
   std::unique_ptr<planning::LearnedPlanner> proposer(dynamic_cast<planning::LearnedPlanner*>(subject.planner.release()));
   FLOWPLAN_DEMAND(proposer != nullptr);
-  auto fallback = std::make_unique<classical::RrtConnectPlanner>(subject.trajectory, subject.config.rrt_connect);
-  validity::PlanChecker checker(subject.robot, subject.trajectory.dt, subject.config.check);
+  auto fallback = std::make_unique<classical::RrtConnectPlanner>(subject.trajectory, subject.config.rrt_connect,
+                                                                 subject.configuration_check);
   subject.planner = std::make_unique<hybrid::HybridPlanner>(std::move(proposer), std::move(fallback),
-                                                            std::move(checker), subject.config.hybrid);
+                                                            MakePlanChecker(subject), subject.config.hybrid);
   subject.source = "hybrid(" + subject.source + ", rrt_connect)";
 }
 
@@ -112,6 +112,12 @@ PlanSubject LoadPlanSubject(const PlanArgs& args) {
                         : args.rrt_connect         ? FromRrtConnect(args)
                                                    : FromCheckpoint(args);
   subject.robot = kinematics::MakeRobot(subject.trajectory.robot, subject.source + ": robot");
+  // The built-in Franka's plans are checked for self-collision and the floor too; RRT-Connect avoids them.
+  if (IsBuiltInFranka(subject.robot->description())) subject.configuration_check = sim::FrankaConfigurationCheck();
+  if (args.rrt_connect) {
+    subject.planner = std::make_unique<classical::RrtConnectPlanner>(subject.trajectory, subject.config.rrt_connect,
+                                                                     subject.configuration_check);
+  }
   if (args.hybrid) MakeHybrid(subject);
   return subject;
 }

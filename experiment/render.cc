@@ -45,14 +45,9 @@ void RunRender(const RenderArgs& args) {
   }
   const std::string where = args.plans + ":" + group;
   if (file.GetStringAttribute("/", "env") != "franka") throw Error(args.plans + ": env: render draws the Franka's plans");
-  const sim::FrankaModel franka = sim::LoadFrankaModel();
   const kinematics::RobotDescription robot =
       kinematics::RobotFromYaml(file.GetStringAttribute("/", "robot"), args.plans + ": robot");
-  auto geometry = [](kinematics::RobotDescription d) {
-    d.velocity_limit.clear();
-    return kinematics::RobotToYaml(d);
-  };
-  if (geometry(robot) != geometry(franka.description())) {
+  if (!IsBuiltInFranka(robot)) {
     throw Error(args.plans + ": robot: render needs the built-in Franka's kinematics and geometry");
   }
   std::vector<int64_t> shape;

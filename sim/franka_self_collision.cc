@@ -1,7 +1,10 @@
 #include "sim/franka_self_collision.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <map>
+#include <memory>
 
 #include "core/error.h"
 
@@ -70,6 +73,29 @@ std::string FrankaCollisionChecker::FirstCollision(const JointVector& q) {
     }
   }
   return "";
+}
+
+std::function<std::string(const std::vector<double>& q)> FrankaConfigurationCheck(double floor_height) {
+  static std::atomic<int64_t> next_id{0};
+  const int64_t id = next_id++;
+  auto model = std::make_shared<const FrankaCollisionModel>(floor_height);
+  return [id, model](const std::vector<double>& q) -> std::string {
+    if (q.size() != static_cast<size_t>(kFrankaJoints)) {
+      return "expected 7 joint positions, got " + std::to_string(q.size());
+    }
+    // One checker per thread and model; it keeps the model alive as long as the thread does.
+    struct Entry {
+      std::shared_ptr<const FrankaCollisionModel> model;
+      std::unique_ptr<FrankaCollisionChecker> checker;
+    };
+    thread_local std::map<int64_t, Entry> checkers;
+    Entry& entry = checkers[id];
+    if (!entry.checker) {
+      entry.model = model;
+      entry.checker = std::make_unique<FrankaCollisionChecker>(*model);
+    }
+    return entry.checker->FirstCollision(Eigen::Map<const JointVector>(q.data()));
+  };
 }
 
 }  // namespace flowplan::sim

@@ -14,7 +14,9 @@
 
 #include <mujoco/mujoco.h>
 
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "sim/franka_model.h"
 #include "sim/mujoco_util.h"
@@ -51,5 +53,11 @@ class FrankaCollisionChecker {
   MjDataPtr data_;
   int link0_, link1_, link5_, link7_;
 };
+
+/// The check as one function that any thread may call (each thread keeps a
+/// checker of its own): the first collision of the configuration `q` (7
+/// joint positions, rad), or empty. What validity::PlanChecker and
+/// RRT-Connect take as their configuration check for the Franka.
+std::function<std::string(const std::vector<double>& q)> FrankaConfigurationCheck(double floor_height = 0.0);
 
 }  // namespace flowplan::sim

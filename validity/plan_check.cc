@@ -1,5 +1,6 @@
 #include "validity/plan_check.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -28,13 +29,19 @@ std::string Num(double v) { return fmt::format("{:.4g}", v); }
 
 }  // namespace
 
-PlanChecker::PlanChecker(std::shared_ptr<const kinematics::Robot> robot, double dt, CheckConfig config)
-    : robot_(std::move(robot)), dt_(dt), config_(config), motion_bound_(robot_->MotionBound()) {
+PlanChecker::PlanChecker(std::shared_ptr<const kinematics::Robot> robot, double dt, CheckConfig config,
+                         ConfigurationCheck self_check)
+    : robot_(std::move(robot)),
+      dt_(dt),
+      config_(config),
+      self_check_(std::move(self_check)),
+      motion_bound_(robot_->MotionBound()) {
   if (!(dt > 0)) throw Error("check: dt: expected a positive sample spacing, got " + Num(dt));
   if (!(config.joint_tolerance > 0)) throw Error("check.joint_tolerance: expected a positive tolerance");
   if (!(config.max_speed_ratio > 0)) throw Error("check.max_speed_ratio: expected a positive ratio");
   if (!(config.margin >= 0)) throw Error("check.margin: expected a non-negative margin");
   if (!(config.resolution > 0)) throw Error("check.resolution: expected a positive resolution");
+  if (!(config.self_resolution > 0)) throw Error("check.self_resolution: expected a positive resolution");
 }
 
 std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const torch::Tensor& start,
@@ -75,8 +82,10 @@ std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const to
   }
   const auto se = start_error.accessor<double, 2>(), ge = goal_error.accessor<double, 2>();
   const auto out = outside.accessor<double, 3>(), sr = speed_ratio.accessor<double, 3>();
+  const torch::Tensor finite = torch::isfinite(plans.to(torch::kFloat64)).flatten(1).all(1);  // (N,)
   for (int64_t n = 0; n < N; ++n) {
     if (found.defined() && !found[n].item<bool>()) fail(n, Failure::kNotFound, "the planner found no plan");
+    if (!finite[n].item<bool>()) fail(n, Failure::kNotFinite, "a state holds NaN or an infinity");
     for (int64_t j = 0; j < J; ++j) {
       if (se[n][j] > config_.joint_tolerance) {
         fail(n, Failure::kStart, "state 0 is " + Num(se[n][j]) + " from the start at " + label(j));
@@ -101,6 +110,40 @@ std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const to
         if (sr[n][t][j] > config_.max_speed_ratio) {
           fail(n, Failure::kSpeedLimit, "states " + std::to_string(t) + "-" + std::to_string(t + 1) + ": " + label(j) +
                                             " moves at " + Num(sr[n][t][j]) + " x its speed limit");
+        }
+      }
+    }
+  }
+
+  // The configuration check at the states and at samples between them, for plans still valid.
+  if (self_check_) {
+    const auto qa = q.accessor<double, 3>();
+    std::vector<double> c(static_cast<size_t>(J));
+    auto at = [&](int64_t n, int64_t t, double u) {  // u in [0, 1] along segment t
+      for (int64_t j = 0; j < J; ++j) {
+        c[static_cast<size_t>(j)] = u == 0.0 ? qa[n][t][j] : qa[n][t][j] + u * (qa[n][t + 1][j] - qa[n][t][j]);
+      }
+      return self_check_(c);
+    };
+    for (int64_t n = 0; n < N; ++n) {
+      if (!verdicts[static_cast<size_t>(n)].valid()) continue;
+      for (int64_t t = 0; t < T && verdicts[static_cast<size_t>(n)].valid(); ++t) {
+        const std::string objection = at(n, t, 0.0);
+        if (!objection.empty()) {
+          fail(n, Failure::kSelf, "state " + std::to_string(t) + ": " + objection);
+          break;
+        }
+        if (t + 1 == T) break;
+        double widest = 0.0;
+        for (int64_t j = 0; j < J; ++j) widest = std::max(widest, std::abs(qa[n][t + 1][j] - qa[n][t][j]));
+        const int64_t samples = static_cast<int64_t>(std::ceil(widest / config_.self_resolution));
+        for (int64_t k = 1; k < samples; ++k) {
+          const std::string between = at(n, t, static_cast<double>(k) / static_cast<double>(samples));
+          if (!between.empty()) {
+            fail(n, Failure::kSelf, "between states " + std::to_string(t) + " and " + std::to_string(t + 1) + ": " +
+                                        between);
+            break;
+          }
         }
       }
     }

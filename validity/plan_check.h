@@ -1,8 +1,9 @@
 #pragma once
 
 // The one check every plan passes before anything calls it a success, for
-// every planner: within the joint limits, within the speed limits, starting at
-// the start and ending at the goal, and clear of every obstacle of the scene
+// every planner: finite, within the joint limits, within the speed limits,
+// starting at the start and ending at the goal, allowed by a configuration
+// check (the Franka's self-collision and floor), and clear of every obstacle of the scene
 // with every collision sphere — at every state and along the motion between
 // consecutive states (the straight joint-space segment), checked by
 // conservative advancement so that no obstacle can be stepped over:
@@ -21,6 +22,7 @@
 
 #include <torch/torch.h>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,6 +39,7 @@ struct CheckConfig {
   double max_speed_ratio = 1.0;   // joint speeds |Δq| / dt between consecutive states, over each joint's limit
   double margin = 0.0;            // world units every collision sphere keeps from every obstacle
   double resolution = 0.001;      // world units: motion checks stop halving a segment whose spheres move less than this
+  double self_resolution = 0.02;  // rad: the self check (below) samples each segment at most this far apart in every joint
 
   template <class V>
   void Visit(V& v) {
@@ -52,26 +55,39 @@ struct CheckConfig {
             "motion checks: a segment whose spheres move less than this is not halved further (world units; it may "
             "overlap an obstacle by at most half of it)",
             config::Positive());
+    v.Field("self_resolution", self_resolution,
+            "self-collision and floor check (the Franka): configurations sampled along each segment at most this far "
+            "apart in every joint (rad)",
+            config::Positive());
   }
 };
+
+/// A check of single configurations beyond the scene's obstacles (for the
+/// Franka: self-collision and the floor, by MuJoCo; sim/franka_self_collision.h):
+/// given the J joint positions, why the configuration is not allowed, or empty.
+/// Called from several threads at once.
+using ConfigurationCheck = std::function<std::string(const std::vector<double>& q)>;
 
 /// Why a plan is not valid; the first that applies, in this order.
 enum class Failure {
   kNone,        // valid
   kNotFound,    // the planner reported that it found no plan
+  kNotFinite,   // a state holds NaN or an infinity
   kStart,       // the first state is not the start
   kGoal,        // the last state is not the goal
   kJointLimit,  // a state outside the joint limits
   kSpeedLimit,  // a joint faster than max_speed_ratio × its limit between two states
+  kSelf,        // the configuration check objects at a state or at a sample between two states
   kCollision,   // a state inside an obstacle
   kMotion,      // the motion between two clear states passes through an obstacle
 };
 
 inline const config::EnumNames<Failure>& EnumEntries(Failure) {
   static const config::EnumNames<Failure> names = {
-      {Failure::kNone, "none"},         {Failure::kNotFound, "not_found"},     {Failure::kStart, "start"},
-      {Failure::kGoal, "goal"},         {Failure::kJointLimit, "joint_limit"}, {Failure::kSpeedLimit, "speed_limit"},
-      {Failure::kCollision, "collision"}, {Failure::kMotion, "motion"}};
+      {Failure::kNone, "none"},           {Failure::kNotFound, "not_found"},     {Failure::kNotFinite, "not_finite"},
+      {Failure::kStart, "start"},         {Failure::kGoal, "goal"},              {Failure::kJointLimit, "joint_limit"},
+      {Failure::kSpeedLimit, "speed_limit"}, {Failure::kSelf, "self_collision"}, {Failure::kCollision, "collision"},
+      {Failure::kMotion, "motion"}};
   return names;
 }
 
@@ -87,8 +103,12 @@ struct PlanVerdict {
 /// Checks plans of one robot at one sample spacing. Immutable; safe to share.
 class PlanChecker {
  public:
-  /// `dt`: seconds between a plan's states. @throws flowplan::Error naming a bad setting.
-  PlanChecker(std::shared_ptr<const kinematics::Robot> robot, double dt, CheckConfig config);
+  /// `dt`: seconds between a plan's states; `self_check` (may be empty) is
+  /// asked about every state and about samples along every segment, at most
+  /// config.self_resolution apart in every joint (a sampled check, unlike the
+  /// obstacles'). @throws flowplan::Error naming a bad setting.
+  PlanChecker(std::shared_ptr<const kinematics::Robot> robot, double dt, CheckConfig config,
+              ConfigurationCheck self_check = {});
 
   /// Checks plans (N, T, D) raw (positions first) against the start and goal
   /// (D,) or (N, D) raw states, `found` (N,) bool (undefined: all found), in `scene`.
@@ -102,6 +122,7 @@ class PlanChecker {
   std::shared_ptr<const kinematics::Robot> robot_;
   double dt_;
   CheckConfig config_;
+  ConfigurationCheck self_check_;
   torch::Tensor motion_bound_;  // (J, S)
 };
 

@@ -19,7 +19,7 @@ struct PlanQuality {
   double tcp_path_length = 0.0;    // world units: Σ_t ‖tcp_{t+1} − tcp_t‖₂
   double max_speed_ratio = 0.0;    // largest |q_{t+1,j} − q_{t,j}| / dt over joint j's speed limit (0 without limits)
   double mean_squared_jerk = 0.0;  // (rad/s³)²: mean over t and j of ((q_{t+3} − 3q_{t+2} + 3q_{t+1} − q_t) / dt³)²
-  double duration = 0.0;           // s: time of the last state farther than `at_rest` (max over joints) from the last state
+  double duration = 0.0;           // s: arrival, one state after the last one farther than `at_rest` from the final state
 };
 
 /// Measures plans (N, T, D) raw of `robot`, states `dt` s apart. A motion

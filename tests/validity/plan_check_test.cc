@@ -7,11 +7,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <iostream>
 
 #include "core/error.h"
 #include "sim/franka_model.h"
+#include "sim/franka_self_collision.h"
 #include "validity/plan_quality.h"
 
 namespace flowplan::validity {
@@ -105,6 +107,61 @@ TEST(PlanCheckTest, EachFailureIsNamedInOrder) {
               ::testing::ThrowsMessage<Error>(HasSubstr("check: plans: expected (N, T, D)")));
   EXPECT_THAT([&] { checker.Check(plan, torch::zeros({3}), goal, none); },
               ::testing::ThrowsMessage<Error>(HasSubstr("check: start: expected (4) or (1, 4)")));
+}
+
+TEST(PlanCheckTest, NonFiniteStatesFailAtOnceWithoutAHang) {
+  const PlanChecker checker(Disc(), 0.1, CheckConfig{});
+  torch::Tensor plan = DiscPlan({{-0.4, 0.0}, {0.0, 0.1}, {0.4, 0.0}});
+  plan[0][1][0] = NAN;
+  const PlanVerdict v = checker.Check(plan, plan[0][0], plan[0][2], Spheres({{0.0, 0.0, 0.05}}))[0];
+  EXPECT_EQ(v.failure, Failure::kNotFinite);
+  plan[0][1][0] = INFINITY;
+  EXPECT_EQ(checker.Check(plan, plan[0][0], plan[0][2], geometry::SceneRows())[0].failure, Failure::kNotFinite);
+}
+
+TEST(PlanCheckTest, TheConfigurationCheckIsAskedAtTheStatesAndBetweenThem) {
+  CheckConfig config;
+  config.max_speed_ratio = INFINITY;
+  config.self_resolution = 0.01;
+  // Objects to every configuration with x in (0.1, 0.12): only samples between the states can find it.
+  std::atomic<int> calls{0};
+  const ConfigurationCheck strip = [&](const std::vector<double>& q) {
+    ++calls;
+    return q[0] > 0.1 && q[0] < 0.12 ? std::string("in the strip") : std::string();
+  };
+  const PlanChecker checker(Disc(), 0.1, config, strip);
+  const torch::Tensor across = DiscPlan({{0.0, 0.0}, {0.3, 0.0}});
+  const PlanVerdict v = checker.Check(across, across[0][0], across[0][1], geometry::SceneRows())[0];
+  EXPECT_EQ(v.failure, Failure::kSelf);
+  EXPECT_EQ(v.reason, "between states 0 and 1: in the strip");
+  const torch::Tensor in = DiscPlan({{0.0, 0.0}, {0.11, 0.0}, {0.3, 0.0}});
+  EXPECT_EQ(checker.Check(in, in[0][0], in[0][2], geometry::SceneRows())[0].reason, "state 1: in the strip");
+  const torch::Tensor beside = DiscPlan({{0.0, 0.0}, {0.045, 0.0}});
+  calls = 0;
+  EXPECT_TRUE(checker.Check(beside, beside[0][0], beside[0][1], geometry::SceneRows())[0].valid());
+  EXPECT_EQ(calls, 2 + 4);  // the two states and the 4 samples between them, at most 0.01 apart
+}
+
+TEST(PlanCheckTest, TheFrankaCheckFindsTheHandFoldedOntoTheForearmAndTheFloor) {
+  const PlanChecker checker(Franka(), 1.0 / 15.0, CheckConfig{}, sim::FrankaConfigurationCheck());
+  // The ready pose, then joint 2 leaning far forward: the hand goes below the floor on the way.
+  torch::Tensor plan = torch::zeros({1, 3, 14});
+  const std::vector<double> ready = {0.0, -0.785398, 0.0, -2.356194, 0.0, 1.570796, 0.785398};
+  for (int t = 0; t < 3; ++t) {
+    for (int j = 0; j < 7; ++j) plan[0][t][j] = ready[static_cast<size_t>(j)];
+  }
+  plan[0][1][1] = 0.5f;
+  plan[0][2][1] = 1.7f;
+  plan[0][2][3] = -0.1f;
+  CheckConfig any_speed;
+  any_speed.max_speed_ratio = INFINITY;
+  const PlanChecker fast(Franka(), 1.0 / 15.0, any_speed, sim::FrankaConfigurationCheck());
+  const PlanVerdict v = fast.Check(plan, plan[0][0], plan[0][2], geometry::SceneRows())[0];
+  EXPECT_EQ(v.failure, Failure::kSelf);
+  EXPECT_THAT(v.reason, HasSubstr("floor-"));
+  // The ready pose alone is allowed.
+  const torch::Tensor still = plan.slice(1, 0, 1).expand({1, 2, 14}).contiguous();
+  EXPECT_TRUE(checker.Check(still, still[0][0], still[0][1], geometry::SceneRows())[0].valid());
 }
 
 TEST(PlanCheckTest, MotionBoundHoldsForEverySphereAndJoint) {
