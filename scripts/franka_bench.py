@@ -54,8 +54,9 @@ the order given (e.g. --rows cross_mpd,cross_fp_s0 --only train-cross,stitching)
 without entering any request (their results do not depend on it): two drivers
 with --threads 1 and different --rows share a root on two cores. The select
 stage plans on one thread always: it compares times per plan.
---adopt ROW=RUN takes a run folder trained outside the driver as training row ROW, if its resolved config is
-the one the row's command makes (paths and threads aside) and it finished its steps.
+--adopt ROW=RUN makes the training stage take a run folder trained outside the driver as training row ROW instead of
+training it, if its resolved config is the one the row's command makes (paths and threads aside) and it finished
+its steps; done.json then names the folder, and the training time is summed from its logged rates.
 --quick runs every stage at toy size (ROOT defaults to runs/franka_bench_quick).
 The sizes of the full run and how they were chosen: docs/results.md.
 """
@@ -205,6 +206,7 @@ class Bench:
         self.quick = args.quick
         self.child = None  # the running command
         self.rows = args.rows  # None: every row
+        self.adoptions = {}  # row -> a run folder trained outside the driver (--adopt), taken by the train stages
         # threads=N on every training and evaluation (not part of any request: results do not depend on it)
         self.threads = [] if args.threads is None else [f"threads={args.threads}"]
 
@@ -381,7 +383,12 @@ class Bench:
             sys.exit(f"--adopt {row}: {shown.stderr.strip()}")
         ignore = lambda c: {k: v for k, v in c.items() if k not in ("run_dir", "threads")} | {
             "data": {k: v for k, v in c["data"].items() if k != "path"}}
-        wanted, theirs = yaml.safe_load(shown.stdout), yaml.safe_load(open(os.path.join(run, "config.yaml")))
+        # The run's config resolved by this flowplan too (sections newer than the run get their defaults).
+        resolved = subprocess.run([self.flowplan, "config", "show", "--config", os.path.join(run, "config.yaml")],
+                                  capture_output=True, text=True)
+        if resolved.returncode != 0:
+            sys.exit(f"--adopt {row}: {resolved.stderr.strip()}")
+        wanted, theirs = yaml.safe_load(shown.stdout), yaml.safe_load(resolved.stdout)
         if ignore(wanted) != ignore(theirs):
             different = sorted(k for k in set(wanted) | set(theirs) if ignore(wanted).get(k) != ignore(theirs).get(k))
             sys.exit(f"--adopt {row}: {run}/config.yaml differs from the row's config in {', '.join(different)}")
@@ -412,6 +419,9 @@ class Bench:
             command, request = self.train_command(row)
             if os.path.exists(done):
                 self.check_training_request(row, json.load(open(done)).get("request"), request)
+                continue
+            if row in self.adoptions:
+                self.adopt(row, self.adoptions[row])
                 continue
             lock = claim(self.path("train", f"{row}.lock"))
             if lock is None:
@@ -537,6 +547,7 @@ class Bench:
     def recount(self):
         plans = [self.path(d) for d in ("sweep", "scales", "budget") if os.path.isdir(self.path(d))]
         plans += [self.path("problems", p) for p, *_ in PLANNERS if os.path.isdir(self.path("problems", p))]
+        plans += [self.path("families", "test")] if os.path.isdir(self.path("families", "test")) else []
         ok, _ = self.call([self.python, "scripts/recount_plans.py", "--out", self.path("results", "recount.json"), *plans],
                           accept_failure=True)
         if not ok:
@@ -1143,8 +1154,7 @@ def main():
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, stop)
-    for row, run in adoptions:
-        bench.adopt(row, run)
+    bench.adoptions = dict(adoptions)
     try:
         for stage in stages:
             started = time.time()

@@ -17,7 +17,11 @@ max_speed_ratio times the limits. The collision spheres (link, centre in the
 link frame, radius) are geometry, read from the file's `robot` attribute.
 
 It also compares, plan by plan, the values behind the counts (smallest TCP
-and arm clearance, goal distance, speed ratio) with those in PREFIX.json.
+and arm clearance, goal distance, speed ratio) with those in PREFIX.json, and
+checks that every plan the report calls a success (the plan checker's
+verdict) keeps every collision sphere at every state at least the check's
+margin from every obstacle, within the check's speed limit. A report of
+`flowplan plan --problems` is recounted problem by problem.
 Prints one line per file (its counts and flowplan's), writes them to
 RESULT.json if asked, and exits 1 if any count or value differs (by more than
 1e-4).
@@ -100,23 +104,28 @@ def signed_distance(kind, row, p):
                       np.array([row[3], 0.5 * row[4]]))
 
 
-def read_obstacles(f):
-    """[(kind, row)] of a plan file's obstacles."""
-    scene = f["scene"]
+def read_obstacles(g):
+    """[(kind, row)] of a plan group's obstacles."""
+    scene = g["scene"]
     return [(kind, row.astype(np.float64)) for kind in ("spheres", "boxes", "cylinders", "capsules") if kind in scene
             for row in scene[kind][...]]
 
 
-def recount(prefix):
-    with h5py.File(prefix + ".h5", "r") as f:
-        if f.attrs["env"] != "franka":
-            raise SystemExit(f"{prefix}.h5: env {f.attrs['env']!r}, only franka plans are recounted")
-        plans = f["plans"][...].astype(np.float64)      # (N, T, D)
-        obstacles = read_obstacles(f)
-        goal_tcp = f["goal_tcp"][...].astype(np.float64)
-        dt = float(f.attrs["dt"])
-        robot = yaml.safe_load(f.attrs["robot"])
-    report = json.load(open(prefix + ".json"))
+def check_limits(report):
+    """The plan checker's speed ratio and margin of a report (`check`, YAML text); None before reports had it."""
+    if "check" not in report:
+        return None
+    check = yaml.safe_load(report["check"])
+    return float(check["max_speed_ratio"]), float(check["margin"])
+
+
+def recount_group(f, g, report, samples):
+    """Counts and largest differences of the plans of one request: HDF5 group G and its report SAMPLES."""
+    plans = g["plans"][...].astype(np.float64)      # (N, T, D)
+    obstacles = read_obstacles(g)
+    goal_tcp = g["goal_tcp"][...].astype(np.float64)
+    dt = float(f.attrs["dt"])
+    robot = yaml.safe_load(f.attrs["robot"])
     n, t = plans.shape[:2]
     q = plans[..., :7].reshape(-1, 7)
     frames = link_frames(q)
@@ -133,7 +142,6 @@ def recount(prefix):
     goal = np.linalg.norm(tcp[:, -1] - goal_tcp, axis=-1)
     ratio = (np.abs(np.diff(plans[..., :7], axis=1)) / dt / VELOCITY_LIMITS).max((1, 2))
     # Per plan, the values behind the counts, against flowplan's (largest difference).
-    samples = report["samples"]
     gaps = {"tcp_clearance": (tcp_gap, [min(s["tcp_clearance"], default=np.inf) for s in samples]),
             "arm_clearance": (arm_gap, [min(s["arm_clearance"], default=np.inf) for s in samples]),
             "goal_distance": (goal, [s["goal_distance"] for s in samples]),
@@ -147,10 +155,38 @@ def recount(prefix):
                                   initial=0.0)) if same_inf else float("inf")
     reached = (goal <= report["goal_tolerance"]) & (ratio <= report["max_speed_ratio"])
     mine = {"tcp": int(np.sum(reached & (tcp_gap >= 0))), "arm": int(np.sum(reached & (arm_gap >= 0)))}
-    theirs = {"tcp": int(sum(s["tcp_clear"] for s in report["samples"])),
-              "arm": int(sum(s["arm_clear"] for s in report["samples"]))}
-    return {"file": prefix, "plans": n, "recounted": mine, "flowplan": theirs, "largest_difference": worst,
-            "agrees": mine == theirs and all(v <= TOLERANCE for v in worst.values())}
+    theirs = {"tcp": int(sum(s["tcp_clear"] for s in samples)), "arm": int(sum(s["arm_clear"] for s in samples))}
+    # A plan the checker calls a success keeps every sphere at every state clear here too, within its speed limit.
+    limits = check_limits(report)
+    unsound = 0
+    if limits is not None:
+        speed, margin = limits
+        unsound = sum(1 for i, s in enumerate(samples)
+                      if s["success"] and (arm_gap[i] < margin - TOLERANCE or ratio[i] > speed + TOLERANCE))
+    return n, mine, theirs, worst, unsound
+
+
+def recount(prefix):
+    report = json.load(open(prefix + ".json"))
+    with h5py.File(prefix + ".h5", "r") as f:
+        if f.attrs["env"] != "franka":
+            raise SystemExit(f"{prefix}.h5: env {f.attrs['env']!r}, only franka plans are recounted")
+        # A `flowplan plan --problems` report holds one group and list of samples per planned problem.
+        parts = ([(f[p["group"]], p["samples"]) for p in report["problems"] if p["status"] == "planned"]
+                 if "problems" in report else [(f, report["samples"])])
+        total, mine, theirs, worst, unsound = 0, {"tcp": 0, "arm": 0}, {"tcp": 0, "arm": 0}, {}, 0
+        for g, samples in parts:
+            n, m, t, w, u = recount_group(f, g, report, samples)
+            total += n
+            unsound += u
+            for key in mine:
+                mine[key] += m[key]
+                theirs[key] += t[key]
+            for key, value in w.items():
+                worst[key] = max(worst.get(key, 0.0), value)
+    return {"file": prefix, "plans": total, "recounted": mine, "flowplan": theirs, "largest_difference": worst,
+            "successes_not_clear": unsound,
+            "agrees": mine == theirs and all(v <= TOLERANCE for v in worst.values()) and unsound == 0}
 
 
 def main():
@@ -170,7 +206,8 @@ def main():
     results = [recount(prefix) for prefix in prefixes]
     differ = [r for r in results if not r["agrees"]]
     for r in results:
-        mark = "" if r["agrees"] else f"   <-- differs {r['largest_difference']}"
+        mark = "" if r["agrees"] else (f"   <-- differs {r['largest_difference']}, "
+                                        f"{r['successes_not_clear']} successes not clear")
         print(f"{r['file']}: TCP {r['recounted']['tcp']}/{r['plans']} (flowplan {r['flowplan']['tcp']}), "
               f"arm {r['recounted']['arm']}/{r['plans']} (flowplan {r['flowplan']['arm']}){mark}")
     summary = {"files": len(results), "differ": len(differ),
