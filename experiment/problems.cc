@@ -48,14 +48,14 @@ Command AddProblemsCommand(CLI::App& app) {
                            obstacles);
               return;
             }
-            problems::BlockedProblemSet set;
+            problems::ProblemSet set;
             try {
               set = problems::MakeBlockedProblems(arm, config.problems, static_cast<uint64_t>(config.seed));
             } catch (const Error& e) {
               throw Error(std::string("problems.") + e.what());
             }
             EnsureParentFolder(args->out);
-            WriteFileAtomically(args->out, config::ToYaml(set));
+            WriteFileAtomically(args->out, problems::ProblemSetYaml(set));
             size_t spheres = 0;
             for (const auto& problem : set.problems) spheres += problem.scene.spheres.size();
             spdlog::info("wrote {}: {} problems, {} spheres, each blocking the straight TCP path with its first",

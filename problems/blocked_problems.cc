@@ -42,18 +42,21 @@ bool Clear(const kinematics::Robot& robot, const torch::Tensor& q, const torch::
 
 }  // namespace
 
-BlockedProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProblemsConfig& config,
-                                      uint64_t seed) {
+ProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProblemsConfig& config, uint64_t seed) {
   CheckConfig(config);
   if (!arm.is_arm() || arm.workspace_dim() != 3) throw Error("blocked problems: expected an arm in a 3-D workspace");
-  BlockedProblemSet set;
+  ProblemSet set;
   set.seed = static_cast<int64_t>(seed);
-  set.drawn = config;
+  set.source = "blocked: " + config::ToYaml(config);  // how they were drawn
+  for (char& c : set.source) {
+    if (c == '\n') c = ' ';
+  }
   for (int i = 0; i < config.count; ++i) {
     Rng rng(StreamSeed(seed, static_cast<uint64_t>(i)));
     bool found = false;
     for (int attempt = 0; attempt < kAttempts && !found; ++attempt) {
-      BlockedProblem problem;
+      Problem problem;
+      problem.name = "blocked/" + std::to_string(i);
       for (Point* p : {&problem.start_tcp, &problem.goal_tcp}) {
         for (int k = 0; k < 3; ++k) p->push_back(rng.Uniform(config.lower[k], config.upper[k]));
       }
@@ -94,6 +97,10 @@ BlockedProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const Blocke
         problem.start_q.push_back(ik.q[0][j].item<double>());
         problem.goal_q.push_back(ik.q[1][j].item<double>());
       }
+      const Point start_tcp = problem.start_tcp, goal_tcp = problem.goal_tcp;  // the drawn points
+      DescribeEnds(arm, problem);  // the clearances (and the TCPs of the IK, within its tolerance)
+      problem.start_tcp = start_tcp;
+      problem.goal_tcp = goal_tcp;
       set.problems.push_back(std::move(problem));
       found = true;
     }

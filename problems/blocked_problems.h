@@ -11,6 +11,7 @@
 #include "core/config.h"
 #include "geometry/scene.h"
 #include "kinematics/robot.h"
+#include "problems/problem.h"
 
 namespace flowplan::problems {
 
@@ -40,44 +41,14 @@ struct BlockedProblemsConfig {
   }
 };
 
-/// One problem: joint start and goal (IK with the home posture's TCP
-/// orientation) and the spheres; the first sphere's centre is on the segment
-/// start_tcp–goal_tcp.
-struct BlockedProblem {
-  std::vector<double> start_tcp, goal_tcp;  // (3,) m
-  std::vector<double> start_q, goal_q;      // (J,) rad
-  geometry::Scene scene;                    // 1..max_spheres spheres
-
-  template <class V>
-  void Visit(V& v) {
-    v.Field("start_tcp", start_tcp, "start TCP (m)");
-    v.Field("goal_tcp", goal_tcp, "goal TCP (m)");
-    v.Field("start_q", start_q, "start joints (rad)");
-    v.Field("goal_q", goal_q, "goal joints (rad)");
-    v.Field("scene", scene, "the obstacles");
-  }
-};
-
-/// A file of problems (YAML), with what drew them.
-struct BlockedProblemSet {
-  int64_t seed = 0;
-  BlockedProblemsConfig drawn;
-  std::vector<BlockedProblem> problems;
-
-  template <class V>
-  void Visit(V& v) {
-    v.Field("seed", seed, "seed the problems were drawn from", config::NonNegative());
-    v.Field("drawn", drawn, "how they were drawn");
-    v.Field("problems", problems, "the problems");
-  }
-};
-
-/// Draws `config.count` problems; problem i depends only on (seed, i). Every
-/// start and goal is reachable, at least `min_length` apart, and its arm (all
-/// collision spheres) is `clearance` clear of every obstacle.
+/// Draws `config.count` problems ("blocked/0", …; problem.h's format, its
+/// `source` saying how they were drawn); problem i depends only on (seed, i).
+/// Every start and goal is the IK of a TCP point (the home posture's TCP
+/// orientation), at least `min_length` apart, and its arm (all collision
+/// spheres) is `clearance` clear of every obstacle; the first sphere is
+/// centred on the straight TCP segment between them.
 /// @throws flowplan::Error naming the key for an inconsistent config, or if a
 ///   problem cannot be drawn in 10,000 attempts (the box is unreachable).
-BlockedProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProblemsConfig& config,
-                                      uint64_t seed);
+ProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProblemsConfig& config, uint64_t seed);
 
 }  // namespace flowplan::problems

@@ -1,11 +1,12 @@
 #pragma once
 
 // Planning problems in joint space: a start and a goal configuration of the
-// arm and the scene around them, as `flowplan scenes import` (MoveIt files)
-// and `flowplan problems --family NAME` (procedural scenes) write them. A
-// problem file is YAML:
+// arm and the scene around them, as `flowplan scenes import` (MoveIt files),
+// `flowplan problems --family NAME` (procedural scenes) and `flowplan problems`
+// (random blocked problems) write them, and `flowplan plan --problems` plans
+// them. A problem file is YAML:
 //
-//   source: "moveit import" | "family shelf" | ...
+//   source: "moveit import" | "family shelf" | "blocked: count: 100 ..." | ...
 //   seed: 7                      # what drew a procedural set (0 for imports)
 //   problems:
 //     - name: scene0001
@@ -19,8 +20,6 @@
 //       left_out: [...]          # obstacles of the source not in `scene` (the grasped object)
 //       scene: {boxes: [...], cylinders: [...], spheres: [...]}
 //
-// The fields start_q, goal_q, start_tcp, goal_tcp and scene are those of
-// `flowplan problems`' blocked problems, so scripts read either kind alike.
 
 #include <cmath>
 #include <cstdint>

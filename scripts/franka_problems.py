@@ -2,14 +2,15 @@
 """Every planner on every problem of a problem file (`flowplan problems`, with or
 without --family, or `flowplan scenes import`).
 
-For each problem and planner, runs `flowplan plan` (joint start and goal, the
-problem's scene, --execute) and keeps its JSON report in
-OUT/<planner>/<i>.json; a report that exists is not made again, so an
-interrupted run continues where it stopped. Then writes OUT/summary.json and
-OUT/summary.md: per planner, the success rate over all plans counted three
-ways (TCP, whole arm, executed in MuJoCo; each also requiring the goal within
-3 cm and feasible speeds, as in `flowplan plan`), the share of problems with
-at least one successful plan (whole arm), and the median planning time.
+For each planner, one `flowplan plan --problems` call plans every problem in its
+own scene (-n plans each, --execute) with the planner loaded once, and keeps its
+report in OUT/<planner>/plans.json and .h5 (refused problems are a status in it);
+a planner whose report exists is not planned again, so an interrupted run
+continues with the next planner. Then writes OUT/summary.json and OUT/summary.md:
+per planner, the states-only counts of `flowplan plan` over all plans (TCP, whole
+arm; each also requiring the goal within 3 cm and speeds within 1.5 times the
+limits), the plan checker's successes and those executed in MuJoCo, the share of
+problems with at least one whole-arm clear plan, and the planning time.
 
 usage: franka_problems.py PROBLEMS.yaml [--run RUN] [--config CONFIG] [--out OUT]
                           [--planners fp,fp_split,rrt_connect] [--samples N] [--limit K]
@@ -26,10 +27,9 @@ import shlex
 import subprocess
 import sys
 
-import yaml
-
 LABELS = {"fp": "FP", "fp_split": "FP + split", "rrt_connect": "RRT-Connect", "mpd": "MPD", "vae": "VAE planner"}
-WAYS = [("tcp_clear_rate", "TCP"), ("arm_clear_rate", "whole arm"), ("success_rate_executed", "executed")]
+WAYS = [("tcp_clear_rate", "TCP"), ("arm_clear_rate", "whole arm"), ("success_rate", "valid"),
+        ("success_rate_executed", "executed")]
 
 
 def main():
@@ -48,9 +48,6 @@ def main():
                         help="config override for every planner call, e.g. data.path=... for RRT-Connect's robot")
     args = parser.parse_args()
     out = args.out or os.path.join(args.run, "problems")
-    problems = yaml.safe_load(open(args.problems))["problems"]
-    if args.limit > 0:
-        problems = problems[: args.limit]
     sources = {"fp": ["--ckpt", args.run],
                "fp_split": ["--ckpt", args.run, "sampler.splitting=midpoint"],
                "rrt_connect": ["--rrt-connect", "--config", args.config]}
@@ -67,64 +64,39 @@ def main():
     for planner in planners:
         if planner not in sources:
             sys.exit(f"--planners: unknown planner {planner} (known: {', '.join(sources)})")
-        os.makedirs(os.path.join(out, planner), exist_ok=True)
-    os.makedirs(os.path.join(out, "scenes"), exist_ok=True)
-
-    for i, problem in enumerate(problems):
-        scene = os.path.join(out, "scenes", f"{i}.yaml")
-        if not os.path.exists(scene):
-            with open(scene + ".tmp", "w") as f:
-                yaml.safe_dump({kind: shapes for kind, shapes in problem["scene"].items() if shapes}, f)
-            os.replace(scene + ".tmp", scene)
-        for planner in planners:
-            prefix = os.path.join(out, planner, str(i))
-            if os.path.exists(prefix + ".json") or os.path.exists(prefix + ".refused"):
-                continue
-            command = [args.flowplan, "plan", *sources[planner],
-                       "--start", ",".join(repr(q) for q in problem["start_q"]),
-                       "--goal", ",".join(repr(q) for q in problem["goal_q"]),
-                       "--scene", scene, "-n", str(args.samples), "--seed", "1", "--execute", "--no-plot",
-                       "--log-level", "warn", "--out", prefix, *args.set]
-            done = subprocess.run(command, capture_output=True, text=True)
-            if done.returncode != 0:
-                if "inside obstacle" in done.stderr + done.stdout:
-                    with open(prefix + ".refused.tmp", "w") as f:
-                        f.write(done.stderr + done.stdout)
-                    os.replace(prefix + ".refused.tmp", prefix + ".refused")
-                else:
-                    sys.exit(f"problem {i}, {planner}: {' '.join(command)}\n{done.stderr}{done.stdout}")
-        print(f"problem {i + 1}/{len(problems)} done", flush=True)
-    summarize(out, planners, len(problems))
-
-
-def summarize(out, planners, count):
-    summary = {"problems": count, "planners": {}}
-    lines = ["| planner | problems | TCP | whole arm | executed | problems solved (arm) | planning time (s, median) |",
-             "|---|---|---|---|---|---|---|"]
     for planner in planners:
-        rates = {key: [] for key, _ in WAYS}
-        solved, times, refused, wall, plans = 0, [], 0, 0.0, 0
-        for i in range(count):
-            prefix = os.path.join(out, planner, str(i))
-            if os.path.exists(prefix + ".refused"):
-                refused += 1
-                for key, _ in WAYS:
-                    rates[key].append(0.0)
-                continue
-            report = json.load(open(prefix + ".json"))
-            for key, _ in WAYS:
-                rates[key].append(report[key])
-            solved += report["arm_clear_rate"] > 0
-            times += [s["planning_time_s"] for s in report["samples"]]
-            wall += report["wall_time_s"]
-            plans += report["num_samples"]
-        row = {key: sum(values) / len(values) for key, values in rates.items()}
-        row |= {"problems_solved_arm": solved / count, "refused": refused,
-                "planning_time_s_median": sorted(times)[len(times) // 2] if times else None,
-                # the planning wall time of every call (execution excluded) over the plans it made
-                "planning_time_s_per_plan": wall / plans if plans else None}
+        prefix = os.path.join(out, planner, "plans")
+        if os.path.exists(prefix + ".json"):
+            continue
+        os.makedirs(os.path.dirname(prefix), exist_ok=True)
+        command = [args.flowplan, "plan", *sources[planner], "--problems", args.problems, "--limit", str(args.limit),
+                   "-n", str(args.samples), "--seed", "1", "--execute", "--log-level", "warn", "--out", prefix,
+                   *args.set]
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            sys.exit(f"{planner}: {' '.join(command)}\n{done.stderr}{done.stdout}")
+        print(f"{planner}: every problem planned", flush=True)
+    summarize(out, planners)
+
+
+def summarize(out, planners):
+    summary = {"planners": {}}
+    lines = ["| planner | problems | TCP | whole arm | valid | executed | problems solved (arm) | "
+             "planning time (s, median) |", "|---|---|---|---|---|---|---|---|"]
+    for planner in planners:
+        report = json.load(open(os.path.join(out, planner, "plans.json")))
+        summary["problems"] = report["num_problems"]
+        solved = sum(1 for p in report["problems"] if any(s["arm_clear"] for s in p["samples"]))
+        times = sorted(s["planning_time_s"] for p in report["problems"] for s in p["samples"])
+        plans = report["planned"] * report["num_samples"]
+        row = {key: report.get(key, 0.0) for key, _ in WAYS}
+        row |= {"problems_solved_arm": solved / report["num_problems"], "refused": report["refused"],
+                "planning_time_s_median": times[len(times) // 2] if times else None,
+                # the planning wall time of every call (checks and execution excluded) over the plans it made
+                "planning_time_s_per_plan": report["wall_time_s"] / plans if plans else None}
         summary["planners"][planner] = row
-        lines.append(f"| {LABELS.get(planner, planner)} | {count} | " + " | ".join(f"{row[key]:.0%}" for key, _ in WAYS) +
+        lines.append(f"| {LABELS.get(planner, planner)} | {report['num_problems']} | " +
+                     " | ".join(f"{row[key]:.0%}" for key, _ in WAYS) +
                      f" | {row['problems_solved_arm']:.0%} | {row['planning_time_s_median']:.3f} |")
     text = "\n".join(lines) + "\n"
     for name, content in (("summary.md", text), ("summary.json", json.dumps(summary, indent=1))):

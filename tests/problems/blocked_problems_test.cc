@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 
 #include "core/error.h"
 #include "sim/franka_model.h"
@@ -43,10 +44,12 @@ double Distance(const std::vector<double>& a, const std::vector<double>& b) {
 TEST(BlockedProblemsTest, TheStraightPathIsBlockedAndStartAndGoalAreFreeAndReached) {
   BlockedProblemsConfig config;
   config.count = 6;
-  const BlockedProblemSet set = MakeBlockedProblems(Franka(), config, 3);
+  const ProblemSet set = MakeBlockedProblems(Franka(), config, 3);
   ASSERT_EQ(set.problems.size(), 6u);
   size_t many = 0;
-  for (const BlockedProblem& p : set.problems) {
+  for (const Problem& p : set.problems) {
+    EXPECT_EQ(p.name.rfind("blocked/", 0), 0u);
+    EXPECT_GE(std::min(p.start_clearance, p.goal_clearance), config.clearance - 1e-9);
     const auto& spheres = p.scene.spheres;
     ASSERT_GE(spheres.size(), 1u);
     ASSERT_LE(spheres.size(), 8u);
@@ -79,13 +82,20 @@ TEST(BlockedProblemsTest, TheStraightPathIsBlockedAndStartAndGoalAreFreeAndReach
 TEST(BlockedProblemsTest, ProblemIDependsOnlyOnTheSeedAndI) {
   BlockedProblemsConfig config;
   config.count = 3;
-  const std::string three = config::ToYaml(MakeBlockedProblems(Franka(), config, 9).problems);
+  const ProblemSet three_set = MakeBlockedProblems(Franka(), config, 9);
+  const std::string three = config::ToYaml(three_set.problems);
   config.count = 4;
-  BlockedProblemSet four = MakeBlockedProblems(Franka(), config, 9);
+  ProblemSet four = MakeBlockedProblems(Franka(), config, 9);
   four.problems.pop_back();
   EXPECT_EQ(config::ToYaml(four.problems), three);
   EXPECT_NE(config::ToYaml(MakeBlockedProblems(Franka(), config, 10).problems.front()),
             config::ToYaml(four.problems.front()));
+  // The file reads back as the problem file every planner takes (`flowplan plan --problems`).
+  const std::string path = ::testing::TempDir() + "/blocked_problems.yaml";
+  std::ofstream(path) << ProblemSetYaml(three_set);
+  const ProblemSet back = LoadProblemSet(path);
+  EXPECT_EQ(ProblemSetYaml(back), ProblemSetYaml(three_set));
+  EXPECT_THAT(back.source, ::testing::HasSubstr("min_spheres: 1"));
 }
 
 TEST(BlockedProblemsTest, InconsistentSettingsAreNamed) {
