@@ -9,6 +9,7 @@
 #include "core/random.h"
 #include "geometry/scene_rows.h"
 #include "sim/franka_ik.h"
+#include "sim/franka_self_collision.h"
 #include "sim/mujoco_util.h"
 
 namespace flowplan::problems {
@@ -281,6 +282,9 @@ bool FreePose(const kinematics::Robot& arm, const sim::FrankaModel& model, mjDat
                                            torch::kFloat64)
                                  .view({1, sim::kFrankaJoints});
     if (arm.Clearance(qt, rows).min().item<double>() < clearance) continue;
+    // Free of itself and above the floor too, as the plan checker demands of every state of a plan.
+    static const auto self_check = sim::FrankaConfigurationCheck();
+    if (!self_check(std::vector<double>(ik.q.data(), ik.q.data() + sim::kFrankaJoints)).empty()) continue;
     q = ik.q;
     return true;
   }

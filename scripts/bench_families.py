@@ -190,6 +190,9 @@ class Families:
             print(f"families: {planner} chose {self.chosen(planner)} on validation", flush=True)
         for planner in PLANNERS:
             setting = [] if planner == "rrt_connect" else self.chosen(planner)
+            if setting is None:  # another driver is still planning its validation cells
+                print(f"families: {planner} has not chosen yet; its test problems wait for the next run", flush=True)
+                continue
             for family in self.families + ["sphere"]:
                 self.cell(self.path("test", f"{planner}_{family}"), planner, setting, "test", family, True)
             print(f"families: {planner} planned the test problems", flush=True)

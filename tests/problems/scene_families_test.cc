@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "sim/franka_execution.h"
 #include "sim/franka_model.h"
+#include "sim/franka_self_collision.h"
 #include "sim/mujoco_util.h"
 #include "tests/support/scratch_dir.h"
 
@@ -73,6 +74,8 @@ TEST_P(SceneFamilyTest, StartsAndGoalsAreFreeWithinLimitsAndWhereTheFamilySaysTh
   ASSERT_EQ(set.problems.size(), 5u);
   const sim::FrankaModel model = sim::LoadFrankaModel();
   const auto& limits = model.limits();
+  const sim::FrankaCollisionModel collision_model(0.0);
+  sim::FrankaCollisionChecker checker(collision_model);
   for (const Problem& p : set.problems) {
     SCOPED_TRACE(p.name);
     ASSERT_EQ(p.obstacle_names.size(), static_cast<size_t>(p.scene.size()));
@@ -87,6 +90,8 @@ TEST_P(SceneFamilyTest, StartsAndGoalsAreFreeWithinLimitsAndWhereTheFamilySaysTh
       EXPECT_EQ(MujocoPenetration(p.scene, *q, true), 0.0);  // MuJoCo's capsules against the real shapes
       // The execution model (distances measured within its margin) agrees: no contact.
       EXPECT_EQ(MujocoPenetration(p.scene, *q, false), 0.0);
+      // Free of itself and above the floor (MuJoCo's capsules, the data set's and the plan checker's check).
+      EXPECT_EQ(checker.FirstCollision(Eigen::Map<const sim::JointVector>(q->data())), "");
     }
     EXPECT_GE(p.start_clearance, kClearance);
     EXPECT_GE(p.goal_clearance, kClearance);
