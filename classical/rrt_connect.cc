@@ -13,6 +13,8 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <optional>
+#include <sstream>
 
 #include "core/error.h"
 #include "core/random.h"
@@ -185,8 +187,20 @@ torch::Tensor RrtConnectPlanner::Valid(const torch::Tensor& q, const geometry::S
 }
 
 planning::PlanResult RrtConnectPlanner::Plan(const planning::PlanRequest& request) const {
+  return PlanAlong(request, torch::Tensor());
+}
+
+planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& request,
+                                                  const torch::Tensor& guides) const {
   planning::CheckEnds(request.start, request.goal, state_dim_, "plan");
   const int64_t B = request.start.size(0), J = robot_->num_joints(), T = horizon_;
+  if (guides.defined() && (guides.dim() != 3 || guides.size(0) != B || guides.size(1) < 2 ||
+                           guides.size(2) != state_dim_)) {
+    std::ostringstream shape;
+    shape << guides.sizes();
+    throw Error("rrt_connect: guide paths of shape " + shape.str() + "; expected (" + std::to_string(B) +
+                ", T >= 2, " + std::to_string(state_dim_) + ")");
+  }
   geometry::CheckRows(request.scene, static_cast<int>(robot_->workspace_dim()), "plan");
   geometry::SceneRows scene;
   for (const auto& entry : request.scene) scene.insert(entry.key(), entry.value().to(torch::kFloat64));
@@ -226,30 +240,64 @@ planning::PlanResult RrtConnectPlanner::Plan(const planning::PlanRequest& reques
     torch::Tensor points = torch::stack({start_q[b], goal_q[b]});  // the straight line unless a path is found
     const torch::Tensor ends_valid = valid(points);
     if (ends_valid.all().item<bool>()) {
-      ob::ScopedState<> start(space), goal(space);
-      for (int64_t j = 0; j < J; ++j) {
-        start[static_cast<unsigned>(j)] = start_q[b][j].item<double>();
-        goal[static_cast<unsigned>(j)] = goal_q[b][j].item<double>();
+      auto state = [&](const torch::Tensor& q) {  // (J,) float64
+        ob::ScopedState<> s(space);
+        for (int64_t j = 0; j < J; ++j) s[static_cast<unsigned>(j)] = q[j].item<double>();
+        return s;
+      };
+      // The stretches of the guide kept at either end: head[0] = start, tail.back() = goal; RRT-Connect joins
+      // head.back() to tail.front().
+      std::vector<torch::Tensor> head = {start_q[b]}, tail = {goal_q[b]};
+      if (guides.defined()) {
+        const torch::Tensor g = torch::max(torch::min(guides[b].slice(1, 0, J).to(torch::kFloat64), upper), lower);
+        std::vector<torch::Tensor> line = {start_q[b]};
+        for (int64_t k = 1; k + 1 < g.size(0); ++k) line.push_back(g[k]);
+        line.push_back(goal_q[b]);
+        const size_t M = line.size();
+        std::vector<bool> joins(M - 1);  // the motion from line[k] to line[k + 1] is valid
+        for (size_t k = 0; k + 1 < M; ++k) joins[k] = si->checkMotion(state(line[k]).get(), state(line[k + 1]).get());
+        size_t first_gap = 0, last_gap = M - 1;
+        while (first_gap + 1 < M && joins[first_gap]) ++first_gap;
+        while (last_gap > 0 && joins[last_gap - 1]) --last_gap;
+        if (first_gap + 1 == M) {  // the whole polyline is valid: nothing to join
+          head = line;
+          tail.clear();
+        } else {
+          head.assign(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(first_gap) + 1);
+          tail.assign(line.begin() + static_cast<std::ptrdiff_t>(last_gap), line.end());
+        }
       }
-      auto problem = std::make_shared<ob::ProblemDefinition>(si);
-      problem->setStartAndGoalStates(start, goal);
-      auto planner = std::make_shared<SeededRrtConnect>(si, StreamSeed(seed, 2));
-      if (config_.range > 0.0) planner->setRange(config_.range);
-      planner->setProblemDefinition(problem);
-      planner->setup();
-      int64_t calls = 0;
-      const ob::PlannerTerminationCondition stop([&] {
-        return ++calls > config_.max_iterations ||
-               std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count() > config_.time_limit;
-      });
-      if (planner->solve(stop) == ob::PlannerStatus::EXACT_SOLUTION) {
-        og::PathGeometric path = *problem->getSolutionPath()->as<og::PathGeometric>();
+      std::optional<og::PathGeometric> path;
+      if (tail.empty()) {
+        path.emplace(si);
+        for (const torch::Tensor& q : head) path->append(state(q).get());
+      } else {
+        auto problem = std::make_shared<ob::ProblemDefinition>(si);
+        problem->setStartAndGoalStates(state(head.back()), state(tail.front()));
+        auto planner = std::make_shared<SeededRrtConnect>(si, StreamSeed(seed, 2));
+        if (config_.range > 0.0) planner->setRange(config_.range);
+        planner->setProblemDefinition(problem);
+        planner->setup();
+        int64_t calls = 0;
+        const ob::PlannerTerminationCondition stop([&] {
+          return ++calls > config_.max_iterations ||
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count() > config_.time_limit;
+        });
+        if (planner->solve(stop) == ob::PlannerStatus::EXACT_SOLUTION) {
+          const auto& found = *problem->getSolutionPath()->as<og::PathGeometric>();
+          path.emplace(si);
+          for (size_t k = 0; k + 1 < head.size(); ++k) path->append(state(head[k]).get());
+          for (unsigned k = 0; k < found.getStateCount(); ++k) path->append(found.getState(k));
+          for (size_t k = 1; k < tail.size(); ++k) path->append(state(tail[k]).get());
+        }
+      }
+      if (path) {
         if (config_.simplify) {
-          Shortcut(path, si);
-          og::PathSimplifier(si).smoothBSpline(path, 5);
+          Shortcut(*path, si);
+          og::PathSimplifier(si).smoothBSpline(*path, 5);
         }
         std::vector<torch::Tensor> rows;
-        for (const ob::State* s : path.getStates()) rows.push_back(ToTensor(s, J));
+        for (const ob::State* s : path->getStates()) rows.push_back(ToTensor(s, J));
         points = torch::stack(rows);
         result.found[b] = true;
       }

@@ -60,6 +60,18 @@ class RrtConnectPlanner : public planning::Planner {
 
   planning::PlanResult Plan(const planning::PlanRequest& request) const override;
 
+  /// Plan, seeded by a guide path per request: `guides` (B, T', D) states
+  /// (T' ≥ 2; e.g. a learned planner's invalid proposal), positions first.
+  /// The polyline start → guide states 1…T'−2 → goal keeps its longest valid
+  /// stretch from the start and from the goal (each state and the motion
+  /// between them checked as RRT-Connect's tree edges are); RRT-Connect joins
+  /// the last state of the first to the first state of the second (nothing to
+  /// join when the whole polyline is valid), and the joined path is shortcut,
+  /// smoothed and timed like an unseeded one. An undefined `guides` plans
+  /// unseeded.
+  /// @throws flowplan::Error if guides are not (B, T', D).
+  planning::PlanResult PlanAlong(const planning::PlanRequest& request, const torch::Tensor& guides) const;
+
   /// Whether configurations q (M, J) keep every sphere `margin` away from every obstacle of `scene`
   /// (the robot's clearance, kinematics::Robot::Clearance) and pass the configuration check: (M,) bool.
   torch::Tensor Valid(const torch::Tensor& q, const geometry::SceneRows& scene) const;

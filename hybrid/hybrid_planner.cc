@@ -42,16 +42,18 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
     const planning::PlanResult proposed = proposer_->Plan(proposals);
     const std::vector<validity::PlanVerdict> verdicts =
         checker_.Check(proposed.plans, one.start[0], one.goal[0], request.scene, proposed.found);
-    int64_t best = -1;
     bool any_valid = false;
     for (const auto& v : verdicts) any_valid = any_valid || v.valid();
-    if (any_valid) {
+    // The best proposal by guidance cost, then joint-space path length: among the valid ones, or among all of them
+    // when none is valid and it seeds RRT-Connect.
+    int64_t best = -1;
+    if (any_valid || config_.seeded_fallback) {
       const torch::Tensor cost = proposer_->GuidanceCost(proposed.plans, request.scene, request.settings);
       const std::vector<validity::PlanQuality> quality =
           validity::MeasurePlans(proposed.plans, checker_.robot(), proposer_->info().dt, checker_.config().joint_tolerance);
       double best_cost = std::numeric_limits<double>::infinity(), best_length = best_cost;
       for (int64_t n = 0; n < N; ++n) {
-        if (!verdicts[static_cast<size_t>(n)].valid()) continue;
+        if (any_valid && !verdicts[static_cast<size_t>(n)].valid()) continue;
         const double c = cost[n].item<double>(), length = quality[static_cast<size_t>(n)].joint_path_length;
         if (best < 0 || c < best_cost || (c == best_cost && length < best_length)) {
           best = n;
@@ -59,18 +61,23 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
           best_length = length;
         }
       }
+    }
+    const std::string of_n = std::to_string(best + 1) + " of " + std::to_string(N);
+    if (any_valid) {
       result.plans[b] = proposed.plans[best];
       result.found[b] = true;
-      result.route[static_cast<size_t>(b)] = "proposal " + std::to_string(best + 1) + " of " + std::to_string(N);
+      result.route[static_cast<size_t>(b)] = "proposal " + of_n;
     } else {
       planning::PlanRequest classical = one;
       classical.settings = {};  // RRT-Connect takes its settings from its config
-      const planning::PlanResult fallback = fallback_->Plan(classical);
+      const planning::PlanResult fallback =
+          best >= 0 ? fallback_->PlanAlong(classical, proposed.plans.slice(0, best, best + 1)) : fallback_->Plan(classical);
       result.plans[b] = fallback.plans[0];
       const validity::PlanVerdict verdict =
           checker_.Check(fallback.plans, one.start[0], one.goal[0], request.scene, fallback.found)[0];
       result.found[b] = verdict.valid();
-      result.route[static_cast<size_t>(b)] = verdict.valid() ? "rrt_connect" : "none";
+      result.route[static_cast<size_t>(b)] =
+          !verdict.valid() ? "none" : best >= 0 ? "rrt_connect seeded by proposal " + of_n : "rrt_connect";
     }
     result.call_seconds[static_cast<size_t>(b)] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();

@@ -3,9 +3,12 @@
 // The hybrid planner: valid or nothing. A learned planner proposes N plans for
 // a request in one call; the plan checker (validity/plan_check.h) keeps the
 // valid ones and the best of them by guidance cost, then by joint-space path
-// length, is returned; when none is valid, RRT-Connect plans the request, and
-// its plan is checked too. Every plan says which way it was made
-// (PlanResult::route): "proposal k of N", "rrt_connect", or "none" when neither
+// length, is returned; when none is valid, RRT-Connect plans the request
+// (with seeded_fallback, seeded by the proposal of least cost: it keeps that
+// proposal's valid stretches from the start and to the goal and joins them,
+// classical::RrtConnectPlanner::PlanAlong), and its plan is checked too. Every
+// plan says which way it was made (PlanResult::route): "proposal k of N",
+// "rrt_connect", "rrt_connect seeded by proposal k of N", or "none" when neither
 // gave a valid plan (found = false; the plan returned is then RRT-Connect's,
 // or the straight line it falls back to).
 
@@ -21,12 +24,16 @@ namespace flowplan::hybrid {
 
 /// The `hybrid` section of an experiment config.
 struct HybridConfig {
-  int64_t proposals = 8;  // N: plans the learned planner proposes per request, in one call
+  int64_t proposals = 8;         // N: plans the learned planner proposes per request, in one call
+  bool seeded_fallback = false;  // RRT-Connect starts from the proposal of least guidance cost (PlanAlong)
 
   template <class V>
   void Visit(V& v) {
     v.Field("proposals", proposals, "plans the learned planner proposes per request, in one call",
             config::Positive());
+    v.Field("seeded_fallback", seeded_fallback,
+            "when no proposal is valid, RRT-Connect keeps the valid ends of the proposal of least guidance cost and "
+            "joins them");
   }
 };
 

@@ -7,6 +7,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "core/error.h"
 #include "kinematics/robot.h"
 #include "sim/franka_execution.h"
@@ -83,6 +85,76 @@ TEST(RrtConnectTest, StartInsideAnObstacleIsNotFoundAndFallsBackToTheLine) {
   const planning::PlanResult result = planner.Plan(request);
   EXPECT_FALSE(result.found[0].item<bool>());
   EXPECT_LT((result.plans[0].select(1, 1) - 0.5).abs().max().item<float>(), 1e-6);
+}
+
+/// The particle's guide of T states along the straight line from (0.1, 0.5) to (0.9, 0.5), bent by `bend` × sin(πs)
+/// in y: (1, T, 4), velocities zero (they are not read).
+torch::Tensor Guide(int64_t T, double bend) {
+  const torch::Tensor s = torch::linspace(0.0, 1.0, T, torch::kFloat64);
+  const torch::Tensor x = 0.1 + 0.8 * s, y = 0.5 + bend * torch::sin(M_PI * s);
+  return torch::stack({x, y, torch::zeros_like(s), torch::zeros_like(s)}, 1).unsqueeze(0).to(torch::kFloat32);
+}
+
+/// Distance of each point p (N, 2) from the polyline `line` (M, 2): (N,).
+torch::Tensor DistanceToPolyline(const torch::Tensor& p, const torch::Tensor& line) {
+  const torch::Tensor a = line.slice(0, 0, -1), ab = line.slice(0, 1) - a;             // (M−1, 2)
+  const torch::Tensor ap = p.unsqueeze(1) - a.unsqueeze(0);                            // (N, M−1, 2)
+  const torch::Tensor u = ((ap * ab).sum(-1) / (ab * ab).sum(-1)).clamp(0.0, 1.0);     // (N, M−1)
+  return (ap - u.unsqueeze(-1) * ab).norm(2, -1).amin(1);
+}
+
+planning::PlanRequest AcrossTheDisc() {
+  planning::PlanRequest request;
+  request.start = torch::tensor({{0.1f, 0.5f, 0.0f, 0.0f}});
+  request.goal = torch::tensor({{0.9f, 0.5f, 0.0f, 0.0f}});
+  request.scene = Disc05();
+  request.seed = 5;
+  return request;
+}
+
+TEST(RrtConnectTest, AValidGuideIsFollowedWithoutSearch) {
+  // A guide arching over the disc (0.35 above the centre at its middle) is valid as a whole: unsimplified, the
+  // plan's positions lie on it.
+  RrtConnectConfig config;
+  config.simplify = false;
+  const RrtConnectPlanner planner(Disc(32), config);
+  const planning::PlanRequest request = AcrossTheDisc();
+  const torch::Tensor guide = Guide(16, 0.35);
+  const planning::PlanResult result = planner.PlanAlong(request, guide);
+  ASSERT_TRUE(result.found[0].item<bool>());
+  const torch::Tensor p = result.plans[0].slice(1, 0, 2).to(torch::kFloat64);
+  const torch::Tensor line = guide[0].slice(1, 0, 2).to(torch::kFloat64);
+  EXPECT_LT(DistanceToPolyline(p, line).max().item<double>(), 1e-5);
+}
+
+TEST(RrtConnectTest, AGuideThroughTheDiscKeepsItsValidEndsAndJoinsThem) {
+  // The straight guide crosses the disc: the plan starts along it (y = 0.5 exactly, which a search from the start
+  // would not give), goes around the disc, and ends along it.
+  RrtConnectConfig config;
+  config.simplify = false;
+  const RrtConnectPlanner planner(Disc(64), config);
+  const planning::PlanRequest request = AcrossTheDisc();
+  const planning::PlanResult result = planner.PlanAlong(request, Guide(33, 0.0));
+  ASSERT_TRUE(result.found[0].item<bool>());
+  const torch::Tensor p = result.plans[0].slice(1, 0, 2).to(torch::kFloat64);
+  EXPECT_LT((p[1][1] - 0.5).abs().item<double>(), 1e-6);
+  EXPECT_GT(p[1][0].item<double>(), 0.1);
+  EXPECT_LT((p[62][1] - 0.5).abs().item<double>(), 1e-6);
+  EXPECT_LT(p[62][0].item<double>(), 0.9);
+  const torch::Tensor s = torch::linspace(0, 1, 21, torch::kFloat64).view({1, -1, 1});
+  const torch::Tensor dense = p.slice(0, 0, 63).unsqueeze(1) + s * (p.slice(0, 1) - p.slice(0, 0, 63)).unsqueeze(1);
+  EXPECT_GT((dense - torch::tensor({0.5, 0.5}, torch::kFloat64)).norm(2, -1).min().item<double>(), 0.2 + 0.05);
+  // Without a guide, the same seed's plan leaves the line at once.
+  const torch::Tensor unseeded = planner.Plan(request).plans[0].to(torch::kFloat64);
+  EXPECT_GT((unseeded[1][1] - 0.5).abs().item<double>(), 1e-6);
+}
+
+TEST(RrtConnectTest, GuidesOfTheWrongShapeAreRejected) {
+  using ::testing::HasSubstr;
+  using ::testing::ThrowsMessage;
+  const RrtConnectPlanner planner(Disc(16), RrtConnectConfig{});
+  EXPECT_THAT([&] { planner.PlanAlong(AcrossTheDisc(), torch::zeros({1, 16, 2})); },
+              ThrowsMessage<Error>(HasSubstr("rrt_connect: guide paths of shape [1, 16, 2]; expected (1, T >= 2, 4)")));
 }
 
 TEST(RrtConnectTest, RobotsWithoutFiniteLimitsOrOddStatesAreRejected) {

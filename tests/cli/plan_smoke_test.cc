@@ -348,6 +348,14 @@ TEST(FrankaPlanTest, AProblemFileIsPlannedByOneProcessWithRefusalsAsAStatusAndTh
   EXPECT_THAT(hybrid, HasSubstr("\"per\": \"plan, the wall time of the call that made it\""));
   check = RunCommand(CheckPlan(path("hybrid")));
   EXPECT_EQ(check.exit_code, 0) << check.output;
+  // Seeded by the proposal of least guidance cost, and checked by the same independent script.
+  ExpectOk(Flowplan("plan --ckpt " + path("run") + " --hybrid hybrid.proposals=3 hybrid.seeded_fallback=true --problems " +
+                    path("problems.yaml") + " --limit 2 --out " + path("seeded") + fast));
+  const std::string seeded = ReadText(path("seeded.json"));
+  EXPECT_THAT(seeded, HasSubstr("\"success_rate\": 1, \"problems_solved\": 1"));
+  EXPECT_THAT(seeded, HasSubstr("\"route\": \"rrt_connect seeded by proposal "));
+  check = RunCommand(CheckPlan(path("seeded")));
+  EXPECT_EQ(check.exit_code, 0) << check.output;
   // The learned planner alone: its plans are checked and fail, with reasons.
   ExpectOk(Flowplan("plan --ckpt " + path("run") + " --problems " + path("problems.yaml") + " --out " + path("fp") + fast));
   EXPECT_THAT(ReadText(path("fp.json")), HasSubstr("\"success\": false, \"failure\": \""));
