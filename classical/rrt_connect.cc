@@ -267,13 +267,10 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
           tail.assign(line.begin() + static_cast<std::ptrdiff_t>(last_gap), line.end());
         }
       }
-      std::optional<og::PathGeometric> path;
-      if (tail.empty()) {
-        path.emplace(si);
-        for (const torch::Tensor& q : head) path->append(state(q).get());
-      } else {
+      // RRT-Connect from `from` to `to` (J,), within max_iterations and what is left of the plan's time_limit.
+      auto search = [&](const torch::Tensor& from, const torch::Tensor& to) -> std::optional<og::PathGeometric> {
         auto problem = std::make_shared<ob::ProblemDefinition>(si);
-        problem->setStartAndGoalStates(state(head.back()), state(tail.front()));
+        problem->setStartAndGoalStates(state(from), state(to));
         auto planner = std::make_shared<SeededRrtConnect>(si, StreamSeed(seed, 2));
         if (config_.range > 0.0) planner->setRange(config_.range);
         planner->setProblemDefinition(problem);
@@ -283,13 +280,22 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
           return ++calls > config_.max_iterations ||
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count() > config_.time_limit;
         });
-        if (planner->solve(stop) == ob::PlannerStatus::EXACT_SOLUTION) {
-          const auto& found = *problem->getSolutionPath()->as<og::PathGeometric>();
-          path.emplace(si);
-          for (size_t k = 0; k + 1 < head.size(); ++k) path->append(state(head[k]).get());
-          for (unsigned k = 0; k < found.getStateCount(); ++k) path->append(found.getState(k));
-          for (size_t k = 1; k < tail.size(); ++k) path->append(state(tail[k]).get());
-        }
+        if (planner->solve(stop) != ob::PlannerStatus::EXACT_SOLUTION) return std::nullopt;
+        return *problem->getSolutionPath()->as<og::PathGeometric>();
+      };
+      std::optional<og::PathGeometric> path;
+      if (tail.empty()) {
+        path.emplace(si);
+        for (const torch::Tensor& q : head) path->append(state(q).get());
+      } else if (const auto found = search(head.back(), tail.front())) {
+        path.emplace(si);
+        for (size_t k = 0; k + 1 < head.size(); ++k) path->append(state(head[k]).get());
+        for (unsigned k = 0; k < found->getStateCount(); ++k) path->append(found->getState(k));
+        for (size_t k = 1; k < tail.size(); ++k) path->append(state(tail[k]).get());
+      } else if (head.size() > 1 || tail.size() > 1) {
+        // The guide's ends can lead into places hard to leave (a narrow gap the guide pushed into): search from
+        // the start to the goal as unseeded.
+        path = search(start_q[b], goal_q[b]);
       }
       if (path) {
         if (config_.simplify) {

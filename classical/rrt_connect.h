@@ -67,8 +67,9 @@ class RrtConnectPlanner : public planning::Planner {
   /// between them checked as RRT-Connect's tree edges are); RRT-Connect joins
   /// the last state of the first to the first state of the second (nothing to
   /// join when the whole polyline is valid), and the joined path is shortcut,
-  /// smoothed and timed like an unseeded one. An undefined `guides` plans
-  /// unseeded.
+  /// smoothed and timed like an unseeded one. When that join is not found,
+  /// RRT-Connect searches from the start to the goal as unseeded (within the
+  /// same time_limit). An undefined `guides` plans unseeded.
   /// @throws flowplan::Error if guides are not (B, T', D).
   planning::PlanResult PlanAlong(const planning::PlanRequest& request, const torch::Tensor& guides) const;
 

@@ -70,14 +70,21 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
     } else {
       planning::PlanRequest classical = one;
       classical.settings = {};  // RRT-Connect takes its settings from its config
-      const planning::PlanResult fallback =
-          best >= 0 ? fallback_->PlanAlong(classical, proposed.plans.slice(0, best, best + 1)) : fallback_->Plan(classical);
-      result.plans[b] = fallback.plans[0];
-      const validity::PlanVerdict verdict =
+      bool seeded = best >= 0;
+      planning::PlanResult fallback =
+          seeded ? fallback_->PlanAlong(classical, proposed.plans.slice(0, best, best + 1)) : fallback_->Plan(classical);
+      validity::PlanVerdict verdict =
           checker_.Check(fallback.plans, one.start[0], one.goal[0], request.scene, fallback.found)[0];
-      result.found[b] = verdict.valid();
+      if (seeded && !verdict.valid()) {
+        // A path along the proposal can be too long to keep within the speed limits: search without it.
+        seeded = false;
+        fallback = fallback_->Plan(classical);
+        verdict = checker_.Check(fallback.plans, one.start[0], one.goal[0], request.scene, fallback.found)[0];
+      }
+      result.plans[b] = fallback.plans[0];
+      result.found[b] = fallback.found[0];  // a path RRT-Connect found but the checker refuses fails with its reason
       result.route[static_cast<size_t>(b)] =
-          !verdict.valid() ? "none" : best >= 0 ? "rrt_connect seeded by proposal " + of_n : "rrt_connect";
+          !verdict.valid() ? "none" : seeded ? "rrt_connect seeded by proposal " + of_n : "rrt_connect";
     }
     result.call_seconds[static_cast<size_t>(b)] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();

@@ -6,11 +6,13 @@
 // length, is returned; when none is valid, RRT-Connect plans the request
 // (with seeded_fallback, seeded by the proposal of least cost: it keeps that
 // proposal's valid stretches from the start and to the goal and joins them,
-// classical::RrtConnectPlanner::PlanAlong), and its plan is checked too. Every
+// classical::RrtConnectPlanner::PlanAlong; if that plan is not valid, it plans
+// again unseeded), and its plan is checked too. Every
 // plan says which way it was made (PlanResult::route): "proposal k of N",
 // "rrt_connect", "rrt_connect seeded by proposal k of N", or "none" when neither
-// gave a valid plan (found = false; the plan returned is then RRT-Connect's,
-// or the straight line it falls back to).
+// gave a valid plan (the plan returned is then RRT-Connect's, with its found:
+// a path the checker refuses, which the report's check names the reason of, or
+// the straight line it falls back to, found = false).
 
 #include <memory>
 
