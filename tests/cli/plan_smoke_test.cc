@@ -338,8 +338,8 @@ TEST(FrankaPlanTest, AProblemFileIsPlannedByOneProcessWithRefusalsAsAStatusAndTh
                      "no plans; this is a --problems file: give --problem NAME, one of board, free");
 
   // The hybrid: a two-step network's proposals are not valid plans, so RRT-Connect makes them, and says so.
-  ExpectOk(Flowplan("plan --ckpt " + path("run") + " --hybrid hybrid.proposals=3 --problems " + path("problems.yaml") +
-                    " --limit 2 --out " + path("hybrid") + fast));
+  ExpectOk(Flowplan("plan --ckpt " + path("run") + " --hybrid hybrid.proposals=3 hybrid.seeded_fallback=false --problems " +
+                    path("problems.yaml") + " --limit 2 --out " + path("hybrid") + fast));
   const std::string hybrid = ReadText(path("hybrid.json"));
   EXPECT_THAT(hybrid, HasSubstr("\"planner\": \"hybrid("));
   EXPECT_THAT(hybrid, HasSubstr("\"num_problems\": 2, \"planned\": 2, \"refused\": 0"));
