@@ -213,6 +213,7 @@ def main():
     summary = {"files": len(results), "differ": len(differ),
                "plans": sum(r["plans"] for r in results), "results": results}
     if args.out:
+        os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
         with open(args.out + ".tmp", "w") as f:
             json.dump(summary, f, indent=1)
         os.replace(args.out + ".tmp", args.out)
