@@ -281,6 +281,7 @@ def plot_families(points, sets, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
     figure, axes = plt.subplots(1, len(sets), figsize=(3.2 * len(sets), 3.3), sharey=True)
     for axis, family in zip(axes, sets):
         for planner in PLANNERS:
@@ -288,6 +289,7 @@ def plot_families(points, sets, path):
                 t, s = points[(planner, family)]
                 axis.scatter([max(t, 1e-4)], [100 * s], label=LABELS[planner], s=28)
         axis.set_xscale("log")
+        axis.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())  # minor labels overlap on short ranges
         axis.set_title(family)
         axis.set_xlabel("median time per plan (s)")
         axis.set_ylim(-5, 105)
