@@ -211,6 +211,7 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
   result.found = torch::zeros({B}, torch::kBool);
   result.call_seconds.assign(static_cast<size_t>(B), 0.0);
   result.call_plans.assign(static_cast<size_t>(B), 1);
+  if (guides.defined()) result.route.assign(static_cast<size_t>(B), "unseeded");
   // Ends exactly at a limit can round to just outside it in float32: clamp them onto the limits.
   const torch::Tensor lower = torch::tensor(d.joint_lower, torch::kFloat64).slice(0, 0, J);
   const torch::Tensor upper = torch::tensor(d.joint_upper, torch::kFloat64).slice(0, 0, J);
@@ -248,7 +249,7 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
       // The stretches of the guide kept at either end: head[0] = start, tail.back() = goal; RRT-Connect joins
       // head.back() to tail.front().
       std::vector<torch::Tensor> head = {start_q[b]}, tail = {goal_q[b]};
-      if (guides.defined()) {
+      if (guides.defined() && torch::isfinite(guides[b]).all().item<bool>()) {
         const torch::Tensor g = torch::max(torch::min(guides[b].slice(1, 0, J).to(torch::kFloat64), upper), lower);
         std::vector<torch::Tensor> line = {start_q[b]};
         for (int64_t k = 1; k + 1 < g.size(0); ++k) line.push_back(g[k]);
@@ -284,6 +285,7 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
         return *problem->getSolutionPath()->as<og::PathGeometric>();
       };
       std::optional<og::PathGeometric> path;
+      bool seeded = head.size() > 1 || tail.size() != 1;  // something of the guide is kept
       if (tail.empty()) {
         path.emplace(si);
         for (const torch::Tensor& q : head) path->append(state(q).get());
@@ -292,11 +294,13 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
         for (size_t k = 0; k + 1 < head.size(); ++k) path->append(state(head[k]).get());
         for (unsigned k = 0; k < found->getStateCount(); ++k) path->append(found->getState(k));
         for (size_t k = 1; k < tail.size(); ++k) path->append(state(tail[k]).get());
-      } else if (head.size() > 1 || tail.size() > 1) {
+      } else if (seeded) {
         // The guide's ends can lead into places hard to leave (a narrow gap the guide pushed into): search from
         // the start to the goal as unseeded.
+        seeded = false;
         path = search(start_q[b], goal_q[b]);
       }
+      if (guides.defined()) result.route[static_cast<size_t>(b)] = seeded ? "seeded" : "unseeded";
       if (path) {
         if (config_.simplify) {
           Shortcut(*path, si);

@@ -67,9 +67,12 @@ class RrtConnectPlanner : public planning::Planner {
   /// between them checked as RRT-Connect's tree edges are); RRT-Connect joins
   /// the last state of the first to the first state of the second (nothing to
   /// join when the whole polyline is valid), and the joined path is shortcut,
-  /// smoothed and timed like an unseeded one. When that join is not found,
-  /// RRT-Connect searches from the start to the goal as unseeded (within the
-  /// same time_limit). An undefined `guides` plans unseeded.
+  /// smoothed and timed like an unseeded one. When nothing of the guide can be
+  /// kept, or the join is not found, RRT-Connect searches from the start to
+  /// the goal as Plan does (the join and that search each have max_iterations,
+  /// and share the plan's time_limit). route[b] says which made plan b:
+  /// "seeded" (the guide's stretches) or "unseeded". A guide that is not
+  /// finite is not used. An undefined `guides` plans as Plan (route empty).
   /// @throws flowplan::Error if guides are not (B, T', D).
   planning::PlanResult PlanAlong(const planning::PlanRequest& request, const torch::Tensor& guides) const;
 

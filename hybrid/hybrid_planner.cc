@@ -1,6 +1,7 @@
 #include "hybrid/hybrid_planner.h"
 
 #include <chrono>
+#include <cmath>
 #include <limits>
 
 #include "core/error.h"
@@ -55,6 +56,7 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
       for (int64_t n = 0; n < N; ++n) {
         if (any_valid && !verdicts[static_cast<size_t>(n)].valid()) continue;
         const double c = cost[n].item<double>(), length = quality[static_cast<size_t>(n)].joint_path_length;
+        if (!any_valid && (!std::isfinite(c) || !std::isfinite(length))) continue;  // a NaN proposal seeds nothing
         if (best < 0 || c < best_cost || (c == best_cost && length < best_length)) {
           best = n;
           best_cost = c;
@@ -70,16 +72,22 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
     } else {
       planning::PlanRequest classical = one;
       classical.settings = {};  // RRT-Connect takes its settings from its config
-      bool seeded = best >= 0;
       planning::PlanResult fallback =
-          seeded ? fallback_->PlanAlong(classical, proposed.plans.slice(0, best, best + 1)) : fallback_->Plan(classical);
+          best >= 0 ? fallback_->PlanAlong(classical, proposed.plans.slice(0, best, best + 1)) : fallback_->Plan(classical);
+      bool seeded = !fallback.route.empty() && fallback.route[0] == "seeded";
       validity::PlanVerdict verdict =
           checker_.Check(fallback.plans, one.start[0], one.goal[0], request.scene, fallback.found)[0];
       if (seeded && !verdict.valid()) {
-        // A path along the proposal can be too long to keep within the speed limits: search without it.
-        seeded = false;
-        fallback = fallback_->Plan(classical);
-        verdict = checker_.Check(fallback.plans, one.start[0], one.goal[0], request.scene, fallback.found)[0];
+        // A path along the proposal can be too long to keep within the speed limits: search without it (a search
+        // of its own, with RRT-Connect's whole budget). A refused seeded plan is kept if that finds nothing.
+        planning::PlanResult unseeded = fallback_->Plan(classical);
+        const validity::PlanVerdict second =
+            checker_.Check(unseeded.plans, one.start[0], one.goal[0], request.scene, unseeded.found)[0];
+        if (second.valid() || unseeded.found[0].item<bool>()) {
+          seeded = false;
+          fallback = std::move(unseeded);
+          verdict = second;
+        }
       }
       result.plans[b] = fallback.plans[0];
       result.found[b] = fallback.found[0];  // a path RRT-Connect found but the checker refuses fails with its reason

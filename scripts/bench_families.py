@@ -31,9 +31,9 @@ LEARNED = [("fp", "FP", "joint_fp", ["sampler.splitting=none"],
             [[f"guidance.scale={s}", f"sampler.final_iterations={g}"] for s in SCALES for g in (0, 10)]),
            ("mpd", "MPD", "joint_mpd", [], [[f"guidance.scale={s}"] for s in SCALES]),
            ("vae", "VAE planner", "joint_vae", ["sampler.latent.lr=0.02"], [[f"guidance.scale={s}"] for s in SCALES])]
-HYBRID_GRID = [["hybrid.proposals=2"], ["hybrid.proposals=8"],
+HYBRID_GRID = [["hybrid.proposals=2", "hybrid.seeded_fallback=false"], ["hybrid.proposals=8", "hybrid.seeded_fallback=false"],
                ["hybrid.proposals=1", "hybrid.seeded_fallback=true"], ["hybrid.proposals=2", "hybrid.seeded_fallback=true"],
-               ["hybrid.proposals=8", "hybrid.seeded_fallback=true"]]
+               ["hybrid.proposals=8", "hybrid.seeded_fallback=true"], ["hybrid.proposals=1", "hybrid.seeded_fallback=false"]]
 LABELS = {name: label for name, label, *_ in LEARNED} | {"rrt_connect": "RRT-Connect", "hybrid": "hybrid (FP, RRT-Connect)"}
 PLANNERS = [name for name, *_ in LEARNED] + ["rrt_connect", "hybrid"]
 # Published anchors (docs/results.md says where they come from and how they differ from ours).

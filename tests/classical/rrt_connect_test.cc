@@ -136,6 +136,7 @@ TEST(RrtConnectTest, AGuideThroughTheDiscKeepsItsValidEndsAndJoinsThem) {
   const planning::PlanRequest request = AcrossTheDisc();
   const planning::PlanResult result = planner.PlanAlong(request, Guide(33, 0.0));
   ASSERT_TRUE(result.found[0].item<bool>());
+  EXPECT_EQ(result.route, std::vector<std::string>{"seeded"});
   const torch::Tensor p = result.plans[0].slice(1, 0, 2).to(torch::kFloat64);
   EXPECT_LT((p[1][1] - 0.5).abs().item<double>(), 1e-6);
   EXPECT_GT(p[1][0].item<double>(), 0.1);
@@ -147,6 +148,25 @@ TEST(RrtConnectTest, AGuideThroughTheDiscKeepsItsValidEndsAndJoinsThem) {
   // Without a guide, the same seed's plan leaves the line at once.
   const torch::Tensor unseeded = planner.Plan(request).plans[0].to(torch::kFloat64);
   EXPECT_GT((unseeded[1][1] - 0.5).abs().item<double>(), 1e-6);
+}
+
+TEST(RrtConnectTest, AGuideWithNothingToKeepOrNotFinitePlansAsUnseeded) {
+  // A guide whose inner states all lie in the disc keeps nothing of itself, and one holding NaN is not used: both
+  // plan exactly as Plan does with the same seed, and say so.
+  const RrtConnectPlanner planner(Disc(32), RrtConnectConfig{});
+  const planning::PlanRequest request = AcrossTheDisc();
+  const planning::PlanResult unseeded = planner.Plan(request);
+  EXPECT_TRUE(unseeded.route.empty());
+  torch::Tensor inside = Guide(8, 0.0);
+  inside.slice(1, 1, 7).select(2, 0).fill_(0.5);
+  torch::Tensor not_finite = Guide(8, 0.35);
+  not_finite[0][3][1] = NAN;
+  for (const torch::Tensor& guide : {inside, not_finite}) {
+    const planning::PlanResult result = planner.PlanAlong(request, guide);
+    EXPECT_TRUE(result.found[0].item<bool>());
+    EXPECT_EQ(result.route, std::vector<std::string>{"unseeded"});
+    EXPECT_TRUE(torch::equal(result.plans, unseeded.plans));
+  }
 }
 
 TEST(RrtConnectTest, GuidesOfTheWrongShapeAreRejected) {
