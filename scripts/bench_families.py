@@ -261,7 +261,8 @@ def summarize(report):
     for s in samples:
         route = s.get("route")
         if route is not None:
-            key = "proposal" if route.startswith("proposal") else route
+            key = ("proposal" if route.startswith("proposal") else
+                   "rrt_connect seeded" if route.startswith("rrt_connect seeded") else route)
             routes[key] = routes.get(key, 0) + 1
     return {"success": report["success_rate"], "executed": report.get("success_rate_executed", 0.0),
             "problems_solved": report["problems_solved"], "refused": report["refused"], "plans": asked,
