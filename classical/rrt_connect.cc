@@ -255,11 +255,14 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
         for (int64_t k = 1; k + 1 < g.size(0); ++k) line.push_back(g[k]);
         line.push_back(goal_q[b]);
         const size_t M = line.size();
-        std::vector<bool> joins(M - 1);  // the motion from line[k] to line[k + 1] is valid
-        for (size_t k = 0; k + 1 < M; ++k) joins[k] = si->checkMotion(state(line[k]).get(), state(line[k + 1]).get());
+        // Whether the motion from line[k] to line[k + 1] is valid; only the motions up to the first invalid one
+        // from either end are checked.
+        auto joins = [&](size_t k) { return si->checkMotion(state(line[k]).get(), state(line[k + 1]).get()); };
         size_t first_gap = 0, last_gap = M - 1;
-        while (first_gap + 1 < M && joins[first_gap]) ++first_gap;
-        while (last_gap > 0 && joins[last_gap - 1]) --last_gap;
+        while (first_gap + 1 < M && joins(first_gap)) ++first_gap;
+        if (first_gap + 1 < M) {
+          while (last_gap > first_gap + 1 && joins(last_gap - 1)) --last_gap;
+        }
         if (first_gap + 1 == M) {  // the whole polyline is valid: nothing to join
           head = line;
           tail.clear();
