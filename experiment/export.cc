@@ -15,18 +15,24 @@ namespace flowplan::experiment {
 
 Command AddExportCommand(CLI::App& app) {
   struct Args {
-    std::string ckpt, out;
+    std::string ckpt, out, kernels = "portable";
     ConfigArgs overlay;
   };
   auto args = std::make_shared<Args>();
   CLI::App* command = app.add_subcommand("export", "write the self-contained TorchScript planner");
   command->add_option("--ckpt", args->ckpt, "checkpoint file, or a run folder")->required();
   command->add_option("--out", args->out, "output file (default: RUN_DIR/planner.pt)");
+  command
+      ->add_option("--kernels", args->kernels,
+                   "the network's code in the file: portable (PyTorch alone loads it) or native (faster at small "
+                   "batches; needs libflowplan_kernels loaded first, docs/export.md)")
+      ->check(CLI::IsMember({"portable", "native"}));
   args->overlay.Add(command, false, "YAML applied over the checkpoint's config");
   return {command, [args] {
             // An exported file runs anywhere: its weights are written from the CPU.
             std::vector<std::string> overrides = args->overlay.overrides;
             overrides.push_back("device=cpu");
+            overrides.push_back("sampler.network_kernels=" + args->kernels);
             const TrainedPlanner loaded = LoadTrainedPlanner(args->ckpt, args->overlay.path, overrides);
             const std::string out =
                 args->out.empty() ? trainer::RunDir(RunFolderOf(loaded.checkpoint)).planner() : args->out;

@@ -16,8 +16,18 @@ const char* const kScriptNamespace = "__torch__.flowplan";
 
 namespace {
 
-/// Resolves `torch` to the ATen builtins, `Exception` (for `raise`) and any
-/// other name to a function of `unit`.
+/// `ops.NAMESPACE.op`: an operator registered by a library (TORCH_LIBRARY),
+/// as saved files spell it.
+struct OpsNamespaces : public torch::jit::SugaredValue {
+  std::string kind() const override { return "operator namespaces"; }
+  std::shared_ptr<torch::jit::SugaredValue> attr(const torch::jit::SourceRange&, torch::jit::GraphFunction&,
+                                                 const std::string& field) override {
+    return std::make_shared<torch::jit::BuiltinModule>(field);
+  }
+};
+
+/// Resolves `torch` to the ATen builtins, `ops` to registered operators,
+/// `Exception` (for `raise`) and any other name to a function of `unit`.
 class FunctionResolver : public torch::jit::Resolver {
  public:
   explicit FunctionResolver(std::shared_ptr<torch::jit::CompilationUnit> unit) : unit_(std::move(unit)) {}
@@ -25,6 +35,7 @@ class FunctionResolver : public torch::jit::Resolver {
   std::shared_ptr<torch::jit::SugaredValue> resolveValue(const std::string& name, torch::jit::GraphFunction&,
                                                          const torch::jit::SourceRange&) override {
     if (name == "torch") return std::make_shared<torch::jit::BuiltinModule>("aten");
+    if (name == "ops") return std::make_shared<OpsNamespaces>();
     if (name == "Exception") return std::make_shared<torch::jit::ExceptionValue>("Exception");
     if (torch::jit::Function* function = unit_->find_function(c10::QualifiedName(std::string(kScriptNamespace) + "." + name))) {
       return std::make_shared<torch::jit::FunctionValue>(function);

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "jit/script_writer.h"
+#include "models/network_kernels.h"
 #include "models/network.h"
 
 namespace flowplan::models {
@@ -34,6 +35,12 @@ class TrajectoryNet : public Network {
   /// holding the velocity (B, T, D).
   virtual std::string WriteScript(jit::ScriptWriter& writer) const = 0;
 
+  /// Writes, before WriteScript's lines, an early return through a native
+  /// operator (kernels/) for the inputs that operator takes, reading the same
+  /// variables; a network without one writes nothing. The other inputs fall
+  /// through to WriteScript's code.
+  virtual void WriteNativeKernel(jit::ScriptWriter& writer) const {}
+
   virtual int64_t state_dim() const = 0;
   virtual int64_t cond_dim() const = 0;
 };
@@ -43,7 +50,7 @@ using TrajectoryNetPtr = std::shared_ptr<TrajectoryNet>;
 /// The network as a TorchScript module with one method,
 ///   forward(x (B, T, D), t (B,), cond: Optional[Tensor] (B, C)) -> (B, T, D),
 /// its parameters copied into buffers (what planners and exported files run).
-torch::jit::Module ScriptNetwork(const TrajectoryNet& net);
+torch::jit::Module ScriptNetwork(const TrajectoryNet& net, NetworkKernels kernels);
 
 /// Checks x (B, T, D), t (B,) and cond (B, C) against a network's dimensions.
 /// @throws flowplan::Error "expected (B, T, 4), got (…)" style messages.

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "kernels/unet1d_kernel.h"
 #include "models/mish.h"
 #include "models/precision.h"
 
@@ -262,6 +263,37 @@ std::string UNet1D::WriteScript(jit::ScriptWriter& w) const {
   h = w.Let(internal::ScriptConv(h, w.Tensor("final_conv.weight", final_conv_->weight),
                                  w.Tensor("final_conv.bias", final_conv_->bias), final_conv_->options));
   return w.Let(h + ".transpose(1, 2)");
+}
+
+void UNet1D::WriteNativeKernel(jit::ScriptWriter& w) const {
+  kernels::UNet1DShape shape;
+  shape.state_dim = state_dim_;
+  shape.cond_dim = cond_dim_;
+  shape.down_dims.assign(config_.down_dims.begin(), config_.down_dims.end());
+  shape.kernel_size = config_.kernel_size;
+  shape.groups = config_.groups;
+  shape.time_embed_dim = config_.time_embed_dim;
+  shape.time_scale = config_.time_scale;
+  shape.norm_eps = final_block_->norm_eps();
+  const auto parameters = named_parameters();
+  torch::Tensor packed;
+  try {
+    packed = kernels::PackUNet1D(shape, [&](const std::string& name) {
+      if (name == "frequencies") return frequencies_;
+      const torch::Tensor* p = parameters.find(name);
+      return p != nullptr ? *p : torch::Tensor();
+    });
+  } catch (const std::runtime_error& e) {
+    throw Error(e.what());
+  }
+  // float32 (the one floating type of 4 bytes) on the CPU (no device index), no gradient
+  w.Line("if x.is_floating_point() and x.element_size() == 4 and x.get_device() < 0 and not x.requires_grad:");
+  w.Indent();
+  w.Line("return ops.flowplan.unet1d(x, t, cond, " + w.Tensor("native.packed", packed) + ", " +
+         jit::ScriptIntList(shape.down_dims) + ", " + std::to_string(shape.kernel_size) + ", " +
+         std::to_string(shape.groups) + ", " + std::to_string(shape.time_embed_dim) + ", " +
+         jit::ScriptFloat(shape.time_scale) + ", " + jit::ScriptFloat(shape.norm_eps) + ")");
+  w.Dedent();
 }
 
 }  // namespace flowplan::models

@@ -41,6 +41,7 @@ class ConvBlock : public torch::nn::Module {
   ConvBlock(int in, int out, int kernel, int groups);
   torch::Tensor Forward(const torch::Tensor& x);
   std::string WriteScript(jit::ScriptWriter& w, const std::string& prefix, const std::string& x) const;
+  double norm_eps() const { return norm_->options.eps(); }
 
  private:
   torch::nn::Conv1d conv_{nullptr};
@@ -74,6 +75,7 @@ class ResidualBlock : public torch::nn::Module {
 
 class UNet1D : public TrajectoryNet {
  public:
+
   /// @param state_dim D, @param cond_dim C (0: no global condition).
   UNet1D(const UNetConfig& config, int64_t state_dim, int64_t cond_dim);
 
@@ -81,6 +83,10 @@ class UNet1D : public TrajectoryNet {
                         const torch::Tensor& cond) override;
   void CheckHorizon(int64_t horizon) const override;
   std::string WriteScript(jit::ScriptWriter& writer) const override;
+  /// flowplan::unet1d (kernels/unet1d_kernel.h) for float32 CPU inputs that
+  /// need no gradient, at any batch (it was faster than LibTorch's operators
+  /// from B = 1 to 64: docs/performance.md).
+  void WriteNativeKernel(jit::ScriptWriter& writer) const override;
   int64_t state_dim() const override { return state_dim_; }
   int64_t cond_dim() const override { return cond_dim_; }
 

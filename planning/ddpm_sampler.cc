@@ -31,7 +31,7 @@ torch::jit::Module BuildDdpmSampler(const SamplerContext& context) {
     noise_std[k] = std::sqrt(beta * (1.0 - a_before) / (1.0 - a));
   }
   return jit::ModuleBuilder("DdpmSampler")
-      .Submodule("network", models::ScriptNetwork(*net))
+      .Submodule("network", models::ScriptNetwork(*net, parts.sampler.network_kernels))
       .Submodule("normalizer", context.normalizer)
       .Submodule("guide", context.guide)
       .Buffer("x0_from_x", x0_from_x)

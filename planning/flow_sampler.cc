@@ -15,7 +15,7 @@ torch::jit::Module BuildFlowSampler(const SamplerContext& context) {
   net->CheckHorizon(T);
   if (parts.sampler.splitting != Splitting::kNone) models::CheckHalfHorizon(*net, T, "sampler.splitting plans");
   return jit::ModuleBuilder("FlowSampler")
-      .Submodule("network", models::ScriptNetwork(*net))
+      .Submodule("network", models::ScriptNetwork(*net, parts.sampler.network_kernels))
       .Submodule("normalizer", context.normalizer)
       .Submodule("guide", context.guide)
       .Attribute("conditioning", std::string(config::EnumName(parts.objective.conditioning)))

@@ -1,6 +1,7 @@
 #pragma once
 
 #include "core/config.h"
+#include "models/network_kernels.h"
 
 namespace flowplan::planning {
 
@@ -105,6 +106,9 @@ struct SamplerConfig {
   int final_iterations = 0;       // gradient steps of the guidance scale on the finished plan, each stage of splitting
   double final_denoise_time = 0.0;  // after each final step, one Euler step from this flow time to 1 (0: none)
   int midpoint_iterations = 0;      // splitting: gradient steps on the first stage's plan before re-noising
+  // The network's code in the planner: native kernels where the network has them (in-process default), or
+  // LibTorch's operators only (what `flowplan export` writes unless told --kernels native).
+  models::NetworkKernels network_kernels = models::NetworkKernels::kNative;
   DdpmSamplerConfig ddpm;
   LatentPlannerConfig latent;
 
@@ -128,6 +132,8 @@ struct SamplerConfig {
     v.Field("midpoint_iterations", midpoint_iterations,
             "flow matching, splitting: gradient steps on the first stage's plan before re-noising",
             config::NonNegative());
+    v.Field("network_kernels", network_kernels,
+            "the network's code: native kernels (needs libflowplan_kernels where the planner runs) or portable");
     v.Field("ddpm", ddpm, "DDPM planner (MPD): guidance schedule");
     v.Field("latent", latent, "latent (VAE) planner: activation maximization");
   }

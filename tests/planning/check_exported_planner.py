@@ -1,6 +1,6 @@
 """Plans with an exported flowplan planner and nothing but PyTorch, and compares.
 
-usage: check_exported_planner.py PLANNER.pt DIR B SCHEDULE KINDS MODE
+usage: check_exported_planner.py PLANNER.pt DIR B SCHEDULE KINDS MODE [KERNELS.so]
 Reads DIR/start.bin, DIR/goal.bin (B, D), DIR/noise.bin (B, *noise_shape),
 DIR/renoise.bin (B, *renoise_shape) if the planner takes renoise, DIR/<kind>.bin
 for every obstacle kind of KINDS (comma-separated, "-" for none; rows of the
@@ -13,7 +13,8 @@ every plan within 1e-5 of the in-process one, and checks the documented
 attributes and methods. Then, for the flow planner, each guide_at variant
 plans alike under both modes (MODE "inference"), and best of 3 returns, per
 request, the candidate of least guidance cost as the planner's own guide
-scores the candidates planned one by one.
+scores the candidates planned one by one. A planner saved with flowplan's
+native network kernels needs KERNELS.so (libflowplan_kernels) loaded first.
 """
 import sys
 
@@ -24,6 +25,8 @@ COLUMNS = {"spheres": lambda W: W + 1, "boxes": lambda W: 10 if W == 3 else 5,
 
 path, folder, batch, schedule, kinds, mode = sys.argv[1:7]
 batch = int(batch)
+if len(sys.argv) > 7:
+    torch.ops.load_library(sys.argv[7])
 planner = torch.jit.load(path)
 T, D, W = planner.horizon, planner.state_dim, planner.workspace_dim
 assert len(planner.state_labels) == D, planner.state_labels

@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <numeric>
 #include <set>
 
 #include "jit/library.h"
@@ -186,6 +187,10 @@ TEST_P(PlannerMatrixTest, InProcessCppAndPythonPlanAlike) {
                                             << "    return torch.relu(" << (franka ? 0.4 : 0.1) << " - height).sum(1)\n";
   }
   parts.config_yaml = "{}\n";
+  // Half the cases (by the parity of their values) plan with the UNet's native kernel, half with LibTorch's
+  // operators only; Python loads libflowplan_kernels for the first half.
+  const bool native = std::accumulate(c.begin(), c.end(), 0) % 2 == 0;
+  parts.sampler.network_kernels = native ? models::NetworkKernels::kNative : models::NetworkKernels::kPortable;
   const auto planner = AssemblePlanner(parts);
 
   // The network's TorchScript against the C++ network (the one computation written twice), at batches that
@@ -244,7 +249,7 @@ TEST_P(PlannerMatrixTest, InProcessCppAndPythonPlanAlike) {
   const auto loaded = LearnedPlanner::Load(file);
   EXPECT_LT((loaded->PlanWithNoise(start, goal, noise, renoise, scene, settings) - ours).abs().max().item<float>(), 1e-5);
 
-  // ... and by Python, with nothing but PyTorch.
+  // ... and by Python, with nothing but PyTorch (and flowplan's kernel library for a native network).
   WriteFloats((dir / "start.bin").string(), start);
   WriteFloats((dir / "goal.bin").string(), goal);
   WriteFloats((dir / "noise.bin").string(), noise);
@@ -258,7 +263,8 @@ TEST_P(PlannerMatrixTest, InProcessCppAndPythonPlanAlike) {
   const std::string command = std::string(FLOWPLAN_PYTHON) + " " + FLOWPLAN_SOURCE_DIR +
                               "/tests/planning/check_exported_planner.py " + file + " " + dir.string() + " " +
                               std::to_string(B) + " " + value(4) + " " + (kinds.empty() ? "-" : kinds) + " " +
-                              (value(8) == "none" ? "inference" : "no_grad");
+                              (value(8) == "none" ? "inference" : "no_grad") +
+                              (native ? std::string(" ") + FLOWPLAN_KERNELS_LIBRARY : std::string());
   EXPECT_EQ(std::system(command.c_str()), 0) << command;
 }
 
