@@ -576,6 +576,7 @@ def main():
     parser.add_argument("--threads", type=int, required=True, help="torch intra-op threads")
     parser.add_argument("--json", required=True, help="output JSON file")
     parser.add_argument("--repeats", type=int, default=20, help="timed repeats per measurement (median)")
+    parser.add_argument("--kernels", help="libflowplan_kernels.so, loaded first when --export uses native kernels")
     parser.add_argument("--check-only", action="store_true", help="the checks without the timings")
     args = parser.parse_args()
 
@@ -602,6 +603,8 @@ def main():
     net = load_network(checkpoint, "ema", config, D, C).eval()
     kinematics = ArmKinematics(robot)
     guide = Guide(settings, kinematics, float(checkpoint.dt), normalizer)
+    if args.kernels:
+        torch.ops.load_library(args.kernels)
     export = torch.jit.load(args.export, map_location="cpu")
     # The end-game as the exported file says (the speed benchmark exports without it, the preset has it); the
     # other guidance variants are not written here, so a file that uses one is refused rather than misjudged.

@@ -32,6 +32,7 @@
 #include "experiment/experiment_config.h"
 #include "experiment/trained_planner.h"
 #include "classical/rrt_connect.h"
+#include "geometry/scene.h"
 #include "geometry/scene_rows.h"
 #include "jit/library.h"
 #include "models/model_config.h"
@@ -212,6 +213,41 @@ int Main(int argc, char** argv) {
     ms["plan_b1"] = MedianMs(repeats, [&] { flow->PlanWithNoise(s, g, noise); });
   }
   ms["plan_guided_split_b1"] = MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, sphere); });
+  // The same plans around eight spheres, and among the boxes and the cylinder of configs/scenes/franka_shelf.yaml.
+  const geometry::SceneRows eight = geometry::SphereRows(EightSpheres());
+  const geometry::SceneRows shelf =
+      geometry::Rows(geometry::LoadScene(std::string(FLOWPLAN_SOURCE_DIR) + "/configs/scenes/franka_shelf.yaml"), 3,
+                     "configs/scenes/franka_shelf.yaml");
+  ms["plan_guided_split_b1_8"] = MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, eight); });
+  ms["plan_guided_split_b1_shelf"] =
+      MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, shelf); });
+  // The planner's network as the planners call it (the TorchScript module, with flowplan's native UNet kernel),
+  // and the same planners with LibTorch's operators only (sampler.network_kernels=portable, what an export
+  // without --kernels native holds), side by side.
+  {
+    torch::jit::Module network = flow->module().attr("sampler").toModule().attr("network").toModule();
+    const experiment::TrainedPlanner portable = experiment::LoadTrainedPlanner(
+        checkpoint, "", {"sampler.splitting=none", "sampler.final_iterations=0", "sampler.network_kernels=portable"});
+    const experiment::TrainedPlanner portable_split = experiment::LoadTrainedPlanner(
+        checkpoint, "", {"sampler.splitting=midpoint", "sampler.final_iterations=0", "sampler.network_kernels=portable"});
+    torch::jit::Module portable_network =
+        portable.planner->module().attr("sampler").toModule().attr("network").toModule();
+    for (int64_t B : {1, 64}) {
+      const torch::Tensor x = torch::randn({B, T, D}), t = torch::full({B}, 0.5f);
+      const int64_t C = models::ConditionDim(config.objective.conditioning, D);
+      const torch::IValue cond = C > 0 ? torch::IValue(torch::zeros({B, C})) : torch::IValue();
+      c10::InferenceMode inference;
+      const std::string key = "planner_forward_b" + std::to_string(B);
+      ms[key] = MedianMs(repeats, [&] { jit::Call(network, "forward", {x, t, cond}); });
+      ms[key + "_portable"] = MedianMs(repeats, [&] { jit::Call(portable_network, "forward", {x, t, cond}); });
+    }
+    {
+      c10::InferenceMode inference;
+      ms["plan_b1_portable"] = MedianMs(repeats, [&] { portable.planner->PlanWithNoise(s, g, noise); });
+    }
+    ms["plan_guided_split_b1_portable"] =
+        MedianMs(repeats, [&] { portable_split.planner->PlanWithNoise(s, g, noise, renoise, sphere); });
+  }
 
   // Throughput: B = 64 plans in one call, guided and split (the flow planner) or guided (MPD: the same network as
   // a DDPM, fresh weights), around one sphere and around eight; RRT-Connect per plan (8 searches, one per plan, the
@@ -266,15 +302,17 @@ int Main(int argc, char** argv) {
     std::remove(json.c_str());
     const std::string command = python + " " + FLOWPLAN_SOURCE_DIR + "/bench/eager_reference.py --checkpoint " +
                                 checkpoint + " --export " + split_file + " --threads " + std::to_string(threads) +
-                                " --repeats " + std::to_string(repeats) + " --json " + json;
+                                " --repeats " + std::to_string(repeats) + " --json " + json +
+                                " --kernels " + FLOWPLAN_KERNELS_LIBRARY;
     spdlog::info("running {}", command);
     if (std::system(command.c_str()) != 0) throw Error("the eager reference failed: " + command);
     reference = ReadNumbers(json);
   }
 
   std::printf("\n%-26s %12s %12s %12s %9s\n", "", "flowplan", "exported", "eager", "eager/fp");
-  for (const std::string key : {"forward_b1", "forward_b64", "train_step_b256", "train_step_b256_bf16", "plan_b1",
-                                "plan_guided_split_b1", "plan_guided_split_b64", "plan_guided_split_b64_8",
+  for (const std::string key : {"forward_b1", "forward_b64", "planner_forward_b1", "planner_forward_b64",
+                                "train_step_b256", "train_step_b256_bf16", "plan_b1", "plan_guided_split_b1",
+                                "plan_guided_split_b1_8", "plan_guided_split_b1_shelf", "plan_guided_split_b64", "plan_guided_split_b64_8",
                                 "mpd_guided_b64", "mpd_guided_b64_8", "rrt_connect_per_plan",
                                 "rrt_connect_per_plan_8"}) {
     const auto exported = ms.find(key + "_exported");
@@ -287,6 +325,12 @@ int Main(int argc, char** argv) {
   if (reference.count("train_step_b256") > 0) {
     std::printf("%-26s %12s %12s %9.2f ms %8s\n", "  bf16 against eager fp32", "", "", reference["train_step_b256"],
                 (std::to_string(reference["train_step_b256"] / ms["train_step_b256_bf16"]).substr(0, 4) + "x").c_str());
+  }
+  // The planners' native UNet kernel against the same planners on LibTorch's operators.
+  std::printf("\n%-26s %12s %12s %9s\n", "", "native", "portable", "speed-up");
+  for (const std::string key : {"planner_forward_b1", "planner_forward_b64", "plan_b1", "plan_guided_split_b1"}) {
+    std::printf("%-26s %9.2f ms %9.2f ms %8.2fx\n", key.c_str(), ms[key], ms[key + "_portable"],
+                ms[key + "_portable"] / ms[key]);
   }
   // Throughput in plans and training samples per second.
   std::printf("\nthroughput (\"_8\": eight spheres)     flowplan        eager\n");
@@ -320,8 +364,10 @@ int Main(int argc, char** argv) {
     ms["gemm_gflops"] = gemm_gflops;
     if (reference.count("flops_b1") != 0) {
       const double limit_ms = reference["flops_b1"] / (conv_gflops * 1e6);
-      std::printf("forward B=1: %.1f MFLOP -> arithmetic limit %.3f ms; flowplan %.2f ms = %.1fx the limit\n",
-                  reference["flops_b1"] / 1e6, limit_ms, ms["forward_b1"], ms["forward_b1"] / limit_ms);
+      std::printf("forward B=1: %.1f MFLOP -> arithmetic limit %.3f ms; the planners' network %.3f ms = %.1fx the "
+                  "limit (the C++ training network %.2f ms = %.1fx)\n", reference["flops_b1"] / 1e6, limit_ms,
+                  ms["planner_forward_b1"], ms["planner_forward_b1"] / limit_ms, ms["forward_b1"],
+                  ms["forward_b1"] / limit_ms);
       ms["flops_b1"] = reference["flops_b1"];
     }
   }
