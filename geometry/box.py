@@ -18,20 +18,40 @@ def box_problem(params: Tensor, W: int) -> str:
     return ""
 
 
+def box_frame(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
+    """Points (M, W) in the frames of boxes (K, box_columns(W)): (M, K, W); the
+    per-axis gap beyond the half side lengths, > 0 outside that slab: (M, K, W);
+    and the rotations, local to world (K, W, W)."""
+    W = points.size(1)
+    rotations = rotation_matrices(params[:, 2 * W:])
+    local = to_local(points, params[:, 0:W], rotations)
+    gap = local.abs() - 0.5 * params[:, W:2 * W].unsqueeze(0)
+    return local, gap, rotations
+
+
+def box_outside(gap: Tensor) -> Tuple[Tensor, Tensor, Tensor, Tensor]:
+    """From box_frame's gap (M, K, W): the signed distance (M, K), the gap's
+    part outside the box (M, K, W), its length (M, K), and the axis of the
+    deepest gap, the nearest face's (M, K)."""
+    outside = torch.relu(gap)
+    outside_length = lengths(outside)
+    deepest, face = torch.max(gap, -1)
+    return outside_length + torch.clamp(deepest, max=0.0), outside, outside_length, face
+
+
 def box_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
     """Signed distance from points (M, W) to boxes (K, box_columns(W)) (negative
     inside): (M, K), and its gradient with respect to the points (M, K, W):
     outside, the direction from the nearest surface point; inside, the normal of
     the nearest face."""
-    W = points.size(1)
-    rotations = rotation_matrices(params[:, 2 * W:])
-    local = to_local(points, params[:, 0:W], rotations)               # (M, K, W)
-    gap = local.abs() - 0.5 * params[:, W:2 * W].unsqueeze(0)       # per axis, > 0 outside that slab
-    outside = torch.relu(gap)
-    outside_length = lengths(outside)                                 # (M, K)
-    deepest, face = torch.max(gap, -1)                                 # (M, K)
-    distance = outside_length + torch.clamp(deepest, max=0.0)
+    local, gap, rotations = box_frame(points, params)
+    distance, outside, outside_length, face = box_outside(gap)
     towards_outside = outside / torch.where(outside_length > 0.0, outside_length, torch.ones_like(outside_length)).unsqueeze(-1)
     face_normal = torch.zeros_like(gap).scatter_(-1, face.unsqueeze(-1), 1.0)
     direction = torch.where((outside_length > 0.0).unsqueeze(-1), towards_outside, face_normal) * sign_of(local)
     return distance, to_world(direction, rotations)
+
+
+def box_distance_only(points: Tensor, params: Tensor) -> Tensor:
+    """box_distance's distances (M, K) alone, the same numbers."""
+    return box_outside(box_frame(points, params)[1])[0]

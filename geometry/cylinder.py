@@ -22,10 +22,13 @@ def cylinder_problem(params: Tensor, W: int) -> str:
     return ""
 
 
-def cylinder_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
-    """Signed distance from points (M, W) to cylinders (K, cylinder_columns(W))
-    (negative inside): (M, K), and its gradient with respect to the points
-    (M, K, W). On the axis the radial direction is taken along local x."""
+def cylinder_parts(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor, Tensor, Tensor, Tensor, Tensor, Tensor, Tensor, Tensor]:
+    """What cylinder_distance computes from points (M, W) and cylinders (K,
+    cylinder_columns(W)), distance first: the signed distance (M, K); the
+    points' local coordinates across the axis (M, K, W - 1) and along it (M,
+    K); their radial distance from the axis (M, K); how far they lie outside
+    the mantle (side) and beyond a cap (cap), each > 0 outside (M, K); the
+    length of the part outside (M, K); and the rotations (K, W, W)."""
     W = points.size(1)
     rotations = rotation_matrices(params[:, W + 2:])
     local = to_local(points, params[:, 0:W], rotations)               # (M, K, W)
@@ -38,6 +41,16 @@ def cylinder_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
     outside_cap = torch.relu(cap)
     outside_length = torch.sqrt(outside_side * outside_side + outside_cap * outside_cap)
     distance = outside_length + torch.clamp(torch.max(side, cap), max=0.0)
+    return distance, across, along, radial, side, cap, outside_length, rotations, outside_side
+
+
+def cylinder_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
+    """Signed distance from points (M, W) to cylinders (K, cylinder_columns(W))
+    (negative inside): (M, K), and its gradient with respect to the points
+    (M, K, W). On the axis the radial direction is taken along local x."""
+    W = points.size(1)
+    distance, across, along, radial, side, cap, outside_length, rotations, outside_side = cylinder_parts(points, params)
+    outside_cap = torch.relu(cap)
     x_axis = torch.zeros([W - 1], dtype=points.dtype, device=points.device)
     x_axis[0] = 1.0
     radial_direction = unit_or(across, radial, x_axis)                # (M, K, W - 1)
@@ -48,3 +61,8 @@ def cylinder_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
     direction = torch.cat([radial_direction * radial_weight.unsqueeze(-1),
                            (axial_direction * axial_weight).unsqueeze(-1)], -1)
     return distance, to_world(direction, rotations)
+
+
+def cylinder_distance_only(points: Tensor, params: Tensor) -> Tensor:
+    """cylinder_distance's distances (M, K) alone, the same numbers."""
+    return cylinder_parts(points, params)[0]

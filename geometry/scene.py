@@ -4,7 +4,8 @@
 # absent. Obstacles are numbered in the dict's order (the kinds' order below:
 # spheres, boxes, cylinders, capsules), row by row.
 #
-# The shapes: one line per shape in each of the three functions below.
+# The shapes: one line per shape in each of the dispatch functions below
+# (shape_distance_only: the shapes with a cheaper way to their distances alone).
 
 
 def shape_kinds() -> List[str]:
@@ -48,10 +49,14 @@ def shape_distance(kind: str, points: Tensor, params: Tensor) -> Tuple[Tensor, T
 
 
 def shape_distance_only(kind: str, points: Tensor, params: Tensor) -> Tensor:
-    """shape_distance's distances (M, K) alone. A sphere has a cheaper way to
-    them; the other shapes find the nearest point, which gives the gradient too."""
+    """shape_distance's distances (M, K) alone, without the work of their
+    gradient (a capsule's nearest point gives both at once)."""
     if kind == "spheres":
         return sphere_distance_only(points, params)
+    if kind == "boxes":
+        return box_distance_only(points, params)
+    if kind == "cylinders":
+        return cylinder_distance_only(points, params)
     return shape_distance(kind, points, params)[0]
 
 
