@@ -24,8 +24,9 @@ Command AddExportCommand(CLI::App& app) {
   command->add_option("--out", args->out, "output file (default: RUN_DIR/planner.pt)");
   command
       ->add_option("--kernels", args->kernels,
-                   "the network's code in the file: portable (PyTorch alone loads it) or native (faster at small "
-                   "batches; needs libflowplan_kernels loaded first, docs/export.md)")
+                   "the network's code in the file: portable (PyTorch alone loads it) or native (faster; needs "
+                   "libflowplan_kernels loaded first, docs/export.md). This option decides, whatever "
+                   "sampler.network_kernels a config says")
       ->check(CLI::IsMember({"portable", "native"}));
   args->overlay.Add(command, false, "YAML applied over the checkpoint's config");
   return {command, [args] {

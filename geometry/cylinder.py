@@ -28,7 +28,8 @@ def cylinder_parts(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor, Tens
     points' local coordinates across the axis (M, K, W - 1) and along it (M,
     K); their radial distance from the axis (M, K); how far they lie outside
     the mantle (side) and beyond a cap (cap), each > 0 outside (M, K); the
-    length of the part outside (M, K); and the rotations (K, W, W)."""
+    length of the part outside (M, K); the rotations (K, W, W); and the part
+    of side outside (M, K)."""
     W = points.size(1)
     rotations = rotation_matrices(params[:, W + 2:])
     local = to_local(points, params[:, 0:W], rotations)               # (M, K, W)

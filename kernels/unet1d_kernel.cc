@@ -376,10 +376,10 @@ class Pass {
     const int64_t K = s_.kernel_size;
     const float* w = cursor_.Take(K * x.C * O);
     const float* bias = cursor_.Take(O);
-    Tap taps[16];
-    for (int64_t k = 0; k < K; ++k) taps[k] = Tap{w + k * x.C * O, k - K / 2};
+    std::vector<Tap> taps(static_cast<size_t>(K));
+    for (int64_t k = 0; k < K; ++k) taps[static_cast<size_t>(k)] = Tap{w + k * x.C * O, k - K / 2};
     Rows y = arena_.Take(x.T, O, P_);
-    ConvRows(x, taps, static_cast<int>(K), 1, x.T, O, bias, y.Row(0), 1, 0);
+    ConvRows(x, taps.data(), static_cast<int>(K), 1, x.T, O, bias, y.Row(0), 1, 0);
     const float* gamma = cursor_.Take(O);
     const float* beta = cursor_.Take(O);
     NormMish(y.Row(0), y.T, O, s_.groups, gamma, beta, static_cast<float>(s_.norm_eps), scale, shift,
@@ -416,10 +416,10 @@ class Pass {
     const int64_t K = s_.kernel_size;
     const float* w = cursor_.Take(K * x.C * O);
     const float* bias = cursor_.Take(O);
-    Tap taps[16];
-    for (int64_t k = 0; k < K; ++k) taps[k] = Tap{w + k * x.C * O, k - K / 2};
+    std::vector<Tap> taps(static_cast<size_t>(K));
+    for (int64_t k = 0; k < K; ++k) taps[static_cast<size_t>(k)] = Tap{w + k * x.C * O, k - K / 2};
     Rows y = arena_.Take(x.T, O, P_);
-    ConvRows(x, taps, static_cast<int>(K), 1, x.T, O, bias, y.Row(0), 1, 0);
+    ConvRows(x, taps.data(), static_cast<int>(K), 1, x.T, O, bias, y.Row(0), 1, 0);
     gamma_ = cursor_.Take(O);
     beta_ = cursor_.Take(O);
     return y;
@@ -476,7 +476,7 @@ class Pass {
 
 void CheckShape(const UNet1DShape& s) {
   if (s.state_dim <= 0 || s.cond_dim < 0 || s.down_dims.empty() || s.time_embed_dim < 4 || s.time_embed_dim % 2 ||
-      s.kernel_size % 2 == 0 || s.kernel_size > 15 || s.groups <= 0) {
+      s.kernel_size % 2 == 0 || s.groups <= 0) {
     throw std::runtime_error("flowplan::unet1d: the shape is not a UNet1D's (state_dim " + std::to_string(s.state_dim) +
                              ", kernel_size " + std::to_string(s.kernel_size) + ")");
   }
@@ -521,7 +521,7 @@ torch::Tensor UNet1DForward(const torch::Tensor& x, const torch::Tensor& t, cons
     fail("packed: expected " + std::to_string(shape.PackedSize()) + " float32 numbers for this shape, got " +
          std::to_string(packed.numel()));
   }
-  if (x.requires_grad() || (cond.defined() && cond.requires_grad()) || t.requires_grad()) {
+  if (x.requires_grad() || (cond.defined() && cond.requires_grad()) || t.requires_grad() || packed.requires_grad()) {
     fail("computes no gradient, and an input requires one");
   }
   const torch::Tensor xs = x.contiguous();

@@ -43,7 +43,8 @@ torch::Tensor PackUNet1D(const UNet1DShape& shape, const std::function<torch::Te
 /// packed from PackUNet1D with the same shape -> (B, T, D). Batch elements
 /// run in parallel on LibTorch's intra-op threads, each on one thread, so the
 /// result does not depend on the thread count. No autograd: an input that
-/// requires grad is refused.
+/// requires grad is refused (the scripted network sends such inputs to
+/// LibTorch's operators instead).
 torch::Tensor UNet1DForward(const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond,
                             const torch::Tensor& packed, const UNet1DShape& shape);
 

@@ -1,6 +1,7 @@
 // Registers the inference UNet as the TorchScript operator flowplan::unet1d.
 // Loading this library (linked into flowplan; in Python,
-// torch.ops.load_library("libflowplan_kernels.so")) makes
+// torch.ops.load_library("libflowplan_kernels.so"); a C++ program links it
+// with -Wl,--no-as-needed, since it calls nothing in it) makes
 // torch.ops.flowplan.unet1d callable from scripts; a planner exported with
 // native kernels (docs/export.md) needs it loaded before torch.jit.load.
 
@@ -40,12 +41,10 @@ TORCH_LIBRARY(flowplan, m) {
       "int time_embed_dim, float time_scale, float norm_eps) -> Tensor");
 }
 
-// A CPU kernel only: under autograd the operator has no derivative, so a
-// gradient through it fails instead of silently missing the network.
+// A CPU kernel only, with no derivative: UNet1DForward refuses any input
+// that requires a gradient, so a gradient through the network is an error,
+// never silently missing (the scripted network sends such inputs to
+// LibTorch's operators).
 TORCH_LIBRARY_IMPL(flowplan, CPU, m) { m.impl("unet1d", UNet1DOp); }
 
 }  // namespace flowplan::kernels
-
-/// Referenced by flowplan's own libraries so that the linker keeps this
-/// library (and its registration) in every program that plans.
-extern "C" int flowplan_kernels_linked() { return 1; }

@@ -286,8 +286,9 @@ void UNet1D::WriteNativeKernel(jit::ScriptWriter& w) const {
   } catch (const std::runtime_error& e) {
     throw Error(e.what());
   }
-  // float32 (the one floating type of 4 bytes) on the CPU (no device index), no gradient
-  w.Line("if x.is_floating_point() and x.element_size() == 4 and x.get_device() < 0 and not x.requires_grad:");
+  // float32 (the one floating type of 4 bytes) on the CPU (no device index), no input needing a gradient
+  w.Line("if x.is_floating_point() and x.element_size() == 4 and x.get_device() < 0 and not x.requires_grad "
+         "and not t.requires_grad and (cond is None or not cond.requires_grad):");
   w.Indent();
   w.Line("return ops.flowplan.unet1d(x, t, cond, " + w.Tensor("native.packed", packed) + ", " +
          jit::ScriptIntList(shape.down_dims) + ", " + std::to_string(shape.kernel_size) + ", " +

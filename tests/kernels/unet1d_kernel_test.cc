@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
+#include "jit/library.h"
 #include "models/trajectory_net.h"
 #include "models/unet1d.h"
 
@@ -23,6 +24,7 @@ struct Case {
   int64_t D, C, T, B;
   int kernel = 5, groups = 8;
   double time_scale = 1.0;
+  int time_embed = 32;
 };
 
 /// A UNet with every parameter moved off its initial value (GroupNorm's 1 and
@@ -33,6 +35,7 @@ std::shared_ptr<models::UNet1D> Perturbed(const Case& c) {
   config.kernel_size = c.kernel;
   config.groups = c.groups;
   config.time_scale = c.time_scale;
+  config.time_embed_dim = c.time_embed;
   auto net = std::make_shared<models::UNet1D>(config, c.D, c.C);
   torch::NoGradGuard no_grad;
   for (torch::Tensor& p : net->parameters()) p.add_(0.2 * torch::randn_like(p));
@@ -40,8 +43,9 @@ std::shared_ptr<models::UNet1D> Perturbed(const Case& c) {
   return net;
 }
 
+/// The module's forward pass as flowplan calls scripts (jit::Call: the graph as compiled, no profiling).
 torch::Tensor Forward(torch::jit::Module& module, const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond) {
-  return module.forward({x, t, cond.defined() ? torch::IValue(cond) : torch::IValue()}).toTensor();
+  return jit::Call(module, "forward", {x, t, cond.defined() ? torch::IValue(cond) : torch::IValue()}).toTensor();
 }
 
 class NativeMatchesLibTorch : public ::testing::TestWithParam<Case> {};
@@ -72,7 +76,9 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{{16, 32, 64, 128}, 4, 8, 16, 2},            // four levels: 2 states at the bottom
                       Case{{8}, 2, 0, 5, 3, 3, 4},                     // one level (no down or up), odd T, k 3
                       Case{{24, 40}, 6, 0, 10, 2, 7, 8, 100.0},        // widths no multiple of 16, k 7, time scale
-                      Case{{32, 64}, 14, 0, 64, 9}));                  // a batch above the thread count
+                      Case{{32, 64}, 14, 0, 64, 9},                    // a batch above the thread count
+                      Case{{16, 48}, 16, 0, 16, 2, 5, 8, 1.0, 16},     // 16 states (a vector-wide output), 48 = 32 + 16
+                      Case{{16, 32}, 4, 0, 16, 2, 17, 8}));            // a kernel wider than the horizon's halves
 
 TEST(UNet1DKernelTest, PackedSizeIsEveryParameterOnce) {
   const Case c{{32, 64, 128}, 14, 28, 64, 1};
@@ -106,17 +112,25 @@ TEST(UNet1DKernelTest, SameBitsForAnyThreadCount) {
 
 TEST(UNet1DKernelTest, AnInputThatNeedsAGradientTakesLibTorchsOperators) {
   torch::manual_seed(4);
-  const Case c{{16, 32}, 4, 0, 16, 2};
+  const Case c{{16, 32}, 4, 6, 16, 2};
   const auto net = Perturbed(c);
   torch::jit::Module native = models::ScriptNetwork(*net, models::NetworkKernels::kNative);
   torch::jit::Module portable = models::ScriptNetwork(*net, models::NetworkKernels::kPortable);
-  const torch::Tensor x0 = torch::randn({2, 16, 4}), t = torch::rand({2});
-  auto gradient = [&](torch::jit::Module& m) {
-    const torch::Tensor x = x0.clone().requires_grad_(true);
-    Forward(m, x, t, {}).pow(2).sum().backward();
-    return x.grad();
-  };
-  EXPECT_TRUE(torch::allclose(gradient(native), gradient(portable)));
+  const torch::Tensor x0 = torch::randn({2, 16, 4}), t0 = torch::rand({2}), cond0 = torch::randn({2, 6});
+  // The gradient with respect to each input in turn (x, t, cond), the others plain.
+  for (int which = 0; which < 3; ++which) {
+    auto gradient = [&](torch::jit::Module& m) {
+      torch::Tensor x = x0.clone(), t = t0.clone(), cond = cond0.clone();
+      torch::Tensor& wanted = which == 0 ? x : which == 1 ? t : cond;
+      wanted.requires_grad_(true);
+      Forward(m, x, t, cond).pow(2).sum().backward();
+      return wanted.grad();
+    };
+    const torch::Tensor ours = gradient(native), want = gradient(portable);
+    ASSERT_TRUE(ours.defined()) << "input " << which;
+    EXPECT_GT(want.abs().max().item<double>(), 0.0) << "input " << which;
+    EXPECT_TRUE(torch::allclose(ours, want)) << "input " << which;
+  }
 }
 
 TEST(UNet1DKernelTest, BadInputsAreClearErrors) {
@@ -146,6 +160,8 @@ TEST(UNet1DKernelTest, BadInputsAreClearErrors) {
   {
     torch::AutoGradMode grad(true);
     EXPECT_THAT([&] { UNet1DForward(x.clone().requires_grad_(true), t, {}, packed, shape); },
+                ThrowsMessage<std::runtime_error>(HasSubstr("computes no gradient")));
+    EXPECT_THAT([&] { UNet1DForward(x, t, {}, packed.clone().requires_grad_(true), shape); },
                 ThrowsMessage<std::runtime_error>(HasSubstr("computes no gradient")));
   }
   UNet1DShape wider = shape;
