@@ -281,7 +281,7 @@ FLOWPLAN_VECTOR_CLONES void NormMish(float* y, int64_t T, int64_t C, int64_t G, 
   }
 }
 
-/// y (O) = W (O, I) x (I) + b, then Mish if asked.
+/// y (O) = W (O, I) x (I) + b.
 void Linear(const float* w, const float* bias, const float* x, int64_t O, int64_t I, float* y) {
   for (int64_t o = 0; o < O; ++o) {
     const float* row = w + o * I;
@@ -300,7 +300,6 @@ class Cursor {
     p_ += n;
     return q;
   }
-  bool AtEnd() const { return p_ == end_; }
 
  private:
   const float* p_;
@@ -336,12 +335,9 @@ class Pass {
       h = Block(h, dims[i]);
       h = Up(h);
     }
-    h = ConvNorm(h, dims[1], nullptr, nullptr, nullptr);
-    // The final 1x1 convolution writes the output (T, D) directly.
-    const float* w = cursor_.Take(dims[1] * s_.state_dim);
-    const float* bias = cursor_.Take(s_.state_dim);
-    const Tap tap{w, 0};
-    ConvRows(h, &tap, 1, 1, h.T, s_.state_dim, bias, out, 1, 0);
+    h = BlockConv(h, dims[1]);  // the final conv block
+    FinishNorm(h, nullptr, nullptr, nullptr);
+    PointwiseConv(h, s_.state_dim, out);  // the final 1x1 convolution writes the output (T, D) directly
   }
 
  private:
@@ -371,48 +367,29 @@ class Pass {
     feature_ = feature;
   }
 
-  /// Conv (K, same padding) -> GroupNorm -> Mish [-> FiLM] [+ residual], out channels O.
-  Rows ConvNorm(const Rows& x, int64_t O, const float* scale, const float* shift, const Rows* residual) {
-    const int64_t K = s_.kernel_size;
-    const float* w = cursor_.Take(K * x.C * O);
-    const float* bias = cursor_.Take(O);
-    std::vector<Tap> taps(static_cast<size_t>(K));
-    for (int64_t k = 0; k < K; ++k) taps[static_cast<size_t>(k)] = Tap{w + k * x.C * O, k - K / 2};
-    Rows y = arena_.Take(x.T, O, P_);
-    ConvRows(x, taps.data(), static_cast<int>(K), 1, x.T, O, bias, y.Row(0), 1, 0);
-    const float* gamma = cursor_.Take(O);
-    const float* beta = cursor_.Take(O);
-    NormMish(y.Row(0), y.T, O, s_.groups, gamma, beta, static_cast<float>(s_.norm_eps), scale, shift,
-             residual ? residual->Row(0) : nullptr, arena_.Floats(4 * O));
-    return y;
-  }
-
   Rows Block(const Rows& x, int64_t out) {
-    // The packed order: conv0, norm0, film, conv1, norm1, residual. The FiLM
-    // and the residual are needed later than they are read, so conv0 and
-    // norm0 are read by ConvNorm first.
-    Rows h = ConvNormDeferred(x, out);
+    // The packed order: conv0, norm0, film, conv1, norm1, residual; each
+    // norm is applied (FinishNorm) once what follows it in the block is known.
+    Rows h = BlockConv(x, out);
     const int64_t f = s_.time_embed_dim + s_.cond_dim;
     const float* w_film = cursor_.Take(2 * out * f);
     const float* b_film = cursor_.Take(2 * out);
     float* film = arena_.Floats(2 * out);
     Linear(w_film, b_film, feature_, 2 * out, f, film);
     FinishNorm(h, film, film + out, nullptr);
-    Rows h2 = ConvNormDeferred(h, out);
+    Rows h2 = BlockConv(h, out);
     Rows skip = x;
     if (x.C != out) {
-      const float* w = cursor_.Take(x.C * out);
-      const float* bias = cursor_.Take(out);
       skip = arena_.Take(x.T, out, P_);
-      const Tap tap{w, 0};
-      ConvRows(x, &tap, 1, 1, x.T, out, bias, skip.Row(0), 1, 0);
+      PointwiseConv(x, out, skip.Row(0));
     }
     FinishNorm(h2, nullptr, nullptr, &skip);
     return h2;
   }
 
-  /// The convolution of a ConvNorm, with the norm's parameters kept for FinishNorm.
-  Rows ConvNormDeferred(const Rows& x, int64_t O) {
+  /// The convolution of a conv block (K taps, same padding) -> (T, O); its
+  /// norm's parameters, read next, are kept for FinishNorm.
+  Rows BlockConv(const Rows& x, int64_t O) {
     const int64_t K = s_.kernel_size;
     const float* w = cursor_.Take(K * x.C * O);
     const float* bias = cursor_.Take(O);
@@ -425,9 +402,18 @@ class Pass {
     return y;
   }
 
+  /// y in place: the last BlockConv's GroupNorm, Mish, then the FiLM and the residual if given.
   void FinishNorm(const Rows& y, const float* scale, const float* shift, const Rows* residual) {
     NormMish(y.Row(0), y.T, y.C, s_.groups, gamma_, beta_, static_cast<float>(s_.norm_eps), scale, shift,
              residual ? residual->Row(0) : nullptr, arena_.Floats(4 * y.C));
+  }
+
+  /// A 1x1 convolution of x to O channels, written to T rows of O at y.
+  void PointwiseConv(const Rows& x, int64_t O, float* y) {
+    const float* w = cursor_.Take(x.C * O);
+    const float* bias = cursor_.Take(O);
+    const Tap tap{w, 0};
+    ConvRows(x, &tap, 1, 1, x.T, O, bias, y, 1, 0);
   }
 
   /// Conv1d(C, C, 3, stride 2, padding 1): T -> T / 2.
