@@ -18,6 +18,7 @@
 
 #include "core/error.h"
 #include "core/random.h"
+#include "planning/time_parametrize.h"
 
 namespace flowplan::classical {
 namespace {
@@ -111,31 +112,6 @@ void Shortcut(og::PathGeometric& path, const ob::SpaceInformationPtr& si) {
     }
   }
   states = reduced;
-}
-
-/// T states along the joint-space polyline `points` (M, J), timed s(τ) = 3τ² − 2τ³ over (T − 1)·dt:
-/// (T, J) positions and (T, J) velocities.
-std::pair<torch::Tensor, torch::Tensor> TimeParametrize(const torch::Tensor& points, int64_t T, double dt) {
-  const int64_t M = points.size(0), J = points.size(1);
-  const torch::Tensor lengths = (points.slice(0, 1) - points.slice(0, 0, M - 1)).norm(2, 1);  // (M−1,)
-  const torch::Tensor cumulative = torch::cat({torch::zeros({1}, torch::kFloat64), lengths.cumsum(0)});
-  const double total = cumulative[-1].item<double>();
-  torch::Tensor q = torch::empty({T, J}, torch::kFloat64), v = torch::zeros({T, J}, torch::kFloat64);
-  const double duration = static_cast<double>(T - 1) * dt;
-  auto c = cumulative.accessor<double, 1>();
-  for (int64_t i = 0; i < T; ++i) {
-    const double tau = static_cast<double>(i) / static_cast<double>(T - 1);
-    const double s = total * (3.0 * tau * tau - 2.0 * tau * tau * tau);
-    const double speed = total * 6.0 * tau * (1.0 - tau) / duration;  // path length per second
-    int64_t k = 0;
-    while (k + 2 < M && c[k + 1] < s) ++k;
-    const double segment = c[k + 1] - c[k];
-    const double u = segment > 0.0 ? std::clamp((s - c[k]) / segment, 0.0, 1.0) : 0.0;
-    q[i] = points[k] + u * (points[k + 1] - points[k]);
-    if (segment > 0.0) v[i] = speed * (points[k + 1] - points[k]) / segment;
-  }
-  q[T - 1] = points[M - 1];
-  return {q, v};
 }
 
 void QuietOmpl() {
@@ -315,7 +291,7 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
         result.found[b] = true;
       }
     }
-    auto [q, v] = TimeParametrize(points, T, dt_);
+    auto [q, v] = planning::TimeAlongPath(points, T, dt_);
     result.plans[b] = (state_dim_ == J ? q : torch::cat({q, v}, 1)).to(torch::kFloat32);
     result.call_seconds[static_cast<size_t>(b)] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();

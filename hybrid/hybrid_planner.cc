@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/random.h"
+#include "planning/time_parametrize.h"
 #include "validity/plan_quality.h"
 
 namespace flowplan::hybrid {
@@ -20,6 +21,80 @@ HybridPlanner::HybridPlanner(std::unique_ptr<planning::LearnedPlanner> proposer,
                 std::to_string(fallback_->horizon()) + ", " + std::to_string(fallback_->state_dim()) + ")");
   }
   if (config_.proposals < 1) throw Error("hybrid.proposals: expected at least one proposal");
+}
+
+void HybridPlanner::RetimeTooFast(torch::Tensor& candidates, std::vector<validity::PlanVerdict>& verdicts,
+                                  std::vector<bool>& retimed, const planning::PlanRequest& one,
+                                  const geometry::SceneRows& scene) const {
+  std::vector<int64_t> too_fast;
+  for (size_t n = 0; n < verdicts.size(); ++n) {
+    if (verdicts[n].failure == validity::Failure::kSpeedLimit) too_fast.push_back(static_cast<int64_t>(n));
+  }
+  if (too_fast.empty()) return;
+  const int64_t T = horizon(), D = state_dim(), J = checker_.robot().num_joints();
+  std::vector<torch::Tensor> timed;
+  for (const int64_t n : too_fast) {
+    // The proposal's states as a polyline: they passed the start, goal and joint-limit checks, and every state of
+    // the re-timed plan lies on a segment between two of them.
+    auto [q, v] = planning::TimeAlongPath(candidates[n].slice(1, 0, J).to(torch::kFloat64), T,
+                                          proposer_->info().dt);
+    timed.push_back((D == J ? q : torch::cat({q, v}, 1)).to(candidates.scalar_type()));
+  }
+  const torch::Tensor again = torch::stack(timed);  // (R, T, D)
+  const std::vector<validity::PlanVerdict> second = checker_.Check(again, one.start[0], one.goal[0], scene, {});
+  candidates = candidates.clone();
+  for (size_t r = 0; r < too_fast.size(); ++r) {
+    if (!second[r].valid()) continue;  // the proposal keeps its own verdict, and its own states for a seed
+    const int64_t n = too_fast[r];
+    candidates[n] = again[static_cast<int64_t>(r)];
+    verdicts[static_cast<size_t>(n)] = second[r];
+    retimed[static_cast<size_t>(n)] = true;
+  }
+}
+
+HybridPlanner::Proposals HybridPlanner::Propose(const planning::PlanRequest& one,
+                                                const planning::PlanSettings& settings,
+                                                const planning::PlanSettings& cost_settings) const {
+  const int64_t N = config_.proposals, D = state_dim();
+  planning::PlanRequest request = one;
+  request.start = one.start.expand({N, D}).contiguous();
+  request.goal = one.goal.expand({N, D}).contiguous();
+  request.settings = settings;
+  const planning::PlanResult planned = proposer_->Plan(request);
+  Proposals p;
+  p.plans = planned.plans;
+  p.verdicts = checker_.Check(p.plans, one.start[0], one.goal[0], one.scene, planned.found);
+  p.retimed.assign(static_cast<size_t>(N), false);
+  RetimeTooFast(p.plans, p.verdicts, p.retimed, one, one.scene);
+  for (const auto& v : p.verdicts) p.any_valid = p.any_valid || v.valid();
+  // The best candidate by guidance cost, then joint-space path length: among the valid ones, or among all the
+  // finite proposals when none is valid and one seeds RRT-Connect. With one such candidate there is no choice.
+  if (!p.any_valid && !config_.seeded_fallback) return p;
+  std::vector<int64_t> eligible;
+  for (int64_t n = 0; n < N; ++n) {
+    const bool ok = p.any_valid ? p.verdicts[static_cast<size_t>(n)].valid()
+                                : torch::isfinite(p.plans[n]).all().item<bool>();  // a NaN proposal seeds nothing
+    if (ok) eligible.push_back(n);
+  }
+  if (eligible.size() == 1) {
+    p.best = eligible[0];
+    return p;
+  }
+  if (eligible.empty()) return p;
+  const torch::Tensor cost = proposer_->GuidanceCost(p.plans, one.scene, cost_settings);
+  const std::vector<validity::PlanQuality> quality =
+      validity::MeasurePlans(p.plans, checker_.robot(), proposer_->info().dt, checker_.config().joint_tolerance);
+  double best_cost = std::numeric_limits<double>::infinity(), best_length = best_cost;
+  for (const int64_t n : eligible) {
+    const double c = cost[n].item<double>(), length = quality[static_cast<size_t>(n)].joint_path_length;
+    if (!std::isfinite(c) || !std::isfinite(length)) continue;
+    if (p.best < 0 || c < best_cost || (c == best_cost && length < best_length)) {
+      p.best = n;
+      best_cost = c;
+      best_length = length;
+    }
+  }
+  return p;
 }
 
 planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) const {
@@ -37,43 +112,33 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
     one.start = request.start.slice(0, b, b + 1);
     one.goal = request.goal.slice(0, b, b + 1);
     one.seed = StreamSeed(request.seed, static_cast<uint64_t>(b));
-    planning::PlanRequest proposals = one;
-    proposals.start = one.start.expand({N, D}).contiguous();
-    proposals.goal = one.goal.expand({N, D}).contiguous();
-    const planning::PlanResult proposed = proposer_->Plan(proposals);
-    const std::vector<validity::PlanVerdict> verdicts =
-        checker_.Check(proposed.plans, one.start[0], one.goal[0], request.scene, proposed.found);
-    bool any_valid = false;
-    for (const auto& v : verdicts) any_valid = any_valid || v.valid();
-    // The best proposal by guidance cost, then joint-space path length: among the valid ones, or among all of them
-    // when none is valid and it seeds RRT-Connect.
-    int64_t best = -1;
-    if (any_valid || config_.seeded_fallback) {
-      const torch::Tensor cost = proposer_->GuidanceCost(proposed.plans, request.scene, request.settings);
-      const std::vector<validity::PlanQuality> quality =
-          validity::MeasurePlans(proposed.plans, checker_.robot(), proposer_->info().dt, checker_.config().joint_tolerance);
-      double best_cost = std::numeric_limits<double>::infinity(), best_length = best_cost;
-      for (int64_t n = 0; n < N; ++n) {
-        if (any_valid && !verdicts[static_cast<size_t>(n)].valid()) continue;
-        const double c = cost[n].item<double>(), length = quality[static_cast<size_t>(n)].joint_path_length;
-        if (!any_valid && (!std::isfinite(c) || !std::isfinite(length))) continue;  // a NaN proposal seeds nothing
-        if (best < 0 || c < best_cost || (c == best_cost && length < best_length)) {
-          best = n;
-          best_cost = c;
-          best_length = length;
-        }
-      }
+    // The unguided proposals first when asked (no cost gradients: a fraction of a guided plan's time), then the
+    // guided ones when none of those is valid.
+    Proposals proposed;
+    bool unguided = config_.unguided_first;
+    if (unguided) {
+      planning::PlanSettings free = request.settings;
+      free.values["guidance.scale"] = 0.0;
+      proposed = Propose(one, free, request.settings);
     }
+    if (!proposed.any_valid) {
+      unguided = false;
+      proposed = Propose(one, request.settings, request.settings);
+    }
+    const bool any_valid = proposed.any_valid;
+    const int64_t best = proposed.best;
+    const torch::Tensor& candidates = proposed.plans;
     const std::string of_n = std::to_string(best + 1) + " of " + std::to_string(N);
     if (any_valid) {
-      result.plans[b] = proposed.plans[best];
+      result.plans[b] = candidates[best];
       result.found[b] = true;
-      result.route[static_cast<size_t>(b)] = "proposal " + of_n;
+      result.route[static_cast<size_t>(b)] = "proposal " + of_n + (unguided ? " unguided" : "") +
+                                               (proposed.retimed[static_cast<size_t>(best)] ? " retimed" : "");
     } else {
       planning::PlanRequest classical = one;
       classical.settings = {};  // RRT-Connect takes its settings from its config
       planning::PlanResult fallback =
-          best >= 0 ? fallback_->PlanAlong(classical, proposed.plans.slice(0, best, best + 1)) : fallback_->Plan(classical);
+          best >= 0 ? fallback_->PlanAlong(classical, candidates.slice(0, best, best + 1)) : fallback_->Plan(classical);
       bool seeded = !fallback.route.empty() && fallback.route[0] == "seeded";
       validity::PlanVerdict verdict =
           checker_.Check(fallback.plans, one.start[0], one.goal[0], request.scene, fallback.found)[0];

@@ -3,16 +3,21 @@
 // The hybrid planner: valid or nothing. A learned planner proposes N plans for
 // a request in one call; the plan checker (validity/plan_check.h) keeps the
 // valid ones and the best of them by guidance cost, then by joint-space path
-// length, is returned; when none is valid, RRT-Connect plans the request
-// (with seeded_fallback, seeded by the proposal of least cost: it keeps that
-// proposal's valid stretches from the start and to the goal and joins them,
-// classical::RrtConnectPlanner::PlanAlong; if that plan is not valid, it plans
-// again unseeded), and its plan is checked too. Every
-// plan says which way it was made (PlanResult::route): "proposal k of N",
-// "rrt_connect", "rrt_connect seeded by proposal k of N", or "none" when neither
-// gave a valid plan (the plan returned is then RRT-Connect's, with its found:
-// a path the checker refuses, which the report's check names the reason of, or
-// the straight line it falls back to, found = false).
+// length, is returned. A proposal refused only for moving a joint too fast is
+// timed again along its own path (planning/time_parametrize.h: the same states
+// as a polyline, rest to rest over the plan's duration) and checked again. With
+// unguided_first, N proposals without guidance come first and the guided ones
+// only when none of those is valid. When no proposal is valid, RRT-Connect
+// plans the request (with seeded_fallback, seeded by the guided proposal of
+// least cost: it keeps that proposal's valid stretches from the start and to
+// the goal and joins them, classical::RrtConnectPlanner::PlanAlong; if that
+// plan is not valid, it plans again unseeded), and its plan is checked too.
+// Every plan says which way it was made (PlanResult::route): "proposal k of N"
+// (followed by " unguided" and/or " retimed"), "rrt_connect", "rrt_connect
+// seeded by proposal k of N", or "none" when neither gave a valid plan (the
+// plan returned is then RRT-Connect's, with its found: a path the checker
+// refuses, which the report's check names the reason of, or the straight line
+// it falls back to, found = false).
 
 #include <memory>
 
@@ -31,6 +36,7 @@ struct HybridConfig {
   // plans (97 of 100, against 96 for every other setting).
   int64_t proposals = 8;        // N: plans the learned planner proposes per request, in one call
   bool seeded_fallback = true;  // RRT-Connect starts from the proposal of least guidance cost (PlanAlong)
+  bool unguided_first = false;  // propose without guidance first; the guided proposals only when none is valid
 
   template <class V>
   void Visit(V& v) {
@@ -39,6 +45,8 @@ struct HybridConfig {
     v.Field("seeded_fallback", seeded_fallback,
             "when no proposal is valid, RRT-Connect keeps the valid ends of the proposal of least guidance cost and "
             "joins them");
+    v.Field("unguided_first", unguided_first,
+            "propose without guidance first (guidance.scale = 0), and guided only when no unguided proposal is valid");
   }
 };
 
@@ -59,6 +67,28 @@ class HybridPlanner : public planning::Planner {
   int64_t state_dim() const override { return proposer_->state_dim(); }
 
  private:
+  /// N proposals for one request, checked (and re-timed where only too fast).
+  struct Proposals {
+    torch::Tensor plans;                          // (N, T, D): as proposed, or re-timed where that made them valid
+    std::vector<validity::PlanVerdict> verdicts;  // (N)
+    std::vector<bool> retimed;                    // (N)
+    bool any_valid = false;
+    int64_t best = -1;  // the valid one of least guidance cost, then path length; with none valid and
+                        // seeded_fallback, the finite proposal chosen so; -1 otherwise
+  };
+
+  /// Proposes for `one` (a request of one plan) with the proposer's `settings`; costs are weighed with
+  /// `cost_settings`.
+  Proposals Propose(const planning::PlanRequest& one, const planning::PlanSettings& settings,
+                    const planning::PlanSettings& cost_settings) const;
+
+  /// Proposals refused only for moving a joint too fast (their ends and joint limits passed) are timed again along
+  /// their own path (planning::TimeAlongPath) and checked again; those that then pass replace their proposal in
+  /// `candidates` (N, T, D), with their verdicts, and are marked in `retimed` (N).
+  void RetimeTooFast(torch::Tensor& candidates, std::vector<validity::PlanVerdict>& verdicts,
+                     std::vector<bool>& retimed, const planning::PlanRequest& one,
+                     const geometry::SceneRows& scene) const;
+
   std::unique_ptr<planning::LearnedPlanner> proposer_;
   std::unique_ptr<classical::RrtConnectPlanner> fallback_;
   validity::PlanChecker checker_;
