@@ -6,10 +6,10 @@
 #include <ompl/base/SpaceInformation.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/geometric/PathGeometric.h>
-#include <ompl/geometric/PathSimplifier.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
 #include <ompl/util/Console.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <mutex>
@@ -47,6 +47,42 @@ torch::Tensor ToTensor(const ob::State* state, int64_t J) {
   return torch::from_blob(values, {J}, torch::kFloat64).clone();
 }
 
+/// The n + 1 states (n + 1, J) of the motion from a to b (J,) a motion check looks at: a, n − 1 between, b.
+torch::Tensor MotionStates(const torch::Tensor& a, const torch::Tensor& b, int64_t n) {
+  const torch::Tensor s = torch::linspace(0.0, 1.0, n + 1, torch::kFloat64).unsqueeze(1);
+  return a + s * (b - a);
+}
+
+/// Whether each motion from[p] → to[p] ((P, J) float64) is valid, every motion checked at the states the motion
+/// validator checks it at, all of them in one call of `valid` ((M, J) float64 -> (M,) bool): (P) flags.
+std::vector<bool> MotionsValid(const ob::StateSpacePtr& space, const torch::Tensor& from, const torch::Tensor& to,
+                               const std::function<torch::Tensor(const torch::Tensor&)>& valid) {
+  const int64_t P = from.size(0), J = from.size(1);
+  std::vector<torch::Tensor> states;
+  std::vector<int64_t> counts;
+  ob::ScopedState<> s1(space), s2(space);
+  const auto fa = from.accessor<double, 2>(), ta = to.accessor<double, 2>();
+  for (int64_t p = 0; p < P; ++p) {
+    for (int64_t j = 0; j < J; ++j) {
+      s1[static_cast<unsigned>(j)] = fa[p][j];
+      s2[static_cast<unsigned>(j)] = ta[p][j];
+    }
+    const int64_t n = std::max<int64_t>(1, space->validSegmentCount(s1.get(), s2.get()));
+    states.push_back(MotionStates(from[p], to[p], n));
+    counts.push_back(n + 1);
+  }
+  std::vector<bool> ok(static_cast<size_t>(P), true);
+  if (P == 0) return ok;
+  const torch::Tensor flags = valid(torch::cat(states));
+  const auto f = flags.accessor<bool, 1>();
+  int64_t at = 0;
+  for (int64_t p = 0; p < P; ++p) {
+    for (int64_t k = 0; k < counts[static_cast<size_t>(p)]; ++k) ok[static_cast<size_t>(p)] = ok[static_cast<size_t>(p)] && f[at + k];
+    at += counts[static_cast<size_t>(p)];
+  }
+  return ok;
+}
+
 /// Checks a whole motion with one batched validity call over its interpolated states.
 class BatchedMotionValidator : public ob::MotionValidator {
  public:
@@ -82,36 +118,63 @@ class BatchedMotionValidator : public ob::MotionValidator {
     const auto space = si_->getStateSpace();
     const int64_t J = space->getDimension();
     const int64_t n = std::max<int64_t>(1, space->validSegmentCount(s1, s2));
-    const torch::Tensor a = ToTensor(s1, J), b = ToTensor(s2, J);
-    const torch::Tensor s = torch::linspace(0.0, 1.0, n + 1, torch::kFloat64).unsqueeze(1);
-    return check_(a + s * (b - a));
+    return check_(MotionStates(ToTensor(s1, J), ToTensor(s2, J), n));
   }
   ValidFn check_;
 };
 
-/// Deterministic shortcutting: from each kept state, jump to the farthest later state in view.
-void Shortcut(og::PathGeometric& path, const ob::SpaceInformationPtr& si) {
-  std::vector<ob::State*>& states = path.getStates();
-  if (states.size() < 3) return;
-  std::vector<ob::State*> kept = {states.front()};
-  size_t i = 0;
-  std::vector<bool> keep(states.size(), false);
-  keep[0] = true;
-  while (i + 1 < states.size()) {
-    size_t j = states.size() - 1;
-    while (j > i + 1 && !si->checkMotion(states[i], states[j])) --j;
-    keep[j] = true;
-    i = j;
-  }
-  std::vector<ob::State*> reduced;
-  for (size_t k = 0; k < states.size(); ++k) {
-    if (keep[k]) {
-      reduced.push_back(states[k]);
-    } else {
-      si->freeState(states[k]);
+using MotionCheck = std::function<std::vector<bool>(const torch::Tensor&, const torch::Tensor&)>;
+
+/// Deterministic shortcutting of a valid polyline (M, J): from each kept point, jump to the farthest later point
+/// the motion to which is valid. The candidates are checked farthest first, in calls of 1, 2, 4, ... of them.
+torch::Tensor Shortcut(const torch::Tensor& points, const MotionCheck& motions) {
+  const int64_t M = points.size(0);
+  if (M < 3) return points;
+  std::vector<int64_t> kept = {0};
+  int64_t i = 0;
+  while (i + 1 < M) {
+    int64_t next = i + 1;  // the motion to the next point is valid: the polyline is
+    for (int64_t top = M - 1, chunk = 1; top > i + 1 && next == i + 1; top -= chunk, chunk *= 2) {
+      const int64_t bottom = std::max(i + 2, top - chunk + 1);  // candidates top, top − 1, ..., bottom
+      const torch::Tensor to = points.slice(0, bottom, top + 1).flip(0).contiguous();
+      const std::vector<bool> ok = motions(points[i].expand_as(to).contiguous(), to);
+      for (size_t c = 0; c < ok.size(); ++c) {
+        if (ok[c]) {
+          next = top - static_cast<int64_t>(c);
+          break;
+        }
+      }
     }
+    kept.push_back(next);
+    i = next;
   }
-  states = reduced;
+  return points.index({torch::tensor(kept, torch::kInt64)});
+}
+
+/// Chaikin's corner cutting, `iterations` times, of a polyline (M, J): every segment's points at 1/4 and 3/4
+/// replace its inner corners; the ends stay. It converges to the quadratic B-spline of the points.
+torch::Tensor CutCorners(torch::Tensor points, int iterations) {
+  for (int k = 0; k < iterations && points.size(0) > 2; ++k) {
+    const int64_t M = points.size(0);
+    const torch::Tensor a = points.slice(0, 0, M - 1), b = points.slice(0, 1, M);
+    const torch::Tensor inner = torch::stack({0.75 * a + 0.25 * b, 0.25 * a + 0.75 * b}, 1).flatten(0, 1);  // (2(M−1), J)
+    points = torch::cat({points.slice(0, 0, 1), inner.slice(0, 1, inner.size(0) - 1), points.slice(0, M - 1)});
+  }
+  return points;
+}
+
+/// The valid polyline (M, J) with its corners rounded: Chaikin's corner cutting with the most iterations, of
+/// kSmoothing down to one, whose polyline is valid as a whole (checked in one call each); the polyline itself if none.
+torch::Tensor RoundCorners(const torch::Tensor& points, const MotionCheck& motions) {
+  constexpr int kSmoothing = 4;
+  if (points.size(0) < 3) return points;
+  for (int iterations = kSmoothing; iterations >= 1; --iterations) {
+    const torch::Tensor rounded = CutCorners(points, iterations);
+    const int64_t M = rounded.size(0);
+    const std::vector<bool> ok = motions(rounded.slice(0, 0, M - 1).contiguous(), rounded.slice(0, 1, M).contiguous());
+    if (std::all_of(ok.begin(), ok.end(), [](bool v) { return v; })) return rounded;
+  }
+  return points;
 }
 
 void QuietOmpl() {
@@ -213,6 +276,9 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
     si->setStateValidityCheckingResolution(config_.resolution);
     si->setMotionValidator(std::make_shared<BatchedMotionValidator>(si.get(), valid));
     si->setup();
+    const MotionCheck motions = [&](const torch::Tensor& from, const torch::Tensor& to) {
+      return MotionsValid(space, from, to, valid);
+    };
 
     torch::Tensor points = torch::stack({start_q[b], goal_q[b]});  // the straight line unless a path is found
     const torch::Tensor ends_valid = valid(points);
@@ -231,13 +297,15 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
         for (int64_t k = 1; k + 1 < g.size(0); ++k) line.push_back(g[k]);
         line.push_back(goal_q[b]);
         const size_t M = line.size();
-        // Whether the motion from line[k] to line[k + 1] is valid; only the motions up to the first invalid one
-        // from either end are checked.
-        auto joins = [&](size_t k) { return si->checkMotion(state(line[k]).get(), state(line[k + 1]).get()); };
+        // Whether the motion from line[k] to line[k + 1] is valid, for every k in one call; the guide is kept up
+        // to its first invalid motion from either end.
+        const torch::Tensor polyline = torch::stack(line);
+        const std::vector<bool> joins = motions(polyline.slice(0, 0, static_cast<int64_t>(M) - 1).contiguous(),
+                                                polyline.slice(0, 1, static_cast<int64_t>(M)).contiguous());
         size_t first_gap = 0, last_gap = M - 1;
-        while (first_gap + 1 < M && joins(first_gap)) ++first_gap;
+        while (first_gap + 1 < M && joins[first_gap]) ++first_gap;
         if (first_gap + 1 < M) {
-          while (last_gap > first_gap + 1 && joins(last_gap - 1)) --last_gap;
+          while (last_gap > first_gap + 1 && joins[last_gap - 1]) --last_gap;
         }
         if (first_gap + 1 == M) {  // the whole polyline is valid: nothing to join
           head = line;
@@ -281,13 +349,10 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
       }
       if (guides.defined()) result.route[static_cast<size_t>(b)] = seeded ? "seeded" : "unseeded";
       if (path) {
-        if (config_.simplify) {
-          Shortcut(*path, si);
-          og::PathSimplifier(si).smoothBSpline(*path, 5);
-        }
         std::vector<torch::Tensor> rows;
         for (const ob::State* s : path->getStates()) rows.push_back(ToTensor(s, J));
         points = torch::stack(rows);
+        if (config_.simplify) points = RoundCorners(Shortcut(points, motions), motions);
         result.found[b] = true;
       }
     }

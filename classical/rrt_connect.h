@@ -2,7 +2,7 @@
 
 // The classical reference planner: OMPL's RRT-Connect in joint space, with
 // whole-arm validity from the robot's collision spheres and the scene, path
-// shortcutting and B-spline smoothing, time-parametrized to T states at the
+// shortcutting and corner rounding, time-parametrized to T states at the
 // dataset's dt so that its plans compare with the learned planners'.
 
 #include <torch/torch.h>
@@ -25,7 +25,7 @@ struct RrtConnectConfig {
   double range = 0.0;              // maximum tree edge, joint-space units; 0: OMPL's default (20 % of the extent)
   double resolution = 0.005;       // motion checks every resolution × the space's extent
   double margin = 0.01;            // world units: a state is valid when every sphere is this far from every obstacle
-  bool simplify = true;            // shortcut and smooth the path
+  bool simplify = true;            // shortcut the path and round its corners
 
   template <class V>
   void Visit(V& v) {
@@ -37,7 +37,7 @@ struct RrtConnectConfig {
             config::Positive());
     v.Field("margin", margin, "clearance every collision sphere keeps from every obstacle (world units)",
             config::NonNegative());
-    v.Field("simplify", simplify, "shortcut and B-spline-smooth the found path");
+    v.Field("simplify", simplify, "shortcut the found path and round its corners (Chaikin's corner cutting, kept only if valid)");
   }
 };
 

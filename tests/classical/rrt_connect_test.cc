@@ -127,6 +127,43 @@ TEST(RrtConnectTest, AValidGuideIsFollowedWithoutSearch) {
   EXPECT_LT(DistanceToPolyline(p, line).max().item<double>(), 1e-5);
 }
 
+/// The largest angle (degrees) between consecutive non-zero displacements of positions p (T, 2).
+double LargestTurn(const torch::Tensor& p) {
+  const torch::Tensor d = p.slice(0, 1) - p.slice(0, 0, -1);
+  const torch::Tensor moving = d.index({d.norm(2, 1) > 1e-9});
+  const torch::Tensor u = moving / moving.norm(2, 1, true);
+  const torch::Tensor cosine = (u.slice(0, 1) * u.slice(0, 0, -1)).sum(1).clamp(-1.0, 1.0);
+  return torch::acos(cosine).max().item<double>() * 180.0 / M_PI;
+}
+
+TEST(RrtConnectTest, SimplifyingShortensAGuideAndRoundsItsCornerWithoutTouchingTheDisc) {
+  // A tent over the disc: straight up to (0.5, 0.9) and down again, 9 states a leg, a right angle at the top.
+  // Unsimplified, the plan keeps the corner; simplified, it is shorter, turns by less than 30° between states
+  // and still clears the disc.
+  std::vector<torch::Tensor> rows;
+  for (int k = 0; k <= 16; ++k) {
+    const double u = k / 16.0, x = 0.1 + 0.8 * u, y = 0.5 + 0.4 * (1.0 - std::abs(2.0 * u - 1.0));
+    rows.push_back(torch::tensor({x, y, 0.0, 0.0}, torch::kFloat64));
+  }
+  const torch::Tensor tent = torch::stack(rows).unsqueeze(0).to(torch::kFloat32);
+  const planning::PlanRequest request = AcrossTheDisc();
+  RrtConnectConfig as_given;
+  as_given.simplify = false;
+  const torch::Tensor raw = RrtConnectPlanner(Disc(64), as_given).PlanAlong(request, tent).plans[0].slice(1, 0, 2).to(torch::kFloat64);
+  const planning::PlanResult result = RrtConnectPlanner(Disc(64), RrtConnectConfig{}).PlanAlong(request, tent);
+  ASSERT_TRUE(result.found[0].item<bool>());
+  const torch::Tensor p = result.plans[0].slice(1, 0, 2).to(torch::kFloat64);
+  auto length = [](const torch::Tensor& q) { return (q.slice(0, 1) - q.slice(0, 0, -1)).norm(2, 1).sum().item<double>(); };
+  EXPECT_GT(LargestTurn(raw), 40.0);  // the right angle, split over the two displacements either side of it
+  EXPECT_LT(LargestTurn(p), 20.0) << LargestTurn(p);
+  EXPECT_LT(length(p), length(raw) - 0.01);
+  const torch::Tensor s = torch::linspace(0, 1, 21, torch::kFloat64).view({1, -1, 1});
+  const torch::Tensor dense = p.slice(0, 0, 63).unsqueeze(1) + s * (p.slice(0, 1) - p.slice(0, 0, 63)).unsqueeze(1);
+  EXPECT_GT((dense - torch::tensor({0.5, 0.5}, torch::kFloat64)).norm(2, -1).min().item<double>(), 0.2 + 0.05);
+  EXPECT_LT((p[0] - torch::tensor({0.1, 0.5}, torch::kFloat64)).abs().max().item<double>(), 1e-6);
+  EXPECT_LT((p[63] - torch::tensor({0.9, 0.5}, torch::kFloat64)).abs().max().item<double>(), 1e-6);
+}
+
 TEST(RrtConnectTest, AGuideThroughTheDiscKeepsItsValidEndsAndJoinsThem) {
   // The straight guide crosses the disc: the plan starts along it (y = 0.5 exactly, which a search from the start
   // would not give), goes around the disc, and ends along it.
