@@ -151,6 +151,22 @@ torch::Tensor Shortcut(const torch::Tensor& points, const MotionCheck& motions) 
   return points.index({torch::tensor(kept, torch::kInt64)});
 }
 
+/// The polyline (M, J) with `parts` − 1 evenly spaced points inserted in every segment: (parts (M − 1) + 1, J).
+torch::Tensor Subdivide(const torch::Tensor& points, int64_t parts) {
+  const int64_t M = points.size(0);
+  if (M < 2) return points;
+  const torch::Tensor u = torch::arange(parts, torch::kFloat64).div(static_cast<double>(parts)).view({1, parts, 1});
+  const torch::Tensor a = points.slice(0, 0, M - 1).unsqueeze(1), b = points.slice(0, 1, M).unsqueeze(1);
+  return torch::cat({(a + u * (b - a)).flatten(0, 1), points.slice(0, M - 1)});
+}
+
+/// Shortcutting again through points along the segments, `passes` times: each pass subdivides every segment in
+/// four and shortcuts, so the path can leave a vertex part way along a segment and draws tighter around obstacles.
+torch::Tensor Tighten(torch::Tensor points, const MotionCheck& motions, int passes) {
+  for (int p = 0; p < passes; ++p) points = Shortcut(Subdivide(points, 4), motions);
+  return points;
+}
+
 /// Chaikin's corner cutting, `iterations` times, of a polyline (M, J): every segment's points at 1/4 and 3/4
 /// replace its inner corners; the ends stay. It converges to the quadratic B-spline of the points.
 torch::Tensor CutCorners(torch::Tensor points, int iterations) {
@@ -352,7 +368,7 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
         std::vector<torch::Tensor> rows;
         for (const ob::State* s : path->getStates()) rows.push_back(ToTensor(s, J));
         points = torch::stack(rows);
-        if (config_.simplify) points = RoundCorners(Shortcut(points, motions), motions);
+        if (config_.simplify) points = RoundCorners(Tighten(Shortcut(points, motions), motions, 2), motions);
         result.found[b] = true;
       }
     }

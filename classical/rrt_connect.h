@@ -25,7 +25,7 @@ struct RrtConnectConfig {
   double range = 0.0;              // maximum tree edge, joint-space units; 0: OMPL's default (20 % of the extent)
   double resolution = 0.005;       // motion checks every resolution × the space's extent
   double margin = 0.01;            // world units: a state is valid when every sphere is this far from every obstacle
-  bool simplify = true;            // shortcut the path and round its corners
+  bool simplify = true;            // shortcut and tighten the path, and round its corners
 
   template <class V>
   void Visit(V& v) {
@@ -37,7 +37,7 @@ struct RrtConnectConfig {
             config::Positive());
     v.Field("margin", margin, "clearance every collision sphere keeps from every obstacle (world units)",
             config::NonNegative());
-    v.Field("simplify", simplify, "shortcut the found path and round its corners (Chaikin's corner cutting, kept only if valid)");
+    v.Field("simplify", simplify, "shortcut and tighten the found path and round its corners (Chaikin's corner cutting, kept only if valid)");
   }
 };
 
