@@ -168,7 +168,8 @@ torch::Tensor Tighten(torch::Tensor points, const MotionCheck& motions, int pass
 }
 
 /// Chaikin's corner cutting, `iterations` times, of a polyline (M, J): every segment's points at 1/4 and 3/4
-/// replace its inner corners; the ends stay. It converges to the quadratic B-spline of the points.
+/// replace the inner vertices (the first segment's 1/4 point and the last one's 3/4 point are left out); the ends
+/// stay. It converges to the quadratic B-spline of the points.
 torch::Tensor CutCorners(torch::Tensor points, int iterations) {
   for (int k = 0; k < iterations && points.size(0) > 2; ++k) {
     const int64_t M = points.size(0);

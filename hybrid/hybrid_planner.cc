@@ -24,8 +24,7 @@ HybridPlanner::HybridPlanner(std::unique_ptr<planning::LearnedPlanner> proposer,
 }
 
 void HybridPlanner::RetimeTooFast(torch::Tensor& candidates, std::vector<validity::PlanVerdict>& verdicts,
-                                  std::vector<bool>& retimed, const planning::PlanRequest& one,
-                                  const geometry::SceneRows& scene) const {
+                                  std::vector<bool>& retimed, const planning::PlanRequest& one) const {
   std::vector<int64_t> too_fast;
   for (size_t n = 0; n < verdicts.size(); ++n) {
     if (verdicts[n].failure == validity::Failure::kSpeedLimit) too_fast.push_back(static_cast<int64_t>(n));
@@ -35,13 +34,14 @@ void HybridPlanner::RetimeTooFast(torch::Tensor& candidates, std::vector<validit
   std::vector<torch::Tensor> timed;
   for (const int64_t n : too_fast) {
     // The proposal's states as a polyline: they passed the start, goal and joint-limit checks, and every state of
-    // the re-timed plan lies on a segment between two of them.
+    // the re-timed plan lies on a segment between two of them (the motion between two states may cut a corner of
+    // the polyline: the re-timed plan is checked again in full).
     auto [q, v] = planning::TimeAlongPath(candidates[n].slice(1, 0, J).to(torch::kFloat64), T,
                                           proposer_->info().dt);
     timed.push_back((D == J ? q : torch::cat({q, v}, 1)).to(candidates.scalar_type()));
   }
   const torch::Tensor again = torch::stack(timed);  // (R, T, D)
-  const std::vector<validity::PlanVerdict> second = checker_.Check(again, one.start[0], one.goal[0], scene, {});
+  const std::vector<validity::PlanVerdict> second = checker_.Check(again, one.start[0], one.goal[0], one.scene, {});
   candidates = candidates.clone();
   for (size_t r = 0; r < too_fast.size(); ++r) {
     if (!second[r].valid()) continue;  // the proposal keeps its own verdict, and its own states for a seed
@@ -54,7 +54,7 @@ void HybridPlanner::RetimeTooFast(torch::Tensor& candidates, std::vector<validit
 
 HybridPlanner::Proposals HybridPlanner::Propose(const planning::PlanRequest& one,
                                                 const planning::PlanSettings& settings,
-                                                const planning::PlanSettings& cost_settings) const {
+                                                const planning::PlanSettings& cost_settings, bool for_seed) const {
   const int64_t N = config_.proposals, D = state_dim();
   planning::PlanRequest request = one;
   request.start = one.start.expand({N, D}).contiguous();
@@ -65,11 +65,11 @@ HybridPlanner::Proposals HybridPlanner::Propose(const planning::PlanRequest& one
   p.plans = planned.plans;
   p.verdicts = checker_.Check(p.plans, one.start[0], one.goal[0], one.scene, planned.found);
   p.retimed.assign(static_cast<size_t>(N), false);
-  RetimeTooFast(p.plans, p.verdicts, p.retimed, one, one.scene);
+  RetimeTooFast(p.plans, p.verdicts, p.retimed, one);
   for (const auto& v : p.verdicts) p.any_valid = p.any_valid || v.valid();
   // The best candidate by guidance cost, then joint-space path length: among the valid ones, or among all the
   // finite proposals when none is valid and one seeds RRT-Connect. With one such candidate there is no choice.
-  if (!p.any_valid && !config_.seeded_fallback) return p;
+  if (!p.any_valid && !(config_.seeded_fallback && for_seed)) return p;
   std::vector<int64_t> eligible;
   for (int64_t n = 0; n < N; ++n) {
     const bool ok = p.any_valid ? p.verdicts[static_cast<size_t>(n)].valid()
@@ -87,7 +87,9 @@ HybridPlanner::Proposals HybridPlanner::Propose(const planning::PlanRequest& one
   double best_cost = std::numeric_limits<double>::infinity(), best_length = best_cost;
   for (const int64_t n : eligible) {
     const double c = cost[n].item<double>(), length = quality[static_cast<size_t>(n)].joint_path_length;
-    if (!std::isfinite(c) || !std::isfinite(length)) continue;
+    // A seed needs a finite cost and length; a valid plan is chosen whatever its cost (the first of the valid ones
+    // when no cost is finite).
+    if (!p.any_valid && (!std::isfinite(c) || !std::isfinite(length))) continue;
     if (p.best < 0 || c < best_cost || (c == best_cost && length < best_length)) {
       p.best = n;
       best_cost = c;
@@ -119,12 +121,13 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
     if (unguided) {
       planning::PlanSettings free = request.settings;
       free.values["guidance.scale"] = 0.0;
-      proposed = Propose(one, free, request.settings);
+      proposed = Propose(one, free, request.settings, /*for_seed=*/false);
     }
     if (!proposed.any_valid) {
       unguided = false;
-      proposed = Propose(one, request.settings, request.settings);
+      proposed = Propose(one, request.settings, request.settings, /*for_seed=*/true);
     }
+    FLOWPLAN_DEMAND(!proposed.any_valid || proposed.best >= 0);
     const bool any_valid = proposed.any_valid;
     const int64_t best = proposed.best;
     const torch::Tensor& candidates = proposed.plans;

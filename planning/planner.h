@@ -48,7 +48,7 @@ struct PlanResult {
   std::vector<double> call_seconds;
   std::vector<int64_t> call_plans;
   /// (B,) how each plan was made, for planners with more than one way (the
-  /// hybrid: "proposal 3 of 8", "rrt_connect"; RRT-Connect seeded by guides:
+  /// hybrid: "proposal 3 of 8", "proposal 1 of 1 unguided retimed", "rrt_connect"; RRT-Connect seeded by guides:
   /// "seeded", "unseeded"); empty otherwise.
   std::vector<std::string> route;
 };

@@ -10,7 +10,8 @@ namespace flowplan::planning {
 std::pair<torch::Tensor, torch::Tensor> TimeAlongPath(const torch::Tensor& points, int64_t T, double dt) {
   if (!points.defined() || points.dim() != 2 || points.size(0) < 1 || points.scalar_type() != torch::kFloat64) {
     throw Error("time_along_path: points: expected (M, J) float64 with M >= 1, got " +
-                (points.defined() ? ShapeText(points.sizes().vec()) : std::string("(undefined)")));
+                (points.defined() ? ShapeText(points.sizes().vec()) + " " + std::string(c10::toString(points.scalar_type()))
+                                  : std::string("(undefined)")));
   }
   if (T < 2 || !(dt > 0)) throw Error("time_along_path: expected T >= 2 states and a positive dt");
   const int64_t M = points.size(0), J = points.size(1);

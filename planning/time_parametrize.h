@@ -16,8 +16,9 @@ namespace flowplan::planning {
 
 /// T states along the joint-space polyline `points` (M, J) float64, M >= 1, at arc length (Euclidean in joint
 /// space) s(τ)·L for τ = i / (T − 1), timed over (T − 1)·dt: (T, J) positions and (T, J) velocities, float64.
-/// The first and last states are the polyline's ends; every state lies on the polyline, so the motion between
-/// consecutive states stays on it. The largest speed along the path is 1.5·L / ((T − 1)·dt).
+/// The first and last states are the polyline's ends and every state lies on the polyline; the straight motion
+/// between two consecutive states cuts the corner of any vertex between them. The largest speed along the path is
+/// 1.5·L / ((T − 1)·dt).
 std::pair<torch::Tensor, torch::Tensor> TimeAlongPath(const torch::Tensor& points, int64_t T, double dt);
 
 }  // namespace flowplan::planning

@@ -138,7 +138,7 @@ double LargestTurn(const torch::Tensor& p) {
 
 TEST(RrtConnectTest, SimplifyingShortensAGuideAndRoundsItsCornerWithoutTouchingTheDisc) {
   // A tent over the disc: straight up to (0.5, 0.9) and down again, 9 states a leg, a right angle at the top.
-  // Unsimplified, the plan keeps the corner; simplified, it is shorter, turns by less than 30° between states
+  // Unsimplified, the plan keeps the corner; simplified, it is shorter, turns by less than 20° between states
   // and still clears the disc.
   std::vector<torch::Tensor> rows;
   for (int k = 0; k <= 16; ++k) {
