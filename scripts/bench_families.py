@@ -8,7 +8,7 @@ paper's sphere scene, each plan checked by `flowplan`'s plan checker and execute
   ROOT/families/test/<planner>_<set>.*              the setting chosen on validation, on the test sets, executed
 
 Every learned planner chooses its guidance (the grid below) on the validation problems of all families pooled:
-the most valid plans, then the shorter median time per plan; the hybrid chooses its number of proposals the same way
+the most valid plans, then the shorter median time per plan; the hybrid chooses its setting the same way
 with the flow planner's chosen setting as its proposer. Test problems are never looked at before the choice. Every
 plan is made by its own call on one thread (`--batch 1`, `threads=1`; the hybrid's call proposes its N plans in one
 batch), so that the time per plan is the wall time of the call that made it, for every planner alike.
@@ -31,9 +31,10 @@ LEARNED = [("fp", "FP", "joint_fp", ["sampler.splitting=none"],
             [[f"guidance.scale={s}", f"sampler.final_iterations={g}"] for s in SCALES for g in (0, 10)]),
            ("mpd", "MPD", "joint_mpd", [], [[f"guidance.scale={s}"] for s in SCALES]),
            ("vae", "VAE planner", "joint_vae", ["sampler.latent.lr=0.02"], [[f"guidance.scale={s}"] for s in SCALES])]
-HYBRID_GRID = [["hybrid.proposals=2", "hybrid.seeded_fallback=false"], ["hybrid.proposals=8", "hybrid.seeded_fallback=false"],
-               ["hybrid.proposals=1", "hybrid.seeded_fallback=true"], ["hybrid.proposals=2", "hybrid.seeded_fallback=true"],
-               ["hybrid.proposals=8", "hybrid.seeded_fallback=true"], ["hybrid.proposals=1", "hybrid.seeded_fallback=false"]]
+# The hybrid: 1 or 4 proposals, guided only or unguided first, seeded fallback; and one unseeded.
+HYBRID_GRID = [[f"hybrid.proposals={n}", "hybrid.seeded_fallback=true", f"hybrid.unguided_first={u}"]
+               for u in ("false", "true") for n in (1, 4)]
+HYBRID_GRID.append(["hybrid.proposals=1", "hybrid.seeded_fallback=false", "hybrid.unguided_first=true"])
 LABELS = {name: label for name, label, *_ in LEARNED} | {"rrt_connect": "RRT-Connect", "hybrid": "hybrid (FP, RRT-Connect)"}
 PLANNERS = [name for name, *_ in LEARNED] + ["rrt_connect", "hybrid"]
 # Published anchors (docs/results.md says where they come from and how they differ from ours).
@@ -261,7 +262,9 @@ def summarize(report):
     for s in samples:
         route = s.get("route")
         if route is not None:
-            key = ("proposal" if route.startswith("proposal") else
+            # "proposal k of N[ unguided][ retimed]": the proposal kind, without k and N
+            key = ("proposal" + (" unguided" if " unguided" in route else "") + (" retimed" if " retimed" in route else "")
+                   if route.startswith("proposal") else
                    "rrt_connect seeded" if route.startswith("rrt_connect seeded") else route)
             routes[key] = routes.get(key, 0) + 1
     return {"success": report["success_rate"], "executed": report.get("success_rate_executed", 0.0),
