@@ -373,8 +373,7 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
         result.found[b] = true;
       }
     }
-    auto [q, v] = planning::TimeAlongPath(points, T, dt_);
-    result.plans[b] = (state_dim_ == J ? q : torch::cat({q, v}, 1)).to(torch::kFloat32);
+    result.plans[b] = planning::TimedStates(points, T, dt_, state_dim_).to(torch::kFloat32);
     result.call_seconds[static_cast<size_t>(b)] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   }

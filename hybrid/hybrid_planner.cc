@@ -36,9 +36,8 @@ void HybridPlanner::RetimeTooFast(torch::Tensor& candidates, std::vector<validit
     // The proposal's states as a polyline: they passed the start, goal and joint-limit checks, and every state of
     // the re-timed plan lies on a segment between two of them (the motion between two states may cut a corner of
     // the polyline: the re-timed plan is checked again in full).
-    auto [q, v] = planning::TimeAlongPath(candidates[n].slice(1, 0, J).to(torch::kFloat64), T,
-                                          proposer_->info().dt);
-    timed.push_back((D == J ? q : torch::cat({q, v}, 1)).to(candidates.scalar_type()));
+    timed.push_back(planning::TimedStates(candidates[n].slice(1, 0, J).to(torch::kFloat64), T, proposer_->info().dt, D)
+                        .to(candidates.scalar_type()));
   }
   const torch::Tensor again = torch::stack(timed);  // (R, T, D)
   const std::vector<validity::PlanVerdict> second = checker_.Check(again, one.start[0], one.goal[0], one.scene, {});

@@ -46,4 +46,14 @@ std::pair<torch::Tensor, torch::Tensor> TimeAlongPath(const torch::Tensor& point
   return {q, v};
 }
 
+torch::Tensor TimedStates(const torch::Tensor& points, int64_t T, double dt, int64_t D) {
+  auto [q, v] = TimeAlongPath(points, T, dt);
+  const int64_t J = q.size(1);
+  if (D != J && D != 2 * J) {
+    throw Error("timed_states: states of " + std::to_string(D) + " dimensions for a path of " + std::to_string(J) +
+                " joints (expected " + std::to_string(J) + " or " + std::to_string(2 * J) + ")");
+  }
+  return D == J ? q : torch::cat({q, v}, 1);
+}
+
 }  // namespace flowplan::planning

@@ -21,4 +21,8 @@ namespace flowplan::planning {
 /// 1.5·L / ((T − 1)·dt).
 std::pair<torch::Tensor, torch::Tensor> TimeAlongPath(const torch::Tensor& points, int64_t T, double dt);
 
+/// TimeAlongPath as a plan's states: (T, D) float64, the positions (D = J) or the positions then the velocities
+/// (D = 2J). @throws flowplan::Error for another D.
+torch::Tensor TimedStates(const torch::Tensor& points, int64_t T, double dt, int64_t D);
+
 }  // namespace flowplan::planning

@@ -61,6 +61,21 @@ HybridPlanner Hybrid(const torch::Tensor& target, HybridConfig config, guidance:
                        config);
 }
 
+/// One proposal, made with guidance only (not unguided first).
+HybridConfig OneGuidedProposal(bool seeded) {
+  HybridConfig config;
+  config.proposals = 1;
+  config.seeded_fallback = seeded;
+  config.unguided_first = false;
+  return config;
+}
+
+guidance::GuidanceConfig Unguided() {
+  guidance::GuidanceConfig guidance;
+  guidance.scale = 0.0;
+  return guidance;
+}
+
 planning::PlanRequest Request(const torch::Tensor& disc) {
   planning::PlanRequest request;
   request.start = torch::cat({kStart, torch::zeros({2}, torch::kFloat64)}).view({1, 4}).to(torch::kFloat32);
@@ -83,12 +98,7 @@ TEST(HybridPlannerTest, AProposalThatIsOnlyTooFastIsRetimedAlongItsOwnPath) {
   const validity::PlanChecker checker(kinematics::MakeRobot(info.robot), kDt, validity::CheckConfig{}, {});
   ASSERT_EQ(checker.Check(Dash().unsqueeze(0), request.start[0], request.goal[0], request.scene, {})[0].failure,
             validity::Failure::kSpeedLimit);
-  HybridConfig config;
-  config.proposals = 1;
-  config.unguided_first = false;
-  guidance::GuidanceConfig unguided;
-  unguided.scale = 0.0;
-  const planning::PlanResult result = Hybrid(Dash(), config, unguided).Plan(request);
+  const planning::PlanResult result = Hybrid(Dash(), OneGuidedProposal(/*seeded=*/true), Unguided()).Plan(request);
   ASSERT_TRUE(result.found[0].item<bool>());
   EXPECT_EQ(result.route[0], "proposal 1 of 1 retimed");
   // The same straight line, timed rest to rest: position start + s(τ)(goal − start), s = 3τ² − 2τ³, velocity
@@ -107,13 +117,7 @@ TEST(HybridPlannerTest, AProposalThatIsOnlyTooFastIsRetimedAlongItsOwnPath) {
 TEST(HybridPlannerTest, AProposalThroughTheDiscIsRetimedInVainAndReplannedAroundIt) {
   // The disc sits on the line: the re-timed dash is refused too, so RRT-Connect plans around it.
   const planning::PlanRequest request = Request(torch::tensor({{0.5f, 0.1f, 0.05f}}));
-  HybridConfig config;
-  config.proposals = 1;
-  config.seeded_fallback = false;
-  config.unguided_first = false;
-  guidance::GuidanceConfig unguided;
-  unguided.scale = 0.0;
-  const planning::PlanResult result = Hybrid(Dash(), config, unguided).Plan(request);
+  const planning::PlanResult result = Hybrid(Dash(), OneGuidedProposal(/*seeded=*/false), Unguided()).Plan(request);
   ASSERT_TRUE(result.found[0].item<bool>());
   EXPECT_EQ(result.route[0], "rrt_connect");
   const torch::Tensor p = result.plans[0].slice(1, 0, 2).to(torch::kFloat64);
