@@ -210,7 +210,7 @@ class Families:
                 "between states, joint position and speed limits, ends); executed: and then tracked in MuJoCo "
                 "without contact to within 3 cm of the goal. Time: per plan, the wall time of the call that made it "
                 "(one plan per call, one thread).\n", "Chosen on validation (pooled success, median time per plan):\n"]
-        summary["families"] = {"chosen": {}, "validation": {}, "test": {}}
+        summary["families"] = {"chosen": {}, "validation": {}, "test": {}, "pooled": {}}
         for planner in [name for name, *_ in LEARNED] + ["hybrid"]:
             rows = self.validation(planner)
             choice = self.chosen(planner)
@@ -240,6 +240,25 @@ class Families:
                             f"{row['tcp_path']:.2f} | {row['speed_ratio']:.2f} | {row['jerk']:.3g} | "
                             f"{row['duration_s']:.2f} | {row['routes']} |")
             text.append("")
+        text += [f"**the {len(self.families)} families pooled** (every test plan of them)\n",
+                 "| planner | success | median time (s) | p95 time (s) |", "|---|---|---|---|"]
+        for planner in PLANNERS:
+            setting = [] if planner == "rrt_connect" else self.chosen(planner)
+            reports = [None if setting is None else self.report(self.path("test", f"{planner}_{family}"), planner,
+                                                                setting, "test", family, True)
+                       for family in self.families]
+            if any(r is None for r in reports):
+                text.append(f"| {LABELS[planner]} | not run | | |")
+                continue
+            samples = [x for r in reports for p in r["problems"] for x in p["samples"]]
+            asked = sum(r["num_problems"] * r["num_samples"] for r in reports)
+            times = sorted(x["planning_time_s"] for x in samples)
+            pooled = {"success": sum(x["success"] for x in samples) / max(asked, 1),
+                      "median_time_s": times[len(times) // 2], "p95_time_s": times[int(0.95 * len(times))]}
+            summary["families"]["pooled"][planner] = pooled
+            text.append(f"| {LABELS[planner]} | {pooled['success']:.1%} | {pooled['median_time_s']:.3f} | "
+                        f"{pooled['p95_time_s']:.2f} |")
+        text.append("")
         text += ["Path length, speed ratio, jerk and duration: medians over the valid plans (over all plans when none is "
                  "valid). Routes: how the hybrid made its plans. Published anchors, not measured here: "
                  f"{CUROBO}; {VAMP}.\n"]
