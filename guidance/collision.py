@@ -35,13 +35,13 @@ def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], op
     penetration = torch.relu(reach - distance.view(M, S, K))
     # d/dc_s of sum_k relu(reach - d_k(c_s)) = -sum_k [active] grad d_k(c_s). Only the sphere centres within
     # reach of some obstacle have a gradient, usually a few of the M S: the obstacles' gradients are taken
-    # at those alone, and summed as one batched product.
+    # at those alone, summed as one batched product, and carried to q from those rows alone.
     active = (penetration > 0).view(M * S, K)
     near = active.any(1).nonzero().squeeze(1)
-    grad_centres = torch.zeros([M * S, W], dtype=q.dtype, device=q.device)
+    grad_near = torch.zeros([0, W], dtype=q.dtype, device=q.device)
     if near.size(0) > 0:
         near_distance, normal = scene_distance(points.index_select(0, near), scene)
         weights = active.index_select(0, near).to(q.dtype).unsqueeze(1)
-        grad_centres.index_copy_(0, near, -torch.bmm(weights, normal).squeeze(1))
-    grad_q = self.robot.spheres_vjp(centres, axes, origins, grad_centres.view(M, S, W)).view(B, T, J)
+        grad_near = -torch.bmm(weights, normal).squeeze(1)
+    grad_q = self.robot.spheres_vjp(centres, axes, origins, near, grad_near).view(B, T, J)
     return penetration.sum([1, 2]).view(B, T).sum(1), grad_q, torch.zeros_like(qd)

@@ -14,8 +14,8 @@ def spheres(self, q: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
     return q.unsqueeze(1), none, none
 
 
-def spheres_vjp(self, centres: Tensor, axes: Tensor, origins: Tensor, g: Tensor) -> Tensor:
-    return g.squeeze(1)
+def spheres_vjp(self, centres: Tensor, axes: Tensor, origins: Tensor, rows: Tensor, g: Tensor) -> Tensor:
+    return torch.zeros_like(centres.squeeze(1)).index_add_(0, rows, g)
 
 
 def tcp_vjp(self, q: Tensor, g: Tensor) -> Tensor:

@@ -63,7 +63,9 @@ torch::jit::Module BuildArm(const RobotDescription& d) {
   std::vector<torch::Tensor> cross, cross_sq;
   c10::List<int64_t> parents, joints;
   torch::Tensor link_joint = torch::zeros({L}, torch::kInt64), link_turns = torch::zeros({L}, torch::kFloat64);
-  torch::Tensor joint_links = torch::zeros({J}, torch::kInt64), joint_axes = torch::zeros({J, 3}, torch::kFloat64);
+  // Points fixed in the links, in homogeneous coordinates in the rows of their link's block: the collision
+  // spheres' centres (S), the hinge axes (J, directions) and a point on each hinge (J, its link's origin).
+  torch::Tensor frame_points = torch::zeros({4 * L, S + 2 * J}, torch::kFloat64);
   for (int64_t l = 0; l < L; ++l) {
     const RobotLink& link = d.links[static_cast<size_t>(l)];
     for (int i = 0; i < 3; ++i) positions[l][i] = link.pos[i];
@@ -76,22 +78,22 @@ torch::jit::Module BuildArm(const RobotDescription& d) {
     if (link.joint >= 0) {
       link_joint[l] = static_cast<int64_t>(link.joint);
       link_turns[l] = 1.0;
-      joint_links[link.joint] = l;
-      joint_axes[link.joint] = UnitAxis(link.axis);
+      const torch::Tensor axis = UnitAxis(link.axis);
+      for (int i = 0; i < 3; ++i) frame_points[4 * l + i][S + link.joint] = axis[i];
+      frame_points[4 * l + 3][S + J + link.joint] = 1.0;
     }
   }
   for (int i = 0; i < 3; ++i) positions[L][i] = d.tcp_pos[i];
   for (int i = 0; i < 4; ++i) quaternions[L][i] = d.tcp_quat[i];
   const torch::Tensor poses = Poses(positions, quaternions);  // links, then the TCP
-  torch::Tensor sphere_links = torch::empty({S}, torch::kInt64), sphere_local = torch::empty({S, 3}, torch::kFloat64);
   torch::Tensor ancestors = torch::zeros({J, S}, torch::kFloat64), tcp_ancestors = torch::zeros({J}, torch::kFloat64);
   for (int64_t l = d.tcp_link; l >= 0; l = parents[static_cast<size_t>(l)]) {
     if (joints[static_cast<size_t>(l)] >= 0) tcp_ancestors[joints[static_cast<size_t>(l)]] = 1.0;
   }
   for (int64_t s = 0; s < S; ++s) {
     const RobotSphere& sphere = d.spheres[static_cast<size_t>(s)];
-    sphere_links[s] = static_cast<int64_t>(sphere.link);
-    for (int i = 0; i < 3; ++i) sphere_local[s][i] = sphere.centre[i];
+    for (int i = 0; i < 3; ++i) frame_points[4 * sphere.link + i][s] = sphere.centre[i];
+    frame_points[4 * sphere.link + 3][s] = 1.0;
     for (int64_t l = sphere.link; l >= 0; l = parents[static_cast<size_t>(l)]) {
       if (joints[static_cast<size_t>(l)] >= 0) ancestors[joints[static_cast<size_t>(l)]][s] = 1.0;
     }
@@ -99,16 +101,14 @@ torch::jit::Module BuildArm(const RobotDescription& d) {
   const IkSettings ik;
   jit::ModuleBuilder builder("Arm");
   AddCommon(builder, d);
-  builder.Buffer("fixed", poses.slice(0, 0, L))
-      .Buffer("cross", torch::stack(cross))
-      .Buffer("cross_sq", torch::stack(cross_sq))
+  const torch::Tensor fixed = poses.slice(0, 0, L);
+  builder.Buffer("fixed", fixed)
+      .Buffer("fixed_cross", torch::matmul(fixed, torch::stack(cross)))
+      .Buffer("fixed_cross_sq", torch::matmul(fixed, torch::stack(cross_sq)))
       .Buffer("link_joint", link_joint)
       .Buffer("link_turns", link_turns)
       .Buffer("tcp_pose", poses[L])
-      .Buffer("sphere_links", sphere_links)
-      .Buffer("sphere_local", sphere_local)
-      .Buffer("joint_links", joint_links)
-      .Buffer("joint_axes", joint_axes)
+      .Buffer("frame_points", frame_points)
       .Buffer("ancestors", ancestors)
       .Buffer("tcp_ancestors", tcp_ancestors)
       .Buffer("home", d.home.empty() ? torch::zeros({J}, torch::kFloat64) : Doubles(d.home))

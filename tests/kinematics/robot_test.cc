@@ -155,15 +155,21 @@ TEST_F(ForwardKinematicsTest, TcpVjpIsTheTcpsJacobianTransposed) {
 }
 
 TEST_F(ForwardKinematicsTest, SpheresVjpIsTheSpheresJacobianTransposed) {
+  // A gradient on some of the 5 S centres (rows, in any order), zero on the rest: the written-out product
+  // equals autograd's of the dense sum.
   const torch::Tensor q0 = RandomQ(5, 8);
   torch::manual_seed(9);
-  const torch::Tensor g = torch::randn({5, fk_.num_spheres(), 3}, torch::kFloat64);
+  const int64_t S = fk_.num_spheres();
+  const torch::Tensor rows = torch::randperm(5 * S, torch::kInt64).slice(0, 0, 2 * S);
+  const torch::Tensor g = torch::randn({2 * S, 3}, torch::kFloat64);
+  const torch::Tensor dense = torch::zeros({5 * S, 3}, torch::kFloat64).index_copy(0, rows, g).view({5, S, 3});
   const torch::Tensor q = q0.clone().requires_grad_(true);
-  const torch::Tensor expected = torch::autograd::grad({(fk_.SphereCentres(q) * g).sum()}, {q})[0];
+  const torch::Tensor expected = torch::autograd::grad({(fk_.SphereCentres(q) * dense).sum()}, {q})[0];
   const auto poses = jit::Call(fk_.module(), "spheres", {q0}).toTuple()->elements();
   const torch::Tensor written =
-      jit::Call(fk_.module(), "spheres_vjp", {poses[0], poses[1], poses[2], g}).toTensor();
+      jit::Call(fk_.module(), "spheres_vjp", {poses[0], poses[1], poses[2], rows, g}).toTensor();
   EXPECT_LT((written - expected).abs().max().item<double>(), 1e-12);
+  EXPECT_GT(expected.abs().max().item<double>(), 0.1);
 }
 
 TEST(PointRobot, IsItsOwnTcpAndSphere) {
