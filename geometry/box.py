@@ -18,6 +18,11 @@ def box_problem(params: Tensor, W: int) -> str:
     return ""
 
 
+def box_prepared(params: Tensor, W: int) -> Tensor:
+    """Boxes (K, box_columns(W)) with their rotation matrices appended (K, box_columns(W) + W W)."""
+    return torch.cat([params, rotation_matrices(params[:, 2 * W:]).reshape(params.size(0), W * W)], 1)
+
+
 def box_frame(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
     """Points (M, W) in the frames of boxes (K, box_columns(W)): (M, K, W); the
     per-axis gap beyond the half side lengths, > 0 outside that slab: (M, K, W);
@@ -29,14 +34,12 @@ def box_frame(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
     return local, gap, rotations
 
 
-def box_outside(gap: Tensor) -> Tuple[Tensor, Tensor, Tensor, Tensor]:
+def box_outside(gap: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
     """From box_frame's gap (M, K, W): the signed distance (M, K), the gap's
-    part outside the box (M, K, W), its length (M, K), and the axis of the
-    deepest gap, the nearest face's (M, K)."""
+    part outside the box (M, K, W) and its length (M, K)."""
     outside = torch.relu(gap)
     outside_length = lengths(outside)
-    deepest, face = torch.max(gap, -1)
-    return outside_length + torch.clamp(deepest, max=0.0), outside, outside_length, face
+    return outside_length + torch.clamp(largest(gap), max=0.0), outside, outside_length
 
 
 def box_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
@@ -45,7 +48,8 @@ def box_distance(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor]:
     outside, the direction from the nearest surface point; inside, the normal of
     the nearest face."""
     local, gap, rotations = box_frame(points, params)
-    distance, outside, outside_length, face = box_outside(gap)
+    distance, outside, outside_length = box_outside(gap)
+    face = torch.argmax(gap, -1)                                        # the axis of the deepest gap, the nearest face's
     towards_outside = outside / torch.where(outside_length > 0.0, outside_length, torch.ones_like(outside_length)).unsqueeze(-1)
     face_normal = torch.zeros_like(gap).scatter_(-1, face.unsqueeze(-1), 1.0)
     direction = torch.where((outside_length > 0.0).unsqueeze(-1), towards_outside, face_normal) * sign_of(local)

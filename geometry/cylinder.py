@@ -22,6 +22,11 @@ def cylinder_problem(params: Tensor, W: int) -> str:
     return ""
 
 
+def cylinder_prepared(params: Tensor, W: int) -> Tensor:
+    """Cylinders (K, cylinder_columns(W)) with their rotation matrices appended (K, cylinder_columns(W) + W W)."""
+    return torch.cat([params, rotation_matrices(params[:, W + 2:]).reshape(params.size(0), W * W)], 1)
+
+
 def cylinder_parts(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor, Tensor, Tensor, Tensor, Tensor, Tensor, Tensor, Tensor]:
     """What cylinder_distance computes from points (M, W) and cylinders (K,
     cylinder_columns(W)), distance first: the signed distance (M, K); the

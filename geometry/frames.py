@@ -4,27 +4,54 @@
 
 def rotation_matrices(rotation: Tensor) -> Tensor:
     """Rotations of K shapes, local to world: (K, 4) quaternions (w, x, y, z) of
-    any non-zero norm (normalised here) -> (K, 3, 3); (K, 1) angles (rad, 2-D)
-    -> (K, 2, 2)."""
+    any non-zero norm -> (K, 3, 3); (K, 1) angles (rad, 2-D) -> (K, 2, 2); an
+    orientation followed by its rotation matrix, row by row ((K, 4 + 9), (K, 1 +
+    4): the rows of a prepared scene, geometry/scene.py) -> the matrix as stored.
+    Each entry of the rotation of a unit quaternion q is a quadratic form of q,
+    e.g. R_00 = w^2 + x^2 - y^2 - z^2, R_01 = 2(xy - wz): R = (q q^T) . C / |q|^2
+    with the constant C (16, 9) below, a handful of operations however many
+    shapes (this runs in every guidance step)."""
+    if rotation.size(1) == 4 + 9 or rotation.size(1) == 1 + 4:
+        W = 3 if rotation.size(1) == 4 + 9 else 2
+        return rotation[:, rotation.size(1) - W * W:].reshape(-1, W, W)
     if rotation.size(1) == 1:
         c = torch.cos(rotation[:, 0])
         s = torch.sin(rotation[:, 0])
         return torch.stack([c, -s, s, c], 1).view(-1, 2, 2)
-    q = rotation / torch.norm(rotation, 2, 1, True)
-    w = q[:, 0]
-    x = q[:, 1]
-    y = q[:, 2]
-    z = q[:, 3]
-    return torch.stack([1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y),
-                        2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x),
-                        2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)], 1).view(-1, 3, 3)
+    # Rows: q_a q_b for (a, b) = (w, w), (w, x), ..., (z, z); columns: R_00, R_01, ..., R_22.
+    C = torch.tensor([[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],       # ww
+                      [0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0],      # wx
+                      [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0],      # wy
+                      [0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],      # wz
+                      [0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0],      # xw
+                      [1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0],     # xx
+                      [0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],       # xy
+                      [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],       # xz
+                      [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0],      # yw
+                      [0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],       # yx
+                      [-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0],     # yy
+                      [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0],       # yz
+                      [0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],      # zw
+                      [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],       # zx
+                      [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0],       # zy
+                      [-1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0]],    # zz
+                     dtype=rotation.dtype, device=rotation.device)
+    K = rotation.size(0)
+    products = (rotation.unsqueeze(2) * rotation.unsqueeze(1)).view(K, 16)   # q_a q_b
+    squared_norm = products[:, 0] + products[:, 5] + products[:, 10] + products[:, 15]
+    return (torch.mm(products, C) / squared_norm.unsqueeze(1)).view(K, 3, 3)
 
 
 def to_local(points: Tensor, centres: Tensor, rotations: Tensor) -> Tensor:
     """points (M, W), centres (K, W), rotations (K, W, W) -> (M, K, W): each point
-    in each shape's frame, R_k^T (p - c_k)."""
-    offset = points.unsqueeze(0) - centres.unsqueeze(1)                     # (K, M, W)
-    return torch.bmm(offset, rotations).transpose(0, 1)                      # rows times R_k
+    in each shape's frame, R_k^T (p - c_k) = (p^T R_k - c_k^T R_k)^T: one matrix
+    product with the rotations side by side (W, K W), and a contiguous result."""
+    M = points.size(0)
+    K = centres.size(0)
+    W = points.size(1)
+    side_by_side = rotations.transpose(0, 1).reshape(W, K * W)                 # [i, k W + j] = R_k[i, j]
+    shifts = torch.bmm(centres.unsqueeze(1), rotations).view(1, K, W)          # c_k^T R_k
+    return torch.mm(points, side_by_side).view(M, K, W) - shifts
 
 
 def to_world(vectors: Tensor, rotations: Tensor) -> Tensor:
@@ -40,6 +67,15 @@ def lengths(vectors: Tensor) -> Tensor:
     for i in range(1, vectors.size(-1)):
         total = total + squares.select(-1, i)
     return torch.sqrt(total)
+
+
+def largest(vectors: Tensor) -> Tensor:
+    """The largest coordinate (...) of vectors (..., W), taken coordinate by
+    coordinate (as lengths: ATen's max over a last dimension of 2 or 3 is slow)."""
+    total = vectors.select(-1, 0)
+    for i in range(1, vectors.size(-1)):
+        total = torch.maximum(total, vectors.select(-1, i))
+    return total
 
 
 def sign_of(x: Tensor) -> Tensor:

@@ -2,7 +2,10 @@
 # Dict[str, Tensor] from obstacle kind to its rows, in world units, e.g.
 # {"spheres": (K1, W + 1), "boxes": (K2, 10)}; a kind with no obstacles is
 # absent. Obstacles are numbered in the dict's order (the kinds' order below:
-# spheres, boxes, cylinders, capsules), row by row.
+# spheres, boxes, cylinders, capsules), row by row. A planning call prepares its
+# scene once (prepared_scene): rotated shapes' rows carry their rotation
+# matrices after their own columns, which the distances take instead of
+# computing them again in every guidance step.
 #
 # The shapes: one line per shape in each of the dispatch functions below
 # (shape_distance_only: the shapes with a cheaper way to their distances alone).
@@ -48,6 +51,17 @@ def shape_distance(kind: str, points: Tensor, params: Tensor) -> Tuple[Tensor, T
     raise Exception("unknown obstacle kind " + kind)
 
 
+def shape_prepared(kind: str, params: Tensor, W: int) -> Tensor:
+    """The rows of one kind with what every distance would compute from them
+    again appended (a rotated shape's rotation matrix); the distances take
+    either. The shapes without such a part are their own."""
+    if kind == "boxes":
+        return box_prepared(params, W)
+    if kind == "cylinders":
+        return cylinder_prepared(params, W)
+    return params
+
+
 def shape_distance_only(kind: str, points: Tensor, params: Tensor) -> Tensor:
     """shape_distance's distances (M, K) alone, without the work of their
     gradient (a capsule's nearest point gives both at once)."""
@@ -75,6 +89,15 @@ def add_obstacles(scene: Dict[str, Tensor], kind: str, params: Optional[Tensor],
         scene[kind] = torch.cat([scene[kind], params.to(scene[kind].dtype)], 0)
     else:
         scene[kind] = params
+
+
+def prepared_scene(scene: Dict[str, Tensor], W: int) -> Dict[str, Tensor]:
+    """A checked scene (add_obstacles) with every kind's rows prepared
+    (shape_prepared), for the many distance passes of one planning call."""
+    out: Dict[str, Tensor] = {}
+    for kind, params in scene.items():
+        out[kind] = shape_prepared(kind, params, W)
+    return out
 
 
 def ordered_scene(scene: Dict[str, Tensor]) -> Dict[str, Tensor]:

@@ -81,6 +81,7 @@ def plan(self, start: Tensor, goal: Tensor, noise: Tensor, renoise: Optional[Ten
     device = self.normalizer.lo.device
     for kind, params in scene.items():
         scene[kind] = params.to(device)
+    scene = prepared_scene(scene, self.workspace_dim)
     start_f = start.to(device).float()
     goal_f = goal.to(device).float()
     noise_f = noise.to(device).float()
