@@ -1,7 +1,8 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): boxes (rotated
 # rectangles in 2-D). Row layout, 3-D (K, 10): centre (3), full side lengths
 # (3), orientation quaternion (w, x, y, z); 2-D (K, 5): centre (2), side
-# lengths (2), angle (rad).
+# lengths (2), angle (rad). The distances also take prepared rows, those
+# columns followed by the rotation matrix row by row (box_prepared).
 
 
 def box_columns(W: int) -> int:

@@ -3,7 +3,8 @@
 # centre (3), radius, height, orientation quaternion (w, x, y, z). In 2-D a
 # cylinder is seen from the side, a rectangle 2·radius wide (local x) and
 # `height` long along its axis (local y): (K, 5) centre (2), radius, height,
-# angle (rad).
+# angle (rad). The distances also take prepared rows, those columns followed
+# by the rotation matrix row by row (cylinder_prepared).
 
 
 def cylinder_columns(W: int) -> int:

@@ -13,7 +13,7 @@ def rotation_matrices(rotation: Tensor) -> Tensor:
     shapes (this runs in every guidance step)."""
     if rotation.size(1) == 4 + 9 or rotation.size(1) == 1 + 4:
         W = 3 if rotation.size(1) == 4 + 9 else 2
-        return rotation[:, rotation.size(1) - W * W:].reshape(-1, W, W)
+        return rotation[:, rotation.size(1) - W * W:].reshape(rotation.size(0), W, W)
     if rotation.size(1) == 1:
         c = torch.cos(rotation[:, 0])
         s = torch.sin(rotation[:, 0])

@@ -54,11 +54,14 @@ def shape_distance(kind: str, points: Tensor, params: Tensor) -> Tuple[Tensor, T
 def shape_prepared(kind: str, params: Tensor, W: int) -> Tensor:
     """The rows of one kind with what every distance would compute from them
     again appended (a rotated shape's rotation matrix); the distances take
-    either. The shapes without such a part are their own."""
+    either. The shapes without such a part are their own, and so are rows
+    already prepared. Computed in float64, returned in the rows' dtype."""
+    if params.size(1) != shape_columns(kind, W):
+        return params
     if kind == "boxes":
-        return box_prepared(params, W)
+        return box_prepared(params.double(), W).to(params.dtype)
     if kind == "cylinders":
-        return cylinder_prepared(params, W)
+        return cylinder_prepared(params.double(), W).to(params.dtype)
     return params
 
 
@@ -97,6 +100,15 @@ def prepared_scene(scene: Dict[str, Tensor], W: int) -> Dict[str, Tensor]:
     out: Dict[str, Tensor] = {}
     for kind, params in scene.items():
         out[kind] = shape_prepared(kind, params, W)
+    return out
+
+
+def given_scene(scene: Dict[str, Tensor], W: int) -> Dict[str, Tensor]:
+    """A scene's rows as a caller gives them (shape_columns of each kind):
+    a prepared scene without its appended columns."""
+    out: Dict[str, Tensor] = {}
+    for kind, params in scene.items():
+        out[kind] = params.narrow(1, 0, shape_columns(kind, W))
     return out
 
 

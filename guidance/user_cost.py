@@ -1,7 +1,9 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): the class
 # UserCost, a cost a user writes as the method
 #   def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor
-# (q, qd (B, T, J) raw joint positions and velocities, scene the obstacles,
+# (q, qd (B, T, J) raw joint positions and velocities, scene the obstacles
+# as the call gave them (given_scene: a prepared scene's rows without their
+# appended columns),
 # returning (B,)), in the file named by guidance.user_cost, compiled onto this
 # module. Its gradient is taken by autograd, also under a caller's
 # torch.no_grad(). Submodule robot (self.robot.tcp(q) and the rest of
@@ -24,7 +26,7 @@ def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], op
     torch.set_grad_enabled(True)
     q_leaf = q.detach().requires_grad_(True)
     qd_leaf = qd.detach().requires_grad_(True)
-    value = self.cost(q_leaf, qd_leaf, scene)
+    value = self.cost(q_leaf, qd_leaf, given_scene(scene, self.robot.workspace_dim))
     assert value.dim() == 1 and value.size(0) == q.size(0), self.source + ": cost: expected a value per trajectory (" + str(q.size(0)) + ",), got " + str(value.shape)
     gradients = torch.autograd.grad([value.sum()], [q_leaf, qd_leaf], allow_unused=True)
     torch.set_grad_enabled(enabled)

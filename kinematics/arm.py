@@ -48,7 +48,7 @@ def fixed_points(self, stacked: Tensor, first: int, count: int) -> Tensor:
     stacked (M, links, 4, 4): the top three rows of every link pose side by side (M * 3, links * 4) times
     the points, one matrix product however many."""
     M = stacked.size(0)
-    rows = stacked[:, :, 0:3, :].transpose(1, 2).reshape(M * 3, -1)
+    rows = stacked[:, :, 0:3, :].transpose(1, 2).reshape(M * 3, 4 * stacked.size(1))
     points = self.frame_points.narrow(1, first, count).to(stacked.dtype)
     return torch.mm(rows, points).view(M, 3, count).transpose(1, 2)
 
@@ -161,8 +161,8 @@ def ik_solve(self, targets: Tensor, seed: Tensor) -> Tuple[Tensor, Tensor, Tenso
         step = torch.matmul(jt, torch.linalg_solve(torch.matmul(jacobian, jt) + damping, error.unsqueeze(-1))).squeeze(-1)
         null_space = identity - torch.matmul(torch.linalg_pinv(jacobian), jacobian)
         step = step + self.ik_posture_gain * torch.matmul(null_space, (home - q).unsqueeze(-1)).squeeze(-1)
-        largest = step.abs().amax(1, True)
-        step = step * (self.ik_max_step / largest.clamp_min(self.ik_max_step))
+        biggest = step.abs().amax(1, True)
+        step = step * (self.ik_max_step / biggest.clamp_min(self.ik_max_step))
         step = step * torch.logical_not(converged).double().unsqueeze(1)
         q = torch.max(torch.min(q + step, upper), lower)
     return q, position_error, orientation_error, converged

@@ -258,6 +258,24 @@ TEST_P(ShapeTest, DistanceMatchesTheReferenceAndItsGradientFiniteDifferencesAndA
     for (size_t n = 0; n < points.size(); ++n) {
       EXPECT_NEAR(alone[n][0].item<double>(), Reference(kind, points[n], row, W), 1e-12) << kind << " point " << n;
     }
+    // A prepared row (shape_prepared: a rotated shape's rotation matrix appended, as a planning call's scene
+    // carries it) gives the same distances and gradients, bit for bit.
+    const torch::Tensor prepared =
+        jit::CallFunction("shape_prepared", {kind, rows, static_cast<int64_t>(W)}).toTensor();
+    const bool rotated = kind == "boxes" || kind == "cylinders";
+    EXPECT_EQ(prepared.size(1), rows.size(1) + (rotated ? W * W : 0)) << kind;
+    EXPECT_EQ(jit::CallFunction("shape_prepared", {kind, prepared, static_cast<int64_t>(W)}).toTensor().sizes(),
+              prepared.sizes())
+        << kind << ": prepared rows are their own";
+    // The stored matrix is what the distances use: with the orientation columns made NaN they do not change.
+    if (rotated) {
+      const int64_t orientation = kind == "boxes" ? 2 * W : W + 2;
+      prepared.slice(1, orientation, orientation + (W == 3 ? 4 : 1)).fill_(std::nan(""));
+    }
+    const auto [prepared_distance, prepared_gradient] = ScriptDistance(kind, p, prepared);
+    EXPECT_TRUE(torch::equal(prepared_distance, distance)) << kind;
+    EXPECT_TRUE(torch::equal(prepared_gradient, gradient)) << kind;
+    EXPECT_TRUE(torch::equal(jit::CallFunction("shape_distance_only", {kind, p, prepared}).toTensor(), alone)) << kind;
     // Central differences of the reference (h = 1e-6) and of the script itself.
     const double h = 1e-6;
     for (size_t n = 0; n < points.size(); ++n) {

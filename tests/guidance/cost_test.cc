@@ -301,6 +301,30 @@ TEST(UserCostTest, TheShippedExampleKeepsTheFrankaTcpAbove25Centimetres) {
   EXPECT_TRUE(torch::allclose(r.grad_qd, torch::zeros_like(qd)));
 }
 
+TEST(UserCostTest, SeesTheObstacleRowsAsTheCallGaveThem) {
+  // A planning call prepares its scene (boxes carry their rotation matrices after their 10 columns); a user
+  // cost still gets the rows as given: here its value is the boxes' column count and their sum.
+  GuidanceConfig config;
+  config.user_cost = WriteFile("columns.py", R"PY(
+def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:
+    boxes = scene["boxes"]
+    return torch.full([q.size(0)], float(boxes.size(1)), dtype=q.dtype) + boxes.sum().to(q.dtype) + 0.0 * q.sum([1, 2])
+)PY");
+  const torch::jit::Module user = Term(Guide(config, Franka()), 4);
+  const auto [q, qd] = FrankaStates(2, 3, 5);
+  geometry::SceneRows scene;
+  const torch::Tensor box = torch::tensor({{0.5, 0.1, 0.3, 0.2, 0.1, 0.05, 0.9, 0.1, 0.3, -0.2}}, torch::kFloat64);
+  scene.insert("boxes", box);
+  const auto prepared = jit::CallFunction("prepared_scene", {scene, static_cast<int64_t>(3)}).toGenericDict();
+  ASSERT_EQ(prepared.at("boxes").toTensor().size(1), 19);
+  geometry::SceneRows as_prepared;
+  as_prepared.insert("boxes", prepared.at("boxes").toTensor());
+  torch::NoGradGuard no_grad;
+  const Evaluated r = Evaluate(user, q, qd, as_prepared, Opts(config));
+  EXPECT_TRUE(torch::allclose(r.value, torch::full({2}, 10.0 + box.sum().item<double>(), torch::kFloat64), 0, 1e-12))
+      << r.value;
+}
+
 TEST(UserCostTest, BadFilesAreOneClearError) {
   GuidanceConfig config;
   config.user_cost = WriteFile("typo.py", "def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
