@@ -21,7 +21,7 @@ def box_problem(params: Tensor, W: int) -> str:
 
 def box_prepared(params: Tensor, W: int) -> Tensor:
     """Boxes (K, box_columns(W)) with their rotation matrices appended (K, box_columns(W) + W W)."""
-    return torch.cat([params, rotation_matrices(params[:, 2 * W:]).reshape(params.size(0), W * W)], 1)
+    return with_rotation_matrices(params, 2 * W, W)
 
 
 def box_frame(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor, Tensor]:

@@ -25,7 +25,7 @@ def cylinder_problem(params: Tensor, W: int) -> str:
 
 def cylinder_prepared(params: Tensor, W: int) -> Tensor:
     """Cylinders (K, cylinder_columns(W)) with their rotation matrices appended (K, cylinder_columns(W) + W W)."""
-    return torch.cat([params, rotation_matrices(params[:, W + 2:]).reshape(params.size(0), W * W)], 1)
+    return with_rotation_matrices(params, W + 2, W)
 
 
 def cylinder_parts(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor, Tensor, Tensor, Tensor, Tensor, Tensor, Tensor, Tensor]:

@@ -42,6 +42,15 @@ def rotation_matrices(rotation: Tensor) -> Tensor:
     return (torch.mm(products, C) / squared_norm.unsqueeze(1)).view(K, 3, 3)
 
 
+def with_rotation_matrices(params: Tensor, orientation: int, W: int) -> Tensor:
+    """Rows (K, C) of rotated shapes whose orientation (a quaternion, or an
+    angle in 2-D) starts at column `orientation`, with their rotation matrices
+    appended row by row (K, C + W W): what rotation_matrices then reads back
+    instead of computing. Computed in float64, returned in the rows' dtype."""
+    rotations = rotation_matrices(params[:, orientation:].double())
+    return torch.cat([params, rotations.reshape(params.size(0), W * W).to(params.dtype)], 1)
+
+
 def to_local(points: Tensor, centres: Tensor, rotations: Tensor) -> Tensor:
     """points (M, W), centres (K, W), rotations (K, W, W) -> (M, K, W): each point
     in each shape's frame, R_k^T (p - c_k) = (p^T R_k - c_k^T R_k)^T: one matrix

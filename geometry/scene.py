@@ -55,13 +55,13 @@ def shape_prepared(kind: str, params: Tensor, W: int) -> Tensor:
     """The rows of one kind with what every distance would compute from them
     again appended (a rotated shape's rotation matrix); the distances take
     either. The shapes without such a part are their own, and so are rows
-    already prepared. Computed in float64, returned in the rows' dtype."""
+    already prepared."""
     if params.size(1) != shape_columns(kind, W):
         return params
     if kind == "boxes":
-        return box_prepared(params.double(), W).to(params.dtype)
+        return box_prepared(params, W)
     if kind == "cylinders":
-        return cylinder_prepared(params.double(), W).to(params.dtype)
+        return cylinder_prepared(params, W)
     return params
 
 
