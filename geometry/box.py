@@ -29,7 +29,7 @@ def box_frame(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor, Tensor]:
     per-axis gap beyond the half side lengths, > 0 outside that slab: (M, K, W);
     and the rotations, local to world (K, W, W)."""
     W = points.size(1)
-    rotations = rotation_matrices(params[:, 2 * W:])
+    rotations = shape_rotations(params, 2 * W, W)
     local = to_local(points, params[:, 0:W], rotations)
     gap = local.abs() - 0.5 * params[:, W:2 * W].unsqueeze(0)
     return local, gap, rotations

@@ -37,7 +37,7 @@ def cylinder_parts(points: Tensor, params: Tensor) -> Tuple[Tensor, Tensor, Tens
     length of the part outside (M, K); the rotations (K, W, W); and the part
     of side outside (M, K)."""
     W = points.size(1)
-    rotations = rotation_matrices(params[:, W + 2:])
+    rotations = shape_rotations(params, W + 2, W)
     local = to_local(points, params[:, 0:W], rotations)               # (M, K, W)
     across = local[:, :, 0:W - 1]                                     # (M, K, W - 1)
     along = local[:, :, W - 1]                                        # (M, K)

@@ -4,16 +4,11 @@
 
 def rotation_matrices(rotation: Tensor) -> Tensor:
     """Rotations of K shapes, local to world: (K, 4) quaternions (w, x, y, z) of
-    any non-zero norm -> (K, 3, 3); (K, 1) angles (rad, 2-D) -> (K, 2, 2); an
-    orientation followed by its rotation matrix, row by row ((K, 4 + 9), (K, 1 +
-    4): the rows of a prepared scene, geometry/scene.py) -> the matrix as stored.
+    any non-zero norm -> (K, 3, 3); (K, 1) angles (rad, 2-D) -> (K, 2, 2).
     Each entry of the rotation of a unit quaternion q is a quadratic form of q,
     e.g. R_00 = w^2 + x^2 - y^2 - z^2, R_01 = 2(xy - wz): R = (q q^T) . C / |q|^2
     with the constant C (16, 9) below, a handful of operations however many
     shapes (this runs in every guidance step)."""
-    if rotation.size(1) == 4 + 9 or rotation.size(1) == 1 + 4:
-        W = 3 if rotation.size(1) == 4 + 9 else 2
-        return rotation[:, rotation.size(1) - W * W:].reshape(rotation.size(0), W, W)
     if rotation.size(1) == 1:
         c = torch.cos(rotation[:, 0])
         s = torch.sin(rotation[:, 0])
@@ -45,10 +40,20 @@ def rotation_matrices(rotation: Tensor) -> Tensor:
 def with_rotation_matrices(params: Tensor, orientation: int, W: int) -> Tensor:
     """Rows (K, C) of rotated shapes whose orientation (a quaternion, or an
     angle in 2-D) starts at column `orientation`, with their rotation matrices
-    appended row by row (K, C + W W): what rotation_matrices then reads back
+    appended row by row (K, C + W W): what shape_rotations then reads back
     instead of computing. Computed in float64, returned in the rows' dtype."""
-    rotations = rotation_matrices(params[:, orientation:].double())
+    rotations = rotation_matrices(params[:, orientation:orientation + (4 if W == 3 else 1)].double())
     return torch.cat([params, rotations.reshape(params.size(0), W * W).to(params.dtype)], 1)
+
+
+def shape_rotations(params: Tensor, orientation: int, W: int) -> Tensor:
+    """The rotations (K, W, W) of rotated shapes' rows (K, C) whose orientation
+    starts at column `orientation`: read back when the rows carry them
+    (with_rotation_matrices), else computed (rotation_matrices)."""
+    turn = 4 if W == 3 else 1
+    if params.size(1) == orientation + turn + W * W:
+        return params[:, orientation + turn:].reshape(params.size(0), W, W)
+    return rotation_matrices(params[:, orientation:orientation + turn])
 
 
 def to_local(points: Tensor, centres: Tensor, rotations: Tensor) -> Tensor:
