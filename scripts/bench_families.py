@@ -42,6 +42,28 @@ CUROBO = "cuRobo: 99.85 % of 2,600 MotionBenchMaker problems, 31 ms median (GPU)
 VAMP = "VAMP RRT-Connect: all 699 valid MotionBenchMaker problems, 35 µs median (one desktop CPU core)"
 
 
+def quantile(values, q):
+    """The q-quantile of VALUES by linear interpolation between order statistics: numpy's default, and the
+    definition of every `flowplan plan` report's median and p95 (experiment/plan_report.cc)."""
+    ordered = sorted(values)
+    if not ordered:
+        return float("inf")
+    at = q * (len(ordered) - 1)
+    below = int(at)
+    above = min(below + 1, len(ordered) - 1)
+    return ordered[below] + (at - below) * (ordered[above] - ordered[below])
+
+
+def pooled(reports):
+    """Success over every plan asked of REPORTS (`flowplan plan` reports), and the median and p95 time per plan
+    of their plans: {"success", "median_time_s", "p95_time_s", "plans"}."""
+    samples = [s for r in reports for p in r["problems"] for s in p["samples"]]
+    asked = sum(r["num_problems"] * r["num_samples"] for r in reports)
+    times = [s["planning_time_s"] for s in samples]
+    return {"success": sum(s["success"] for s in samples) / max(asked, 1), "median_time_s": quantile(times, 0.5),
+            "p95_time_s": quantile(times, 0.95), "plans": asked}
+
+
 class Families:
     def __init__(self, bench, helpers):
         """BENCH: the driver (its paths, requests, calls, sizes); HELPERS: its module (write_text, recorded, stale,
@@ -169,11 +191,8 @@ class Families:
                        for f in self.families]
             if any(r is None for r in reports):
                 continue
-            samples = [s for r in reports for p in r["problems"] for s in p["samples"]]
-            asked = sum(r["num_problems"] * r["num_samples"] for r in reports)
-            times = sorted(s["planning_time_s"] for s in samples)
-            median = times[len(times) // 2] if times else float("inf")
-            rows.append((setting, sum(s["success"] for s in samples) / max(asked, 1), median, asked))
+            row = pooled(reports)
+            rows.append((setting, row["success"], row["median_time_s"], row["plans"]))
         return rows
 
     def chosen(self, planner):
@@ -250,14 +269,10 @@ class Families:
             if any(r is None for r in reports):
                 text.append(f"| {LABELS[planner]} | not run | | |")
                 continue
-            samples = [x for r in reports for p in r["problems"] for x in p["samples"]]
-            asked = sum(r["num_problems"] * r["num_samples"] for r in reports)
-            times = sorted(x["planning_time_s"] for x in samples)
-            pooled = {"success": sum(x["success"] for x in samples) / max(asked, 1),
-                      "median_time_s": times[len(times) // 2], "p95_time_s": times[int(0.95 * len(times))]}
-            summary["families"]["pooled"][planner] = pooled
-            text.append(f"| {LABELS[planner]} | {pooled['success']:.1%} | {pooled['median_time_s']:.3f} | "
-                        f"{pooled['p95_time_s']:.2f} |")
+            row = pooled(reports)
+            summary["families"]["pooled"][planner] = {key: row[key] for key in ("success", "median_time_s", "p95_time_s")}
+            text.append(f"| {LABELS[planner]} | {row['success']:.1%} | {row['median_time_s']:.3f} | "
+                        f"{row['p95_time_s']:.2f} |")
         text.append("")
         text += ["Path length, speed ratio, jerk and duration: medians over the valid plans (over all plans when none is "
                  "valid). Routes: how the hybrid made its plans. Published anchors, not measured here: "

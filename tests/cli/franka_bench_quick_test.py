@@ -142,6 +142,16 @@ for cell in test_cells:
     report = json.load(open(prefix + ".json"))
     assert report["planning_time_s"]["per"] == "plan, the wall time of the call that made it", cell
     assert families["test"][cell]["success"] == report["success_rate"], cell
+# The pooled times are quantiles of the same definition as each report's (numpy's linear interpolation, which
+# statistics.median agrees with): pooled over a report's own plans they are its median.
+for planner in ("fp", "fp_split", "mpd", "vae", "rrt_connect", "hybrid"):
+    times = []
+    for family in ("table", "shelf"):
+        report = json.load(open(os.path.join(root, "families", "test", f"{planner}_{family}.json")))
+        own = [s["planning_time_s"] for p in report["problems"] for s in p["samples"]]
+        assert abs(report["planning_time_s"]["median"] - statistics.median(own)) < 1e-9, (planner, family)
+        times += own
+    assert abs(families["pooled"][planner]["median_time_s"] - statistics.median(times)) < 1e-12, planner
 hybrid = json.load(open(os.path.join(root, "families", "test", "hybrid_sphere.json")))
 assert all(s["route"].startswith(("rrt_connect", "proposal")) for p in hybrid["problems"]
            for s in p["samples"] if s["success"]), hybrid
