@@ -6,7 +6,8 @@
 # ("inpaint" or "direct"), splitting ("none" or "midpoint"), horizon (T).
 # Settings: sampler.steps, sampler.split_time, the guidance variants
 # sampler.guide_from, .prediction_iterations, .final_iterations,
-# .final_denoise_time, .midpoint_iterations, and the guide's; choices
+# .final_denoise_time, .final_spread, .final_joint_speed_weight,
+# .midpoint_iterations, and the guide's; choices
 # "guidance.schedule" and "sampler.guide_at" (docs/planning.md, "Guidance
 # variants").
 
@@ -37,8 +38,7 @@ def integrate(self, x: Tensor, start: Tensor, goal: Tensor, t0: float, steps: in
       prediction: x̂1 moved by G steps x̂1 <- x̂1 - s b(t_i) g(x̂1); x <- x + h (x̂1 - x) / (1 - t_i)
     (g the guide's gradient, the ends re-imposed after each step; with the
     `ratio` schedule b(0) = 1000 in the velocity and prediction forms), then the
-    end-game: sampler.final_iterations steps x <- x - s g(x), each followed by
-    an Euler step from sampler.final_denoise_time to 1 when that is non-zero."""
+    end-game (end_game)."""
     inpainting = self.conditioning == "inpaint"
     at = choices["sampler.guide_at"]
     schedule = choices["guidance.schedule"]
@@ -64,12 +64,38 @@ def integrate(self, x: Tensor, start: Tensor, goal: Tensor, t0: float, steps: in
             x = self.guide.step(x, t_i + h, scene, opts, schedule)
         x = conditioned(x, start, goal, inpainting)
     if guided:
-        denoise_time = opts["sampler.final_denoise_time"]
-        for g in range(setting_int(opts, "sampler.final_iterations")):
-            x = self.descend(x, scale, 1, start, goal, scene, opts)
-            if denoise_time > 0.0:
-                t_r = torch.full([x.size(0)], denoise_time, dtype=x.dtype, device=x.device)
-                x = conditioned(x + (1.0 - denoise_time) * self.velocity(x, t_r, start, goal), start, goal, inpainting)
+        x = self.end_game(x, start, goal, scene, opts)
+    return x
+
+
+def end_game(self, x: Tensor, start: Tensor, goal: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tensor:
+    """sampler.final_iterations steps x <- x - s M g(x) on finished normalized
+    plans x (B, T', D): g the guide's gradient with the joint-speed term's
+    weight raised by sampler.final_joint_speed_weight, M the identity or, with
+    sampler.final_spread = l > 0, the spread of each state's push over its
+    neighbours (spread_matrix; the end states stay); the ends re-imposed after
+    each step, then an Euler step from sampler.final_denoise_time to 1 when
+    that is non-zero."""
+    iterations = setting_int(opts, "sampler.final_iterations")
+    if iterations == 0:
+        return x
+    inpainting = self.conditioning == "inpaint"
+    scale = opts["guidance.scale"]
+    denoise_time = opts["sampler.final_denoise_time"]
+    end_opts: Dict[str, float] = {}
+    for key, value in opts.items():
+        end_opts[key] = value
+    end_opts["guidance.joint_speed_weight"] = opts["guidance.joint_speed_weight"] + opts["sampler.final_joint_speed_weight"]
+    length = opts["sampler.final_spread"]
+    spread = spread_matrix(x.size(1), length, x) if length > 0.0 else None
+    for g in range(iterations):
+        push = self.guide.gradient(x, scene, end_opts)
+        if spread is not None:
+            push = torch.matmul(spread, push)
+        x = conditioned(x - scale * push, start, goal, inpainting)
+        if denoise_time > 0.0:
+            t_r = torch.full([x.size(0)], denoise_time, dtype=x.dtype, device=x.device)
+            x = conditioned(x + (1.0 - denoise_time) * self.velocity(x, t_r, start, goal), start, goal, inpainting)
     return x
 
 

@@ -105,6 +105,8 @@ struct SamplerConfig {
   int prediction_iterations = 1;  // guide_at prediction: gradient steps on x̂1 per Euler step
   int final_iterations = 0;       // gradient steps of the guidance scale on the finished plan, each stage of splitting
   double final_denoise_time = 0.0;  // after each final step, one Euler step from this flow time to 1 (0: none)
+  double final_spread = 0.0;        // final steps: states over which one state's push decays (0: each state alone)
+  double final_joint_speed_weight = 0.0;  // final steps: added to guidance.joint_speed_weight
   int midpoint_iterations = 0;      // splitting: gradient steps on the first stage's plan before re-noising
   // The network's code in the planner: native kernels where the network has them (in-process default), or
   // LibTorch's operators only (what `flowplan export` writes unless told --kernels native).
@@ -129,6 +131,12 @@ struct SamplerConfig {
     v.Field("final_denoise_time", final_denoise_time,
             "flow matching: after each final gradient step, one Euler step from this flow time to 1 (0: none)",
             config::InRange(0.0, 0.999));
+    v.Field("final_spread", final_spread,
+            "flow matching: the final steps spread each state's push over its neighbours, decaying over this many "
+            "states, the end states fixed (the covariant step of a speed metric; 0: each state moves alone)",
+            config::NonNegative());
+    v.Field("final_joint_speed_weight", final_joint_speed_weight,
+            "flow matching: added to guidance.joint_speed_weight in the final steps only", config::NonNegative());
     v.Field("midpoint_iterations", midpoint_iterations,
             "flow matching, splitting: gradient steps on the first stage's plan before re-noising",
             config::NonNegative());

@@ -30,3 +30,34 @@ def split_steps(steps: int, split_time: float) -> int:
 def guide_targets() -> List[str]:
     """Where the flow planner may guide (sampler.guide_at)."""
     return ["state", "velocity", "prediction"]
+
+
+def spread_matrix(T: int, length: float, like: Tensor) -> Tensor:
+    """(T, T) M such that M g spreads each state's push g (B, T, D) over its
+    neighbours, the two end states fixed: on the interior states M is
+    (I + l² KᵀK)⁻¹ (K the differences of successive states, the ends held, so
+    KᵀK = tridiag(-1, 2, -1)), the covariant step of the metric that charges a
+    push for the speed it adds, scaled so that its largest diagonal entry is 1
+    (the middle state moves as far as a plain step moves it); l (states) the
+    length over which a push decays, l = 0 the identity on the interior, l -> oo
+    the tent min(i, j)(n + 1 - max(i, j)) of CHOMP's velocity metric. Rows and
+    columns of the end states are 0. Closed form in float64:
+    M_ij ∝ e^{-mu |i - j|} (1 - e^{-2 mu min(i, j)}) (1 - e^{-2 mu (n + 1 - max(i, j))})
+    over interior indices 1..n = T - 2, cosh mu = 1 + 1 / (2 l²); returned in
+    the dtype and on the device of `like`."""
+    assert length >= 0.0, "sampler.final_spread: expected a length in states of at least 0, got " + str(length)
+    M = torch.zeros([T, T], dtype=like.dtype, device=like.device).double()
+    n = T - 2
+    if n <= 0:
+        return M.to(like.dtype)
+    if length == 0.0:
+        M[1:T - 1, 1:T - 1] = torch.eye(n, dtype=like.dtype, device=like.device).double()
+        return M.to(like.dtype)
+    i = torch.arange(1, n + 1, device=like.device).double()
+    a = i.new_full([1], 0.5 / (length * length))
+    mu = torch.log1p(a + torch.sqrt(a * (2.0 + a)))  # acosh(1 + a), accurate for small a
+    lo = torch.minimum(i.view(n, 1), i.view(1, n))
+    hi = torch.maximum(i.view(n, 1), i.view(1, n))
+    G = torch.exp(-mu * (hi - lo)) * torch.expm1(-2.0 * mu * lo) * torch.expm1(-2.0 * mu * (n + 1 - hi))
+    M[1:T - 1, 1:T - 1] = G / G.diagonal().max()
+    return M.to(like.dtype)

@@ -78,7 +78,10 @@ FP_GRID = [
      None, None),
     ("base + end-game G 10, joint speed 1", {"sampler.final_iterations": 10.0, "guidance.joint_speed_weight": 1.0},
      None, None),
-]
+] + [(f"base + end-game G {g}, spread {l:g}" + (f", end joint speed {w:g}" if w else ""),
+      {"sampler.final_iterations": float(g), "sampler.final_spread": float(l), "sampler.final_joint_speed_weight": w},
+      None, None)
+     for g, l, w in ((10, 4, 0.0), (10, 1, 0.1), (10, 4, 0.1), (10, 16, 0.1), (10, 4, 0.3), (5, 4, 0.1), (20, 4, 0.1))]
 # FP + split: the same planner exported with splitting; its grid adds the re-noise time and midpoint steps.
 FP_SPLIT_GRID = [
     ("split base", {}, None, None),
@@ -94,7 +97,10 @@ FP_SPLIT_GRID = [
      {"sampler.final_iterations": 10.0, "guidance.joint_speed_weight": 0.1}, None, None),
     ("split + end-game G 10, joint speed 1",
      {"sampler.final_iterations": 10.0, "guidance.joint_speed_weight": 1.0}, None, None),
-]
+] + [(f"split + end-game G {g}, spread {l:g}, end joint speed {w:g}",
+      {"sampler.final_iterations": float(g), "sampler.final_spread": float(l), "sampler.final_joint_speed_weight": w},
+      None, None)
+     for g, l, w in ((10, 4, 0.1), (5, 4, 0.1), (10, 16, 0.1))]
 OTHER_GRID = [
     ("default", {}, None, None),
     ("best of 4", {"guidance.candidates": 4.0}, None, None),

@@ -85,7 +85,8 @@ with torch.no_grad():
     assert clearance.shape == (batch, T, sum(len(rows) for rows in scene.values())), clearance.shape
 
 if planner.planner == "flow_matching":
-    variants = {"sampler.final_iterations": 2.0, "sampler.final_denoise_time": 0.95, "sampler.prediction_iterations": 2.0}
+    variants = {"sampler.final_iterations": 2.0, "sampler.final_denoise_time": 0.95, "sampler.prediction_iterations": 2.0,
+                "sampler.final_spread": 4.0, "sampler.final_joint_speed_weight": 0.1}
     for at in ("state", "velocity", "prediction"):
         with torch.no_grad():
             guided = planner.plan(start, goal, noise, renoise, schedule=schedule, guide_at=at, settings=variants, **scene)

@@ -327,6 +327,90 @@ TEST(FlowSamplerTest, TheEndGameStepsOnTheFinishedPlanAndDenoisesBetween) {
                                                               {"sampler.final_denoise_time", 0.9}}))));
 }
 
+/// (T, T) (I + l² KᵀK)⁻¹ on the interior states (KᵀK = tridiag(-1, 2, -1), the
+/// ends held) scaled to a largest diagonal entry of 1, zero on the ends: the
+/// spread the end-game applies, by matrix inversion instead of its closed form.
+torch::Tensor SpreadByInversion(int64_t T, double length) {
+  const int64_t n = T - 2;
+  const torch::Tensor eye = torch::eye(n, torch::kFloat64);
+  const torch::Tensor laplacian = 2.0 * eye - eye.roll(1, 1).triu(1) - eye.roll(1, 0).tril(-1);
+  const torch::Tensor inverse = torch::linalg_inv(eye + length * length * laplacian);
+  torch::Tensor M = torch::zeros({T, T}, torch::kFloat64);
+  M.slice(0, 1, T - 1).slice(1, 1, T - 1).copy_(inverse / inverse.diagonal().max());
+  return M;
+}
+
+TEST(FlowSamplerTest, EndGameSpreadMovesEveryStateByTheSpreadOfThePushes) {
+  // One end-game step with sampler.final_spread = l moves the plan by M times
+  // the plain step's move, M as SpreadByInversion computes it; the ends stay.
+  const NearOrigin r;
+  const auto planner = GuidedZero(Splitting::kNone, 0.1);
+  const geometry::SceneRows obstacle = Spheres(torch::tensor({{0.0f, 0.0f, 0.3f}}));
+  const torch::Tensor base = planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle);
+  const torch::Tensor plain_move =
+      (planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle, With({{"sampler.final_iterations", 1}})) - base)
+          .to(torch::kFloat64);
+  ASSERT_GT(plain_move.abs().max().item<double>(), 0.05) << "the test needs a push";
+  for (double length : {0.5, 3.0, 1e4}) {
+    const torch::Tensor spread =
+        planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle,
+                               With({{"sampler.final_iterations", 1}, {"sampler.final_spread", length}}));
+    const torch::Tensor expected = torch::matmul(SpreadByInversion(16, length), plain_move[0]);
+    EXPECT_LT(((spread - base)[0].to(torch::kFloat64) - expected).abs().max().item<double>(), 2e-6)
+        << "final_spread " << length;
+    EXPECT_TRUE(torch::equal(spread.select(1, 0), r.start));
+    EXPECT_TRUE(torch::equal(spread.select(1, 15), r.goal));
+  }
+  // A long spread moves the middle state as a plain step would and every other state less, tent-like.
+  const torch::Tensor tent = SpreadByInversion(16, 1e4);
+  EXPECT_NEAR(tent[7][7].item<double>(), 1.0, 1e-12);
+  EXPECT_NEAR(tent[1][7].item<double>(), 1.0 / 7.0, 1e-6);  // min(i, j)(n + 1 - max(i, j)) / (7 * 8 / 15) at i = 1
+}
+
+TEST(FlowSamplerTest, EndGameJointSpeedWeightActsInTheFinalStepsOnly) {
+  // A disc with speed limits of 1 per second (0.1 per state at dt = 0.1), fast
+  // noise, an obstacle far away: nothing guides while sampling; the end-game
+  // step, weighted by sampler.final_joint_speed_weight, follows the squared
+  // hinge's gradient written out here.
+  kinematics::TrajectoryInfo trajectory = DiscTrajectory();
+  trajectory.robot.velocity_limit = {1.0, 1.0};
+  PlannerParts parts = Parts(ZeroVelocity(4), trajectory, UnitNormalizer(4));
+  parts.sampler.steps = 4;
+  parts.guidance.scale = 0.05;
+  parts.guidance.collision_weight = 1.0;
+  parts.guidance.smoothness_weight = 0.0;
+  parts.guidance.margin = 0.0;
+  parts.guidance.clip = 1.0;
+  const auto planner = AssemblePlanner(parts);
+  auto generator = at::make_generator<at::CPUGeneratorImpl>(3);
+  const torch::Tensor noise = 0.2 * torch::randn({1, 16, 4}, generator);
+  const torch::Tensor start = torch::zeros({1, 4}), goal = torch::tensor({{0.5f, 0.0f, 0.0f, 0.0f}});
+  const geometry::SceneRows far = Spheres(torch::tensor({{5.0f, 5.0f, 0.1f}}));
+  const torch::Tensor sampled = planner->PlanWithNoise(start, goal, noise, {}, far);
+  EXPECT_TRUE(torch::equal(sampled, planner->PlanWithNoise(start, goal, noise, {}, far,
+                                                           With({{"sampler.final_joint_speed_weight", 2.0}}))))
+      << "without final steps the weight does nothing";
+  EXPECT_TRUE(torch::equal(sampled, planner->PlanWithNoise(start, goal, noise, {}, far,
+                                                           With({{"sampler.final_iterations", 1}}))))
+      << "far from the obstacle a final step without the speed term does not move the plan";
+  const torch::Tensor ended = planner->PlanWithNoise(
+      start, goal, noise, {}, far, With({{"sampler.final_iterations", 1}, {"sampler.final_joint_speed_weight", 2.0}}));
+  // C = sum relu(|q_{i+1} - q_i| / 0.1 - 1)², dC/dq_i = g_{i-1} - g_i with g_i = 2 excess_i sign(step_i) / 0.1,
+  // each state's gradient capped at norm 1 (guidance.clip), then x <- x - 0.05 * 2 * gradient.
+  const torch::Tensor q = sampled[0].slice(1, 0, 2).to(torch::kFloat64);
+  const torch::Tensor step = q.slice(0, 1, 16) - q.slice(0, 0, 15);
+  const torch::Tensor g = 2.0 * torch::relu(step.abs() / 0.1 - 1.0) * torch::sign(step) / 0.1;
+  const torch::Tensor zero = torch::zeros({1, 2}, torch::kFloat64);
+  torch::Tensor gradient = torch::cat({zero, g}, 0) - torch::cat({g, zero}, 0);
+  gradient = gradient / gradient.norm(2, -1, true).clamp_min(1.0);
+  torch::Tensor expected = q - 0.05 * 2.0 * gradient;
+  expected[0] = q[0];
+  expected[15] = q[15];
+  ASSERT_GT(gradient.abs().max().item<double>(), 0.5) << "the test needs speeds over the limit";
+  EXPECT_LT((ended[0].slice(1, 0, 2).to(torch::kFloat64) - expected).abs().max().item<double>(), 1e-6);
+  EXPECT_TRUE(torch::equal(ended.slice(2, 2, 4), sampled.slice(2, 2, 4))) << "the hinge reads positions only";
+}
+
 TEST(FlowSamplerTest, SplittingRenoisesToSplitTimeAndStepsTheMidpointFirst) {
   // dx/dt = t, direct conditioning, 10 steps: the first stage gives noise + 0.45;
   // re-noised to t_s = 0.6 the halves take int(10 * 0.4) = 4 steps of 0.1: + 0.3.
@@ -364,6 +448,8 @@ TEST(FlowSamplerTest, AtScaleZeroEveryVariantSettingLeavesTheUnguidedPlan) {
          {With({{"guidance.scale", 0}}, "velocity"), With({{"guidance.scale", 0}}, "prediction"),
           With({{"guidance.scale", 0}, {"sampler.prediction_iterations", 3}}, "prediction", "constant"),
           With({{"guidance.scale", 0}, {"sampler.final_iterations", 3}, {"sampler.final_denoise_time", 0.97}}),
+          With({{"guidance.scale", 0}, {"sampler.final_iterations", 3}, {"sampler.final_spread", 4},
+                {"sampler.final_joint_speed_weight", 1}}),
           With({{"guidance.scale", 0}, {"sampler.midpoint_iterations", 3}, {"sampler.guide_from", 0.5}})}) {
       EXPECT_TRUE(torch::equal(free, planner->PlanWithNoise(r.start, r.goal, r.noise, renoise, obstacle, variant)))
           << "guide_at " << variant.guide_at.value_or("state") << ", splitting " << config::EnumName(splitting);
