@@ -608,9 +608,11 @@ def main():
     export = torch.jit.load(args.export, map_location="cpu")
     # The end-game as the exported file says (the speed benchmark exports without it, the preset has it); the
     # other guidance variants are not written here, so a file that uses one is refused rather than misjudged.
-    variants = {"sampler.final_denoise_time": 0.0, "sampler.final_spread": 0.0, "sampler.final_joint_speed_weight": 0.0,
-                "sampler.midpoint_iterations": 0.0, "sampler.guide_from": 0.0,
+    variants = {"sampler.midpoint_iterations": 0.0, "sampler.guide_from": 0.0,
                 "sampler.split_time": 0.5, "guidance.candidates": 1.0}
+    if export.settings.get("sampler.final_iterations", 0.0) != 0.0:  # the end-game's own variants matter only with it
+        variants |= {"sampler.final_denoise_time": 0.0, "sampler.final_spread": 0.0,
+                     "sampler.final_joint_speed_weight": 0.0}
     other = {k: export.settings[k] for k, v in variants.items() if export.settings.get(k, v) != v}
     if other or getattr(export, "guide_at", "state") != "state":
         sys.exit(f"{args.export}: guidance variants this reference does not implement: {other}, "

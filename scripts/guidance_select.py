@@ -124,14 +124,14 @@ def load_problems(path):
     return out
 
 
-def successes(planner, plans, problem, limits):
-    """(plans,) bool: whole-arm success of raw plans (P, T, D)."""
+def criteria(planner, plans, problem, limits):
+    """(clear, at goal, within speed), each (plans,) bool, of raw plans (P, T, D)."""
     J = planner.num_joints
     q = plans[:, :, :J]
     clear = planner.clearance(q, spheres=problem["spheres"]).flatten(1).min(1).values > 0.0
     goal = (planner.tcp(q[:, -1]) - problem["goal_tcp"]).norm(dim=-1) <= GOAL_TOLERANCE
     speed = ((q[:, 1:] - q[:, :-1]).abs() / planner.dt / limits).flatten(1).max(1).values <= MAX_SPEED_RATIO
-    return clear & goal & speed
+    return clear, goal, speed
 
 
 def run(planner, grid_entry, problems, plans, seed, limits):
@@ -139,6 +139,7 @@ def run(planner, grid_entry, problems, plans, seed, limits):
     N = int(settings.get("guidance.candidates", planner.settings["guidance.candidates"]))
     ok, seconds = 0, 0.0
     per_problem = []
+    failing = {"collision": 0, "goal": 0, "speed": 0}  # plans failing each criterion (a plan may fail several)
     # Three untimed calls first: TorchScript's executor profiles and specialises a method on its first calls.
     for i, problem in [(-1, problems[0])] * 3 + list(enumerate(problems)):
         generator = torch.Generator().manual_seed(seed * 100003 + i)
@@ -153,16 +154,19 @@ def run(planner, grid_entry, problems, plans, seed, limits):
             out = planner.plan(start, goal, noise, renoise, spheres=problem["spheres"], settings=settings,
                                schedule=schedule, guide_at=guide_at)
             seconds += time.perf_counter() - begin
-            good = successes(planner, out, problem, limits)
+            clear, at_goal, slow = criteria(planner, out, problem, limits)
+            good = clear & at_goal & slow
         if i < 0:
             seconds = 0.0
             continue
+        for key, passed in (("collision", clear), ("goal", at_goal), ("speed", slow)):
+            failing[key] += int((~passed).sum())
         ok += int(good.sum())
         per_problem.append(int(good.sum()))
     total = plans * len(problems)
     return {"label": label, "settings": settings, "guide_at": guide_at, "schedule": schedule,
             "arm_clear": ok / total, "problems_solved": sum(1 for c in per_problem if c > 0) / len(problems),
-            "seconds_per_plan": seconds / total, "per_problem": per_problem}
+            "seconds_per_plan": seconds / total, "per_problem": per_problem, "failing": failing}
 
 
 def cached(path, entry, make):
@@ -282,22 +286,28 @@ def main():
 def write_report(out, validation, test_result):
     lines = [f"Validation: {validation['problems']} problems x {validation['plans_per_problem']} plans, "
              f"{validation['threads']} thread(s).", "",
-             "| planner | setting | success (whole arm) | 95 % interval | problems solved | time per plan (ms) |",
-             "|---|---|---|---|---|---|"]
+             "| planner | setting | success (whole arm) | 95 % interval | problems solved | time per plan (ms) "
+             "| plans failing: collision / goal / speed |",
+             "|---|---|---|---|---|---|---|"]
     n = validation["problems"] * validation["plans_per_problem"]
+
+    def failing(r):  # rows made before the counts were kept have none
+        return " / ".join(str(r["failing"][k]) for k in ("collision", "goal", "speed")) if "failing" in r else ""
+
     for name, rows in validation["planners"].items():
         for r in rows:
             lo, hi = wilson(r["arm_clear"], n)
             lines.append(f"| {name} | {r['label']} | {r['arm_clear']:.1%} | {lo:.1%}–{hi:.1%} | "
-                         f"{r['problems_solved']:.0%} | {1e3 * r['seconds_per_plan']:.1f} |")
+                         f"{r['problems_solved']:.0%} | {1e3 * r['seconds_per_plan']:.1f} | {failing(r)} |")
     n = test_result["problems"] * test_result["plans_per_problem"]
     lines += ["", f"Test (held out): {test_result['problems']} problems x {test_result['plans_per_problem']} plans.", "",
-              "| role | planner | setting | success (whole arm) | 95 % interval | problems solved | time per plan (ms) |",
-              "|---|---|---|---|---|---|---|"]
+              "| role | planner | setting | success (whole arm) | 95 % interval | problems solved | time per plan (ms) "
+              "| plans failing: collision / goal / speed |",
+              "|---|---|---|---|---|---|---|---|"]
     for r in test_result["rows"]:
         lo, hi = wilson(r["arm_clear"], n)
         lines.append(f"| {r['role']} | {r['planner']} | {r['label']} | {r['arm_clear']:.1%} | {lo:.1%}–{hi:.1%} | "
-                     f"{r['problems_solved']:.0%} | {1e3 * r['seconds_per_plan']:.1f} |")
+                     f"{r['problems_solved']:.0%} | {1e3 * r['seconds_per_plan']:.1f} | {failing(r)} |")
     with open(os.path.join(out, "selection.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
     print("\n".join(lines))
