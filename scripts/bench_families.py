@@ -24,11 +24,14 @@ JOINT_CONFIG = "configs/franka_joint.yaml"
 # Guidance scales of the grid: the reach preset's 1.75 moves the joints of this planner too far (its data spans the
 # whole joint range, so a normalized step is several times larger in radians), see docs/results.md.
 SCALES = [0.05, 0.1, 0.2, 0.4]
+# The flow planner's grid: the paper's sampler and 10 plain end-game steps at each scale, then the covariant
+# end-game (20 steps spread over 4 states, the joint-speed hinge in them at weight 0.1 or 1; docs/planning.md).
+FP_GRID = ([[f"guidance.scale={s}", f"sampler.final_iterations={g}"] for s in SCALES for g in (0, 10)] +
+           [[f"guidance.scale={s}", "sampler.final_iterations=20", "sampler.final_spread=4",
+             f"sampler.final_joint_speed_weight={w}"] for s in SCALES for w in (0.1, 1)])
 # Learned planners: name, label, training row, fixed overrides, validation grid (a list of override lists).
-LEARNED = [("fp", "FP", "joint_fp", ["sampler.splitting=none"],
-            [[f"guidance.scale={s}", f"sampler.final_iterations={g}"] for s in SCALES for g in (0, 10)]),
-           ("fp_split", "FP + split", "joint_fp", ["sampler.splitting=midpoint"],
-            [[f"guidance.scale={s}", f"sampler.final_iterations={g}"] for s in SCALES for g in (0, 10)]),
+LEARNED = [("fp", "FP", "joint_fp", ["sampler.splitting=none"], FP_GRID),
+           ("fp_split", "FP + split", "joint_fp", ["sampler.splitting=midpoint"], FP_GRID),
            ("mpd", "MPD", "joint_mpd", [], [[f"guidance.scale={s}"] for s in SCALES]),
            ("vae", "VAE planner", "joint_vae", ["sampler.latent.lr=0.02"], [[f"guidance.scale={s}"] for s in SCALES])]
 # The hybrid: 1 or 4 proposals, guided only or unguided first, seeded fallback; and one unseeded.
