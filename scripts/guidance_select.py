@@ -326,10 +326,13 @@ def write_report(out, validation, test_result):
                 front.append((x, y))
                 best = y
         axes[0].step([x for x, _ in front], [y for _, y in front], where="post", color=colours[name], label=name)
-    for r in test_result["rows"]:
+    # Test points are numbered, and the numbers explained below the panel (labels beside close points overlap).
+    for k, r in enumerate(test_result["rows"]):
         axes[1].scatter([1e3 * r["seconds_per_plan"]], [100 * r["arm_clear"]], color=colours[r["planner"]], s=24)
-        axes[1].annotate(f"{r['planner']}: {r['label']}", (1e3 * r["seconds_per_plan"], 100 * r["arm_clear"]),
-                         fontsize=7, xytext=(4, -10), textcoords="offset points")
+        axes[1].annotate(str(k + 1), (1e3 * r["seconds_per_plan"], 100 * r["arm_clear"]), fontsize=8,
+                         xytext=(3, 3), textcoords="offset points")
+    axes[1].text(0.02, 0.02, "\n".join(f"{k + 1}: {r['planner']}: {r['label']}" for k, r in enumerate(test_result["rows"])),
+                 transform=axes[1].transAxes, fontsize=7, va="bottom")
     axes[0].set_title("validation: every setting; line: best within a time", fontsize=10)
     axes[1].set_title("held-out test: chosen settings, defaults", fontsize=10)
     for ax in axes:
