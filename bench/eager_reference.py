@@ -382,6 +382,33 @@ class SmoothnessCost:
         return (self.a * e_q * e_q + 2.0 * self.b * e_q * e_v + self.c * e_v * e_v).sum([1, 2])
 
 
+class JointSpeedCost:
+    """The joint-speed hinge: sum over steps and joints of relu(|q_{i+1} - q_i| / (dt v_j) - ratio)^2, v_j the
+    joint's velocity limit. x (B, T, D) raw -> (B,)."""
+
+    def __init__(self, velocity_limit, num_joints, dt, ratio):
+        self.step_limit = torch.tensor(velocity_limit, dtype=torch.float64).float() * dt  # (J,)
+        self.J, self.ratio = num_joints, ratio
+
+    def __call__(self, x, scene):
+        q = x[:, :, 0:self.J]
+        excess = torch.relu((q[:, 1:] - q[:, :-1]).abs() / self.step_limit - self.ratio)  # (B, T-1, J)
+        return (excess * excess).sum([1, 2])
+
+
+def spread_by_inversion(T, length):
+    """(T, T): (I + l^2 L)^-1 on the T - 2 interior states (L = tridiag(-1, 2, -1)), scaled to a largest diagonal
+    entry of 1, zero on the end states; the end-game's covariant step, by matrix inversion."""
+    n = T - 2
+    eye = torch.eye(n, dtype=torch.float64)
+    laplacian = 2.0 * eye - torch.diag(torch.ones(n - 1, dtype=torch.float64), 1) \
+        - torch.diag(torch.ones(n - 1, dtype=torch.float64), -1)
+    inverse = torch.linalg.inv(eye + length * length * laplacian)
+    spread = torch.zeros(T, T, dtype=torch.float64)
+    spread[1:T - 1, 1:T - 1] = inverse / inverse.diagonal().max()
+    return spread.float()
+
+
 SCHEDULES = {
     "one_minus_t": lambda t: 1.0 - t,
     "ratio": lambda t: (1.0 - t) / max(t, 1e-3),
@@ -394,20 +421,24 @@ class Guide:
     x - scale b_t sum_k w_k clip(grad C_k(denormalize_unclamped(x))) (hi - lo)/2,
     clip() capping each term's raw gradient at each state to norm `clip`."""
 
-    def __init__(self, settings, kinematics, dt, normalizer):
+    def __init__(self, settings, kinematics, dt, normalizer, velocity_limit):
         self.normalizer = normalizer
         self.schedule = SCHEDULES[settings["schedule"]]
         self.clip = float(settings["clip"])
         self.terms = [(float(settings["collision_weight"]), CollisionCost(kinematics, float(settings["margin"]))),
                       (float(settings["smoothness_weight"]),
                        SmoothnessCost(kinematics.num_joints, dt, float(settings["smoothness_sigma"])))]
+        self.speed = JointSpeedCost(velocity_limit, kinematics.num_joints, dt,
+                                    float(settings.get("joint_speed_ratio", 1.0)))
+        self.speed_weight = float(settings.get("joint_speed_weight", 0.0))
 
-    def gradient(self, x_n, scene):
-        """(B, T, D) normalized -> (B, T, D), the weighted clipped gradient in normalized units."""
+    def gradient(self, x_n, scene, extra_speed_weight=0.0):
+        """(B, T, D) normalized -> (B, T, D), the weighted clipped gradient in normalized units; the joint-speed
+        hinge's weight raised by extra_speed_weight (the end-game's)."""
         with torch.enable_grad():
             raw = self.normalizer.denormalize_unclamped(x_n.detach()).requires_grad_(True)  # (B, T, D)
             gradient = torch.zeros_like(x_n)
-            for weight, cost in self.terms:
+            for weight, cost in self.terms + [(self.speed_weight + extra_speed_weight, self.speed)]:
                 if weight == 0.0:
                     continue
                 part, = torch.autograd.grad(cost(raw, scene).sum(), raw)  # (B, T, D) raw units
@@ -425,7 +456,8 @@ class Guide:
 # ----------------------------------------------------------------------------
 
 class FlowPlanner:
-    def __init__(self, net, normalizer, conditioning, steps, guide, final_iterations=0):
+    def __init__(self, net, normalizer, conditioning, steps, guide, final_iterations=0, final_spread=0.0,
+                 final_speed_weight=0.0):
         self.net = net
         self.normalizer = normalizer
         self.inpaint = conditioning == "inpaint"
@@ -433,6 +465,8 @@ class FlowPlanner:
         self.split_steps = max(1, steps // 2)
         self.guide = guide
         self.final_iterations = final_iterations  # the end-game: gradient steps on each stage's finished plan
+        self.final_spread = final_spread  # > 0: each step's push spread over the neighbours (covariant step)
+        self.final_speed_weight = final_speed_weight  # added to the joint-speed hinge's weight in the end-game
 
     def integrate(self, x, s, g, t0, steps, scene, scale):
         """Euler from flow time t0 to 1: x (B, T', D) normalized, boundaries s, g (B, D);
@@ -448,8 +482,12 @@ class FlowPlanner:
                 x = self.guide.step(x, t0 + (i + 1) * h, scene, scale)
             if self.inpaint:
                 x = inpaint(x, s, g)
+        spread = spread_by_inversion(x.size(1), self.final_spread) if self.final_spread > 0.0 else None
         for _ in range(self.final_iterations if scene is not None else 0):
-            x = x - scale * self.guide.gradient(x, scene)  # x <- x - s g(x), no schedule factor
+            push = self.guide.gradient(x, scene, self.final_speed_weight)  # (B, T', D)
+            if spread is not None:
+                push = torch.einsum("ij,bjd->bid", spread, push)
+            x = x - scale * push  # x <- x - s M g(x), no schedule factor
             if self.inpaint:
                 x = inpaint(x, s, g)
         return x
@@ -602,23 +640,25 @@ def main():
 
     net = load_network(checkpoint, "ema", config, D, C).eval()
     kinematics = ArmKinematics(robot)
-    guide = Guide(settings, kinematics, float(checkpoint.dt), normalizer)
+    guide = Guide(settings, kinematics, float(checkpoint.dt), normalizer, robot["velocity_limit"])
     if args.kernels:
         torch.ops.load_library(args.kernels)
     export = torch.jit.load(args.export, map_location="cpu")
-    # The end-game as the exported file says (the speed benchmark exports without it, the preset has it); the
-    # other guidance variants are not written here, so a file that uses one is refused rather than misjudged.
+    # The end-game as the exported file says (plain or covariant, with its joint-speed weight; the speed benchmark
+    # exports without it, the preset has it); the other guidance variants are not written here, so a file that uses one
+    # is refused rather than misjudged.
     variants = {"sampler.midpoint_iterations": 0.0, "sampler.guide_from": 0.0,
                 "sampler.split_time": 0.5, "guidance.candidates": 1.0}
-    if export.settings.get("sampler.final_iterations", 0.0) != 0.0:  # the end-game's own variants matter only with it
-        variants |= {"sampler.final_denoise_time": 0.0, "sampler.final_spread": 0.0,
-                     "sampler.final_joint_speed_weight": 0.0}
+    if export.settings.get("sampler.final_iterations", 0.0) != 0.0:  # the end-game's own variant matters only with it
+        variants["sampler.final_denoise_time"] = 0.0
     other = {k: export.settings[k] for k, v in variants.items() if export.settings.get(k, v) != v}
     if other or getattr(export, "guide_at", "state") != "state":
         sys.exit(f"{args.export}: guidance variants this reference does not implement: {other}, "
                  f"guide_at {getattr(export, 'guide_at', 'state')}")
     planner = FlowPlanner(net, normalizer, conditioning, steps, guide,
-                          int(export.settings.get("sampler.final_iterations", 0.0)))
+                          int(export.settings.get("sampler.final_iterations", 0.0)),
+                          float(export.settings.get("sampler.final_spread", 0.0)),
+                          float(export.settings.get("sampler.final_joint_speed_weight", 0.0)))
     reference = ExportReference(export)
     compiled = {key[len("guidance."):]: value for key, value in export.settings.items() if key.startswith("guidance.")}
     compiled["schedule"] = export.schedule

@@ -73,7 +73,8 @@ def end_game(self, x: Tensor, start: Tensor, goal: Tensor, scene: Dict[str, Tens
     plans x (B, T', D): g the guide's gradient with the joint-speed term's
     weight raised by sampler.final_joint_speed_weight, M the identity or, with
     sampler.final_spread = l > 0, the spread of each state's push over its
-    neighbours (spread_matrix; the end states stay); the ends re-imposed after
+    neighbours (spread_matrix; the end states stay, under direct conditioning
+    too, where a plain step moves them); the ends re-imposed after
     each step, then an Euler step from sampler.final_denoise_time to 1 when
     that is non-zero."""
     iterations = setting_int(opts, "sampler.final_iterations")

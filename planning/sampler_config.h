@@ -134,7 +134,7 @@ struct SamplerConfig {
     v.Field("final_spread", final_spread,
             "flow matching: the final steps spread each state's push over its neighbours, decaying over this many "
             "states, the end states fixed (the covariant step of a speed metric; 0: each state moves alone)",
-            config::NonNegative());
+            config::InRange(0.0, 1e6));
     v.Field("final_joint_speed_weight", final_joint_speed_weight,
             "flow matching: added to guidance.joint_speed_weight in the final steps only", config::NonNegative());
     v.Field("midpoint_iterations", midpoint_iterations,

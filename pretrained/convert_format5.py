@@ -13,8 +13,9 @@ shipped file takes up later changes of that code with its weights unchanged.
 The template is any checkpoint of the same network and objective; its weights
 (online and EMA alike: an exported file holds only the EMA weights) are
 replaced by the old file's, undoing the export's one change to them (the FiLM
-layers of every residual block stacked into one product), and its normalizer
-and config by the old file's. The check plans with the same noise from both
+layers of every residual block stacked into one product), and its normalizer,
+config, robot, environment, time step, horizon and state labels by the old
+file's. The check plans with the same noise from both
 files, unguided and guided around a sphere with the old file's settings, and
 requires agreement to 1e-5 unguided and 1e-4 guided (the guidance code of a
 newer file may compute the same gradients in another order, and a guided
@@ -40,7 +41,7 @@ def block_order(name):
 
 def convert(old_path, template_path, out_path, step):
     old = torch.jit.load(old_path)
-    if old.format_version != 5:
+    if getattr(old, "format_version", None) != 5:
         sys.exit(f"{old_path}: expected an exported planner of format 5, got format {old.format_version}")
     ckpt = torch.jit.load(template_path)
     weights = {name[len(NETWORK):]: t for name, t in list(old.named_parameters()) + list(old.named_buffers())
@@ -75,6 +76,11 @@ def convert(old_path, template_path, out_path, step):
     ckpt.normalizer_hi = old.normalizer.hi.clone()
     ckpt.step = step
     ckpt.config = old.config
+    ckpt.robot = old.robot_description
+    ckpt.env = old.env
+    ckpt.dt = old.dt
+    ckpt.horizon = old.horizon
+    ckpt.state_labels = old.state_labels
     ckpt.data_fingerprint = "converted from " + old_path
     torch.jit.save(ckpt, out_path)
     print(f"wrote {out_path}: the network, normalizer and config of {old_path}, step {step}")

@@ -361,6 +361,9 @@ TEST(FlowSamplerTest, EndGameSpreadMovesEveryStateByTheSpreadOfThePushes) {
     EXPECT_TRUE(torch::equal(spread.select(1, 0), r.start));
     EXPECT_TRUE(torch::equal(spread.select(1, 15), r.goal));
   }
+  EXPECT_THAT([&] { planner->PlanWithNoise(r.start, r.goal, r.noise, {}, obstacle,
+                                           With({{"sampler.final_iterations", 1}, {"sampler.final_spread", 1e-5}})); },
+              ThrowsMessage<Error>(HasSubstr("sampler.final_spread: expected 0 or a length in states from 0.001 to 1e6, got 1.0000000000000001e-05")));
   // A long spread moves the middle state as a plain step would and every other state less, tent-like.
   const torch::Tensor tent = SpreadByInversion(16, 1e4);
   EXPECT_NEAR(tent[7][7].item<double>(), 1.0, 1e-12);
