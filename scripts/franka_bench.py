@@ -111,7 +111,8 @@ SELECT_PLANNERS = [("fp", "reach_fp", ["sampler.splitting=none", "sampler.final_
                    ("mpd", "reach_mpd", []),
                    ("paper_mpd", "reach_paper_mpd", [])]
 # The cross planner guided around the paper's sphere on the stitching pair (its start and goal TCP are those of the
-# pair (-0.3, 0.2) -> (0.3, 0.2)): the reach preset's guidance, split, with the end-game chosen on validation problems.
+# pair (-0.3, 0.2) -> (0.3, 0.2)): the reach preset's guidance, split, with the plain end-game of 10 steps chosen on
+# validation problems before the covariant end-game existed (docs/results.md, "Training budget").
 CURVE_GUIDANCE = ["guidance.scale=1.75", "guidance.schedule=rising", "guidance.clip=1", "guidance.collision_weight=0.1",
                   "guidance.smoothness_weight=0.02", "guidance.margin=0.05", "sampler.splitting=midpoint",
                   "sampler.final_iterations=10"]
