@@ -4,7 +4,7 @@ test problems, success against time per plan (docs/results.md, "Choosing
 guidance on validation problems").
 
 usage: /usr/bin/python3 scripts/guidance_select.py --planner NAME=FILE.pt ... --val VAL.yaml --test TEST.yaml
-                                                   --out DIR [--plans 8] [--threads 1] [--grid GRID]
+                                                   --out DIR [--plans 8] [--threads 1] [--warmup 3]
 
 --planner names an exported planner (`flowplan export`): `fp` (the flow planner
 whose settings are chosen), `fp_split` (the same network exported with
@@ -134,14 +134,14 @@ def criteria(planner, plans, problem, limits):
     return clear, goal, speed
 
 
-def run(planner, grid_entry, problems, plans, seed, limits):
+def run(planner, grid_entry, problems, plans, seed, limits, warmup=3):
     label, settings, guide_at, schedule = grid_entry
     N = int(settings.get("guidance.candidates", planner.settings["guidance.candidates"]))
     ok, seconds = 0, 0.0
     per_problem = []
     failing = {"collision": 0, "goal": 0, "speed": 0}  # plans failing each criterion (a plan may fail several)
-    # Three untimed calls first: TorchScript's executor profiles and specialises a method on its first calls.
-    for i, problem in [(-1, problems[0])] * 3 + list(enumerate(problems)):
+    # Untimed calls first (3 by default): TorchScript's executor profiles and specialises a method on its first calls.
+    for i, problem in [(-1, problems[0])] * warmup + list(enumerate(problems)):
         generator = torch.Generator().manual_seed(seed * 100003 + i)
         shape = [plans] if N == 1 else [plans, N]
         noise = torch.randn(shape + list(planner.noise_shape), generator=generator)
@@ -200,6 +200,8 @@ def main():
     parser.add_argument("--out", required=True)
     parser.add_argument("--plans", type=int, default=8)
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--warmup", type=int, default=3,
+                        help="untimed calls before each setting's timed ones (fewer only where times do not matter)")
     parser.add_argument("--limit", type=int, default=0, help="first K problems of each set (0: all)")
     parser.add_argument("--test-also", action="append", default=[], metavar="NAME:LABEL",
                         help="a grid setting to report on the test problems besides the chosen ones (role \"also\"; "
@@ -233,7 +235,7 @@ def main():
             rows = []
             for k, entry in enumerate(GRIDS.get(name, OTHER_GRID)):
                 rows.append(cached(os.path.join(args.out, "rows", f"validation_{name}_{k}.json"), entry,
-                                   lambda: run(planner, entry, val, args.plans, 1, limits[name])))
+                                   lambda: run(planner, entry, val, args.plans, 1, limits[name], args.warmup)))
                 r = rows[-1]
                 print(f"validation {name} | {r['label']}: {r['arm_clear']:.1%} of plans, "
                       f"{r['problems_solved']:.0%} of problems, {1e3 * r['seconds_per_plan']:.1f} ms/plan", flush=True)
@@ -268,7 +270,7 @@ def main():
         for (name, label), key in runs.items():
             k, entry = next((k, e) for k, e in enumerate(GRIDS.get(name, OTHER_GRID)) if e[0] == label)
             row = dict(cached(os.path.join(args.out, "rows", f"test_{name}_{k}.json"), entry,
-                              lambda: run(planners[name], entry, test, args.plans, 2, limits[name])))
+                              lambda: run(planners[name], entry, test, args.plans, 2, limits[name], args.warmup)))
             row |= {"planner": name, "role": key}
             out["rows"].append(row)
             print(f"test {key} ({name} | {label}): {row['arm_clear']:.1%} of plans, {row['problems_solved']:.0%} "
