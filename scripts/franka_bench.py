@@ -149,13 +149,14 @@ FULL = {"episodes": None, "train": [], "plans_per_pair": 64, "radii": [round(0.0
         "scale_radii": [0.1, 0.125, 0.15, 0.175, 0.2, 0.225, 0.25],
         "problems": 100, "problem_plans": 8, "example_radii": [0.1, 0.2], "example_plans": 8,
         "curve_steps": [2000, 5000, 10000], "select_problems": 100, "select_plans": 8, "select_warmup": 3,
+        "select_rows": 0,
         "family_val_problems": 10, "family_val_plans": 2, "family_test_problems": 20, "family_test_plans": 4}
 QUICK = {"episodes": 256,
          "train": ["train.steps=20", "train.batch_size=16", "train.eval_every=0", "train.checkpoint_every=10",
                    "train.log_every=10", "train.val_batch_size=16"],
          "plans_per_pair": 4, "radii": [0.0, 0.1, 0.2, 0.3], "sweep_plans": 4, "scales": [1.0, 2.5],
          "scale_radii": [0.15], "problems": 2, "problem_plans": 2, "example_radii": [0.1], "example_plans": 2,
-         "curve_steps": [10, 20], "select_problems": 2, "select_plans": 2, "select_warmup": 1,
+         "curve_steps": [10, 20], "select_problems": 2, "select_plans": 2, "select_warmup": 1, "select_rows": 3,
          "family_val_problems": 1, "family_val_plans": 1, "family_test_problems": 1, "family_test_plans": 1}
 
 
@@ -569,7 +570,7 @@ class Bench:
             selection += ["--planner", f"{name}={out}"]
         commands.append(selection + ["--val", self.path("select", "val.yaml"), "--test", self.path("select", "test.yaml"),
                                      "--out", self.path("select"), "--plans", str(self.size["select_plans"]),
-                                     "--warmup", str(self.size["select_warmup"])])
+                                     "--warmup", str(self.size["select_warmup"]), "--rows", str(self.size["select_rows"])])
         request = "".join(self.request(c) for c in commands)
         return commands, self.request([], request, *inputs)
 

@@ -4,7 +4,7 @@ test problems, success against time per plan (docs/results.md, "Choosing
 guidance on validation problems").
 
 usage: /usr/bin/python3 scripts/guidance_select.py --planner NAME=FILE.pt ... --val VAL.yaml --test TEST.yaml
-                                                   --out DIR [--plans 8] [--threads 1] [--warmup 3]
+                                                   --out DIR [--plans 8] [--threads 1] [--warmup 3] [--rows K]
 
 --planner names an exported planner (`flowplan export`): `fp` (the flow planner
 whose settings are chosen), `fp_split` (the same network exported with
@@ -200,6 +200,9 @@ def main():
     parser.add_argument("--out", required=True)
     parser.add_argument("--plans", type=int, default=8)
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--rows", type=int, default=0,
+                        help="K > 0: only each grid's first row (the planner's default) and its last K - 1 rows (quick "
+                             "runs); 0: every row")
     parser.add_argument("--warmup", type=int, default=3,
                         help="untimed calls before each setting's timed ones (fewer only where times do not matter)")
     parser.add_argument("--limit", type=int, default=0, help="first K problems of each set (0: all)")
@@ -233,7 +236,10 @@ def main():
         out = {"problems": len(val), "plans_per_problem": args.plans, "threads": args.threads, "planners": {}}
         for name, planner in planners.items():
             rows = []
-            for k, entry in enumerate(GRIDS.get(name, OTHER_GRID)):
+            grid = GRIDS.get(name, OTHER_GRID)
+            for k, entry in enumerate(grid):
+                if args.rows > 0 and 0 < k < len(grid) - (args.rows - 1):
+                    continue  # the rows run keep their indices (their files are named by them)
                 rows.append(cached(os.path.join(args.out, "rows", f"validation_{name}_{k}.json"), entry,
                                    lambda: run(planner, entry, val, args.plans, 1, limits[name], args.warmup)))
                 r = rows[-1]
