@@ -70,7 +70,7 @@ start, goal = torch.cat([start_q, torch.zeros(7)]), torch.cat([goal_q, torch.zer
 sphere = torch.tensor([[0.5, 0.0, 0.2, radius]])
 torch.manual_seed(0)
 # The executor's optimisations off, as flowplan plans: with them on, the first two calls of a freshly loaded file
-# spend most of this check's time profiling (docs/export.md, "The first calls": 28 s of its 29 here).
+# spend most of this check's time profiling (docs/export.md, "The first calls": about 24 s of its 29 here).
 with torch.no_grad(), torch.jit.optimized_execution(False):
     unguided = planner.sample(start, goal, 64).double().numpy()
     guided = planner.sample(start, goal, 64, sphere).double().numpy()
