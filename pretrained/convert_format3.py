@@ -77,8 +77,9 @@ def check(old_path, new_path):
         sys.exit(f"{new_path} does not plan as {old_path} does (largest difference {worst:.2e})")
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def main(doc=__doc__, convert_file=convert, check_files=check):
+    """The command line of this script and of convert_format5.py: DOC, and their own convert and check."""
+    parser = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--check", action="store_true", help="compare OLD.pt and NEW.pt instead of converting")
     parser.add_argument("--step", type=int, default=10000, help="the training step to record")
     parser.add_argument("files", nargs="+")
@@ -86,11 +87,11 @@ def main():
     if args.check:
         if len(args.files) != 2:
             parser.error("--check takes OLD.pt NEW.pt")
-        check(*args.files)
+        check_files(*args.files)
     else:
         if len(args.files) != 3:
             parser.error("expected OLD.pt TEMPLATE_CHECKPOINT.pt OUT.pt")
-        convert(*args.files, args.step)
+        convert_file(*args.files, args.step)
 
 
 if __name__ == "__main__":

@@ -22,11 +22,12 @@ newer file may compute the same gradients in another order, and a guided
 DDPM chain carries that rounding through its 24 steps: 6.8e-5 for the shipped
 MPD planner).
 """
-import argparse
 import re
 import sys
 
 import torch
+
+import convert_format3  # its command line, shared
 
 NETWORK = "sampler.network."
 
@@ -115,21 +116,5 @@ def check(old_path, new_path):
         sys.exit(f"{new_path} does not plan as {old_path} does: " + ", ".join(failed))
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--check", action="store_true", help="compare OLD.pt and NEW.pt instead of converting")
-    parser.add_argument("--step", type=int, default=10000, help="the training step to record")
-    parser.add_argument("files", nargs="+")
-    args = parser.parse_args()
-    if args.check:
-        if len(args.files) != 2:
-            parser.error("--check takes OLD.pt NEW.pt")
-        check(*args.files)
-    else:
-        if len(args.files) != 3:
-            parser.error("expected OLD.pt TEMPLATE_CHECKPOINT.pt OUT.pt")
-        convert(*args.files, args.step)
-
-
 if __name__ == "__main__":
-    main()
+    convert_format3.main(__doc__, convert, check)
