@@ -10,7 +10,8 @@ exists and was made by the current request (below), so a stopped run continues
 where it stopped (a stopped training resumes from its newest checkpoint):
 
   data        ROOT/data/<set>.h5            `flowplan generate` of every data set
-  train-reach ROOT/train/reach_*/done.json  `flowplan train` of FP, MPD, the VAE and the paper's MPD on franka_reach
+  train-reach ROOT/train/reach_*/done.json  `flowplan train` of FP, MPD, the VAE and the paper's MPD on franka_reach,
+                                            and of FP and MPD with training seeds 1 and 2 (reach_fp_s1, ...)
   sweep       ROOT/sweep/<planner>_r<R>.*   the paper's scene, one sphere of radius R, every
                                             planner, plans executed in MuJoCo
   scales      ROOT/scales/s<S>_r<R>.*       FP + split at several guidance scales
@@ -25,7 +26,8 @@ where it stopped (a stopped training resumes from its newest checkpoint):
                                             splitting, and guided around the paper's sphere on the stitching pair
   select      ROOT/select/                  guidance chosen on validation problems (seed 101) and reported on
                                             held-out test problems (seed 202): scripts/guidance_select.py on FP,
-                                            FP + split, MPD and the paper's MPD, exported from the reach rows
+                                            FP + split, MPD and the paper's MPD, exported from the reach rows;
+                                            the test rows of FP, FP + split and MPD again with seeds 1 and 2
   train-joint ROOT/train/joint_*/done.json  `flowplan train` of FP, MPD and the VAE on franka_joint (configs/
                                             franka_joint.yaml: motions between random configurations)
   families    ROOT/families/                every planner on the scene families and the paper's sphere scene,
@@ -98,6 +100,7 @@ TABLE1 = [("FP", "cross_fp", [], SEEDS),
 # schedule, evaluated at the checkpoints of CURVE_STEPS; beside it, the 2,000-step rows of table 1, whose schedule
 # ends there.
 LONG_SEEDS = [0, 1]
+REACH_SEEDS = [0, 1, 2]  # training seeds of the reach FP and MPD in the select stage's seed rows
 CURVE_EVERY = 1000
 LONG_TRAIN = ["train.steps=10000", f"train.checkpoint_every={CURVE_EVERY}", "train.keep_checkpoints=10",
               f"train.eval_every={CURVE_EVERY}"]
@@ -110,6 +113,9 @@ SELECT_PLANNERS = [("fp", "reach_fp", ["sampler.splitting=none", "sampler.final_
                    ("fp_split", "reach_fp", ["sampler.splitting=midpoint", "sampler.final_iterations=0"]),
                    ("mpd", "reach_mpd", []),
                    ("paper_mpd", "reach_paper_mpd", [])]
+# The select stage's other models: each planner above whose row has seeds REACH_SEEDS[1:] is exported from those rows
+# alike and passed as --replicate, so that the held-out rows give their spread over training seeds.
+SELECT_REPLICATED = ["fp", "fp_split", "mpd"]
 # The cross planner guided around the paper's sphere on the stitching pair (its start and goal TCP are those of the
 # pair (-0.3, 0.2) -> (0.3, 0.2)): the reach preset's guidance, split, with the plain end-game of 10 steps chosen on
 # validation problems before the covariant end-game existed (docs/results.md, "Training budget").
@@ -173,6 +179,12 @@ def train_rows():
         rows[f"long_cross_fp_s{seed}"] = (CROSS_SETS[0][1], "franka_cross", LONG_TRAIN, seed)
     rows["reach_fp"] = (REACH_CONFIG, "franka_reach", [], 0)
     rows["reach_mpd"] = (REACH_CONFIG, "franka_reach", ["objective.name=ddpm"], 0)
+    # Two more training seeds of FP and MPD for the spread of the held-out comparison (the select stage's seed rows;
+    # seed 0 is the row above). The seed draws the initial weights, the batches and the validation episodes; the
+    # data set is the same.
+    for seed in REACH_SEEDS[1:]:
+        rows[f"reach_fp_s{seed}"] = (REACH_CONFIG, "franka_reach", [], seed)
+        rows[f"reach_mpd_s{seed}"] = (REACH_CONFIG, "franka_reach", ["objective.name=ddpm"], seed)
     # The VAE learns single states: 16 trajectories are 1,024 states per step (as in the particle zoo), and
     # 128 would make its 10,000 steps take 95 minutes here.
     rows["reach_vae"] = (REACH_CONFIG, "franka_reach",
@@ -568,6 +580,15 @@ class Bench:
             commands.append([self.flowplan, "export", "--ckpt", self.path("train", row), "--out", out, *overrides])
             inputs.append(self.model_request(row))
             selection += ["--planner", f"{name}={out}"]
+        for name, row, overrides in SELECT_PLANNERS:
+            if name not in SELECT_REPLICATED:
+                continue
+            for seed in REACH_SEEDS[1:]:
+                out = self.path("select", f"{name}_s{seed}.pt")
+                commands.append([self.flowplan, "export", "--ckpt", self.path("train", f"{row}_s{seed}"), "--out", out,
+                                 *overrides])
+                inputs.append(self.model_request(f"{row}_s{seed}"))
+                selection += ["--replicate", f"{name}={out}"]
         commands.append(selection + ["--val", self.path("select", "val.yaml"), "--test", self.path("select", "test.yaml"),
                                      "--out", self.path("select"), "--plans", str(self.size["select_plans"]),
                                      "--warmup", str(self.size["select_warmup"]), "--rows", str(self.size["select_rows"])])
@@ -948,12 +969,15 @@ def select_table(bench, summary):
     if not all(os.path.exists(p) for p in made) or not bench.current(lambda: bench.select_commands()[1], marker):
         return ["### Guidance chosen on validation problems\n", "Not run.\n"]
     test = json.load(open(bench.path("select", "test.json")))
-    summary["select"] = {"chosen": test["chosen"], "test": test["rows"]}
+    summary["select"] = {"chosen": test["chosen"], "test": test["rows"], "test_other_seeds": test["replicate_rows"]}
     shutil.copyfile(bench.path("select", "success_vs_time.png"), bench.path("results", "success_vs_time.png"))
     seeds = ", ".join(f"{name} seed {seed}" for name, seed in SELECT_SEEDS.items())
     return ["### Guidance chosen on validation problems\n",
             f"Problems: {seeds}; every setting on validation, the chosen ones and the defaults on test "
-            "(scripts/guidance_select.py; plot: success_vs_time.png).\n", open(report).read()]
+            "(scripts/guidance_select.py; plot: success_vs_time.png). The test rows of "
+            f"{', '.join(SELECT_REPLICATED)} are planned again with the models of training seeds "
+            f"{', '.join(map(str, REACH_SEEDS[1:]))} (models 2–{len(REACH_SEEDS)}; model 1 is seed {REACH_SEEDS[0]}).\n",
+            open(report).read()]
 
 
 def curve_table(bench, summary):

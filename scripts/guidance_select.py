@@ -5,6 +5,7 @@ guidance on validation problems").
 
 usage: /usr/bin/python3 scripts/guidance_select.py --planner NAME=FILE.pt ... --val VAL.yaml --test TEST.yaml
                                                    --out DIR [--plans 8] [--threads 1] [--warmup 3] [--rows K]
+                                                   [--replicate NAME=FILE ...]
 
 --planner names an exported planner (`flowplan export`): `fp` (the flow planner
 whose settings are chosen), `fp_split` (the same network exported with
@@ -24,7 +25,13 @@ stage does. VAL and TEST are
      the FP setting of highest success whose time per plan is at most that
      planner's (FP "at equal time"), and FP's best setting at any time;
   3. test: the chosen settings and every other planner's default on the test
-     problems, with other noise.
+     problems, with other noise;
+  4. other training seeds (`--replicate NAME=FILE`, e.g. the same preset
+     trained with seed=1 and exported as NAME's file was): every test row of
+     planner NAME planned again with that file, with the same problems and
+     noise, nothing chosen again; the report gives each model's success and
+     the mean ± sample standard deviation over the models (the --planner file
+     first, then the --replicate files of NAME in the order given).
 
 A plan succeeds (whole arm) when every collision sphere of every state stays
 outside every obstacle (the planner's own `clearance`, the flowplan kinematics),
@@ -38,6 +45,7 @@ import argparse
 import json
 import math
 import os
+import statistics
 import sys
 import time
 
@@ -140,7 +148,9 @@ def run(planner, grid_entry, problems, plans, seed, limits, warmup=3):
     ok, seconds = 0, 0.0
     per_problem = []
     failing = {"collision": 0, "goal": 0, "speed": 0}  # plans failing each criterion (a plan may fail several)
-    # Untimed calls first (3 by default): TorchScript's executor profiles and specialises a method on its first calls.
+    # Untimed calls first (3 by default). The plans run with the graph executor's optimisations off, as flowplan plans:
+    # a freshly loaded file's first calls would otherwise profile and specialise its graphs for seconds, for no gain
+    # later (docs/export.md, "The first calls").
     for i, problem in [(-1, problems[0])] * warmup + list(enumerate(problems)):
         generator = torch.Generator().manual_seed(seed * 100003 + i)
         shape = [plans] if N == 1 else [plans, N]
@@ -149,7 +159,7 @@ def run(planner, grid_entry, problems, plans, seed, limits, warmup=3):
                    if len(planner.renoise_shape) > 0 else None)
         start = problem["start"].expand(plans, -1)
         goal = problem["goal"].expand(plans, -1)
-        with torch.inference_mode():
+        with torch.inference_mode(), torch.jit.optimized_execution(False):
             begin = time.perf_counter()
             out = planner.plan(start, goal, noise, renoise, spheres=problem["spheres"], settings=settings,
                                schedule=schedule, guide_at=guide_at)
@@ -206,6 +216,9 @@ def main():
     parser.add_argument("--warmup", type=int, default=3,
                         help="untimed calls before each setting's timed ones (fewer only where times do not matter)")
     parser.add_argument("--limit", type=int, default=0, help="first K problems of each set (0: all)")
+    parser.add_argument("--replicate", action="append", default=[], metavar="NAME=FILE",
+                        help="another model of planner NAME (another training seed, exported alike): the test rows of "
+                             "NAME are planned with it too and reported over the models")
     parser.add_argument("--test-also", action="append", default=[], metavar="NAME:LABEL",
                         help="a grid setting to report on the test problems besides the chosen ones (role \"also\"; "
                              "it takes no part in the choice), e.g. 'fp:base + end-game G 10'")
@@ -219,6 +232,13 @@ def main():
         planners[name] = torch.jit.load(path)
     if "fp" not in planners:
         sys.exit("--planner: expected fp=FILE, the flow planner whose settings are chosen")
+    replicates = {}  # name -> [planner of each --replicate file of it, in order]
+    for spec in args.replicate:
+        name, _, path = spec.partition("=")
+        if name not in planners or not os.path.isfile(path):
+            sys.exit(f"--replicate {spec}: expected NAME=FILE, NAME one of the --planner names "
+                     f"({', '.join(planners)}) and FILE an exported planner")
+        replicates.setdefault(name, []).append(torch.jit.load(path))
     test_also = []
     for spec in args.test_also:
         name, _, label = spec.partition(":")
@@ -281,6 +301,17 @@ def main():
             out["rows"].append(row)
             print(f"test {key} ({name} | {label}): {row['arm_clear']:.1%} of plans, {row['problems_solved']:.0%} "
                   f"of problems, {1e3 * row['seconds_per_plan']:.1f} ms/plan", flush=True)
+        # Stage 4: the same rows with the other models of a planner (model 2, 3, ...; model 1 is the row above).
+        out["replicate_rows"] = []
+        for (name, label), key in runs.items():
+            k, entry = next((k, e) for k, e in enumerate(GRIDS.get(name, OTHER_GRID)) if e[0] == label)
+            for m, planner in enumerate(replicates.get(name, []), start=2):
+                row = dict(cached(os.path.join(args.out, "rows", f"test_{name}_model{m}_{k}.json"), entry,
+                                  lambda: run(planner, entry, test, args.plans, 2, limits[name], args.warmup)))
+                row |= {"planner": name, "role": key, "model": m}
+                out["replicate_rows"].append(row)
+                print(f"test {key} ({name} | {label}), model {m}: {row['arm_clear']:.1%} of plans, "
+                      f"{1e3 * row['seconds_per_plan']:.1f} ms/plan", flush=True)
         return out
 
     test_result = held_out()
@@ -289,6 +320,31 @@ def main():
             json.dump(content, f, indent=1)
         os.replace(os.path.join(args.out, name + ".tmp"), os.path.join(args.out, name))
     write_report(args.out, validation, test_result)
+
+
+def over_models(test_result):
+    """The test rows of the planners given other models (--replicate): each model's success and time, then the
+    mean ± sample standard deviation of success over the models; [] without replicates."""
+    extra = test_result.get("replicate_rows", [])
+    if not extra:
+        return []
+    models = max(r["model"] for r in extra)
+    lines = ["", f"Test over models (model 1 is the --planner file, models 2–{models} the --replicate files, e.g. "
+             "other training seeds; the same problems and noise): success (whole arm), time per plan in ms.", "",
+             "| role | planner | setting | " + " | ".join(f"model {m}" for m in range(1, models + 1)) +
+             " | mean ± std over models |", "|---|---|---|" + "---|" * (models + 1)]
+    for r in test_result["rows"]:
+        rows = [r] + sorted((x for x in extra if (x["planner"], x["role"]) == (r["planner"], r["role"])),
+                            key=lambda x: x["model"])
+        if len(rows) == 1:
+            continue
+        rates = [x["arm_clear"] for x in rows]
+        spread = (f"{statistics.mean(rates):.1%} ± {statistics.stdev(rates):.1%}, "
+                  f"{1e3 * statistics.mean(x['seconds_per_plan'] for x in rows):.1f}")
+        cells = [f"{x['arm_clear']:.1%}, {1e3 * x['seconds_per_plan']:.1f}" for x in rows]
+        cells += [""] * (models - len(rows))  # a planner given fewer models
+        lines.append(f"| {r['role']} | {r['planner']} | {r['label']} | " + " | ".join(cells) + f" | {spread} |")
+    return lines
 
 
 def write_report(out, validation, test_result):
@@ -316,6 +372,7 @@ def write_report(out, validation, test_result):
         lo, hi = wilson(r["arm_clear"], n)
         lines.append(f"| {r['role']} | {r['planner']} | {r['label']} | {r['arm_clear']:.1%} | {lo:.1%}–{hi:.1%} | "
                      f"{r['problems_solved']:.0%} | {1e3 * r['seconds_per_plan']:.1f} | {failing(r)} |")
+    lines += over_models(test_result)
     with open(os.path.join(out, "selection.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
     print("\n".join(lines))
@@ -339,6 +396,9 @@ def write_report(out, validation, test_result):
         axes[1].scatter([1e3 * r["seconds_per_plan"]], [100 * r["arm_clear"]], color=colours[r["planner"]], s=24)
         axes[1].annotate(str(k + 1), (1e3 * r["seconds_per_plan"], 100 * r["arm_clear"]), fontsize=8,
                          xytext=(3, 3), textcoords="offset points")
+    for r in test_result.get("replicate_rows", []):  # other training seeds: crosses
+        axes[1].scatter([1e3 * r["seconds_per_plan"]], [100 * r["arm_clear"]], color=colours[r["planner"]], s=24,
+                        marker="x")
     axes[1].text(0.02, 0.02, "\n".join(f"{k + 1}: {r['planner']}: {r['label']}" for k, r in enumerate(test_result["rows"])),
                  transform=axes[1].transAxes, fontsize=7, va="bottom")
     axes[0].set_title("validation: every setting; line: best within a time", fontsize=10)

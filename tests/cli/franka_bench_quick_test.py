@@ -28,6 +28,7 @@ import subprocess
 import sys
 
 import h5py
+import yaml
 
 flowplan, scratch = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
@@ -181,6 +182,23 @@ assert {"mpd_default", "paper_mpd_default"} <= roles, roles
 assert all(len(r["per_problem"]) == 2 for r in summary["select"]["test"]), summary["select"]["test"]
 summary_md = open(os.path.join(root, "results", "summary.md")).read()
 assert "### Guidance chosen on validation problems" in summary_md and "Test (held out)" in summary_md
+# ... and every test row of FP, FP + split and MPD again with the models of training seeds 1 and 2 (exported as seed
+# 0's, with other weights); the report gives each row's mean ± sample std over the three models.
+for row in ("reach_fp", "reach_mpd"):
+    for seed in (1, 2):
+        assert yaml.safe_load(open(os.path.join(root, "train", f"{row}_s{seed}", "config.yaml")))["seed"] == seed
+tested = {r["planner"] for r in summary["select"]["test"]}
+assert {"fp", "mpd"} <= tested, tested  # FP + split has test rows only where chosen
+for name in {"fp", "fp_split", "mpd"} & tested:
+    for r in [r for r in summary["select"]["test"] if r["planner"] == name]:
+        models = sorted((x for x in summary["select"]["test_other_seeds"]
+                         if (x["planner"], x["role"]) == (name, r["role"])), key=lambda x: x["model"])
+        assert [x["model"] for x in models] == [2, 3], (name, r["role"], models)
+        rates = [r["arm_clear"]] + [x["arm_clear"] for x in models]
+        assert f"{statistics.mean(rates):.1%} ± {statistics.stdev(rates):.1%}" in summary_md, (name, rates)
+weights = [dict(torch.jit.load(os.path.join(root, "select", f"{name}.pt")).named_buffers())
+           ["sampler.network.p_final_conv_weight"] for name in ("fp", "fp_s1")]
+assert weights[0].shape == weights[1].shape and not torch.equal(*weights)
 times = next(line for line in summary_md.split("\n") if line.startswith("| FP + split | "))
 assert len([t for t in times.split("|")[2:-1] if float(t) > 0]) == 5, times  # 4 radii and their median
 for name in (["success_vs_radius.png", "training_budget.png", "success_vs_time.png", "summary.md"] +
