@@ -107,10 +107,12 @@ LONG_TRAIN = ["train.steps=10000", f"train.checkpoint_every={CURVE_EVERY}", "tra
 CURVE_RADII = [0.1, 0.15]
 # Guidance selection (stage select, scripts/guidance_select.py): validation and held-out test problems drawn with
 # two seeds; the planners it compares, each exported from its training row with these settings (the flow planner
-# with the paper's sampler, so that the grids' base setting is that).
+# with the paper's sampler, no end-game and the end-game's spread and hinge off, so that the grids' base setting is
+# that and a grid row that adds end-game steps without a spread adds plain ones, whatever the preset's defaults).
 SELECT_SEEDS = {"val": 101, "test": 202}
-SELECT_PLANNERS = [("fp", "reach_fp", ["sampler.splitting=none", "sampler.final_iterations=0"]),
-                   ("fp_split", "reach_fp", ["sampler.splitting=midpoint", "sampler.final_iterations=0"]),
+PAPER_SAMPLER = ["sampler.final_iterations=0", "sampler.final_spread=0", "sampler.final_joint_speed_weight=0"]
+SELECT_PLANNERS = [("fp", "reach_fp", ["sampler.splitting=none", *PAPER_SAMPLER]),
+                   ("fp_split", "reach_fp", ["sampler.splitting=midpoint", *PAPER_SAMPLER]),
                    ("mpd", "reach_mpd", []),
                    ("paper_mpd", "reach_paper_mpd", [])]
 # The select stage's other models: each planner above whose row has seeds REACH_SEEDS[1:] is exported from those rows

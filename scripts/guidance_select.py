@@ -12,9 +12,10 @@ whose settings are chosen), `fp_split` (the same network exported with
 splitting) and any others (e.g. `mpd`, `paper_mpd`), which run at their own
 settings and the few variants of GRIDS[name]. Every grid changes the exported
 file's defaults; its base row is those defaults, so export the flow planner
-with the paper's sampler (`sampler.final_iterations=0`, and
+with the paper's sampler (`sampler.final_iterations=0
+sampler.final_spread=0 sampler.final_joint_speed_weight=0`, and
 `sampler.splitting=none` or `midpoint`), as scripts/franka_bench.py's select
-stage does. VAL and TEST are
+stage does; an fp or fp_split file with other defaults is refused. VAL and TEST are
 `flowplan problems` files drawn with different seeds. Stages:
 
   1. validation: every setting of every planner's grid on every validation
@@ -232,6 +233,7 @@ def main():
         planners[name] = torch.jit.load(path)
     if "fp" not in planners:
         sys.exit("--planner: expected fp=FILE, the flow planner whose settings are chosen")
+    paper_sampler = ("sampler.final_iterations", "sampler.final_spread", "sampler.final_joint_speed_weight")
     replicates = {}  # name -> [planner of each --replicate file of it, in order]
     for spec in args.replicate:
         name, _, path = spec.partition("=")
@@ -239,6 +241,16 @@ def main():
             sys.exit(f"--replicate {spec}: expected NAME=FILE, NAME one of the --planner names "
                      f"({', '.join(planners)}) and FILE an exported planner")
         replicates.setdefault(name, []).append(torch.jit.load(path))
+    # The FP grids add end-game steps to the file's defaults: a file whose defaults already hold an end-game, a
+    # spread or its hinge would turn their rows into other settings than their labels say.
+    loaded = [(f"--planner {n}", n, planners[n]) for n in planners] + [
+        (f"--replicate {n} (model {m})", n, p) for n, ps in replicates.items() for m, p in enumerate(ps, start=2)]
+    for where, name, planner in loaded:
+        if name in ("fp", "fp_split"):
+            other = [f"{key}={planner.settings[key]:g}" for key in paper_sampler if planner.settings[key] != 0.0]
+            if other:
+                sys.exit(f"{where}: exported with {', '.join(other)}; export the flow planner with the paper's "
+                         f"sampler ({' '.join(key + '=0' for key in paper_sampler)}), the FP grids' base")
     test_also = []
     for spec in args.test_also:
         name, _, label = spec.partition(":")
@@ -334,8 +346,8 @@ def over_models(test_result):
              "| role | planner | setting | " + " | ".join(f"model {m}" for m in range(1, models + 1)) +
              " | mean ± std over models |", "|---|---|---|" + "---|" * (models + 1)]
     for r in test_result["rows"]:
-        rows = [r] + sorted((x for x in extra if (x["planner"], x["role"]) == (r["planner"], r["role"])),
-                            key=lambda x: x["model"])
+        rows = [r] + sorted((x for x in extra if (x["planner"], x["role"], x["label"]) ==
+                             (r["planner"], r["role"], r["label"])), key=lambda x: x["model"])
         if len(rows) == 1:
             continue
         rates = [x["arm_clear"] for x in rows]

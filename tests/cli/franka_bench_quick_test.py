@@ -171,6 +171,7 @@ import torch  # noqa: E402
 for name, splitting in (("fp", "none"), ("fp_split", "midpoint")):
     exported = torch.jit.load(os.path.join(root, "select", f"{name}.pt"))
     assert exported.settings["sampler.final_iterations"] == 0.0 and exported.splitting == splitting, name
+    assert exported.settings["sampler.final_spread"] == exported.settings["sampler.final_joint_speed_weight"] == 0.0
 assert "sampler.final_iterations=0" in open(os.path.join(root, "sweep", "fp_r0.1.request")).read()
 validation = json.load(open(os.path.join(root, "select", "validation.json")))
 assert sorted(validation["planners"]) == ["fp", "fp_split", "mpd", "paper_mpd"], sorted(validation["planners"])
@@ -192,7 +193,8 @@ assert {"fp", "mpd"} <= tested, tested  # FP + split has test rows only where ch
 for name in {"fp", "fp_split", "mpd"} & tested:
     for r in [r for r in summary["select"]["test"] if r["planner"] == name]:
         models = sorted((x for x in summary["select"]["test_other_seeds"]
-                         if (x["planner"], x["role"]) == (name, r["role"])), key=lambda x: x["model"])
+                         if (x["planner"], x["role"], x["label"]) == (name, r["role"], r["label"])),
+                        key=lambda x: x["model"])
         assert [x["model"] for x in models] == [2, 3], (name, r["role"], models)
         rates = [r["arm_clear"]] + [x["arm_clear"] for x in models]
         assert f"{statistics.mean(rates):.1%} ± {statistics.stdev(rates):.1%}" in summary_md, (name, rates)
