@@ -180,15 +180,17 @@ def run(planner, grid_entry, problems, plans, seed, limits, warmup=3):
             "seconds_per_plan": seconds / total, "per_problem": per_problem, "failing": failing}
 
 
-def cached(path, entry, make):
+def cached(path, entry, make, source=None):
     """make()'s JSON, kept in `path`: a row that exists is not made again if it was made with ENTRY's settings
-    (grid rows are kept by index; a grid edited since makes the row again, a renamed row takes the new label)."""
+    (grid rows are kept by index; a grid edited since makes the row again, a renamed row takes the new label) and,
+    given SOURCE (a --replicate file's identity), from that file."""
     label, settings, guide_at, schedule = entry
     if os.path.exists(path):
         row = json.load(open(path))
-        if (row["settings"], row["guide_at"], row["schedule"]) == (settings, guide_at, schedule):
+        if (row["settings"], row["guide_at"], row["schedule"], row.get("source")) == (settings, guide_at, schedule,
+                                                                                     source):
             return row | {"label": label}
-    result = make()
+    result = make() | ({} if source is None else {"source": source})
     with open(path + ".tmp", "w") as f:
         json.dump(result, f, indent=1)
     os.replace(path + ".tmp", path)
@@ -235,12 +237,16 @@ def main():
         sys.exit("--planner: expected fp=FILE, the flow planner whose settings are chosen")
     paper_sampler = ("sampler.final_iterations", "sampler.final_spread", "sampler.final_joint_speed_weight")
     replicates = {}  # name -> [planner of each --replicate file of it, in order]
+    replicate_sources = {}  # name -> [identity of each of those files]
     for spec in args.replicate:
         name, _, path = spec.partition("=")
         if name not in planners or not os.path.isfile(path):
             sys.exit(f"--replicate {spec}: expected NAME=FILE, NAME one of the --planner names "
                      f"({', '.join(planners)}) and FILE an exported planner")
         replicates.setdefault(name, []).append(torch.jit.load(path))
+        identity = os.stat(path)  # a replicate row is kept for the file that made it (path, size, time)
+        replicate_sources.setdefault(name, []).append(
+            f"{os.path.realpath(path)} {identity.st_size} {identity.st_mtime_ns}")
     # The FP grids add end-game steps to the file's defaults: a file whose defaults already hold an end-game, a
     # spread or its hinge would turn their rows into other settings than their labels say.
     loaded = [(f"--planner {n}", n, planners[n]) for n in planners] + [
@@ -319,7 +325,8 @@ def main():
             k, entry = next((k, e) for k, e in enumerate(GRIDS.get(name, OTHER_GRID)) if e[0] == label)
             for m, planner in enumerate(replicates.get(name, []), start=2):
                 row = dict(cached(os.path.join(args.out, "rows", f"test_{name}_model{m}_{k}.json"), entry,
-                                  lambda: run(planner, entry, test, args.plans, 2, limits[name], args.warmup)))
+                                  lambda: run(planner, entry, test, args.plans, 2, limits[name], args.warmup),
+                                  replicate_sources[name][m - 2]))
                 row |= {"planner": name, "role": key, "model": m}
                 out["replicate_rows"].append(row)
                 print(f"test {key} ({name} | {label}), model {m}: {row['arm_clear']:.1%} of plans, "

@@ -197,7 +197,22 @@ for name in {"fp", "fp_split", "mpd"} & tested:
                         key=lambda x: x["model"])
         assert [x["model"] for x in models] == [2, 3], (name, r["role"], models)
         rates = [r["arm_clear"]] + [x["arm_clear"] for x in models]
-        assert f"{statistics.mean(rates):.1%} ± {statistics.stdev(rates):.1%}" in summary_md, (name, rates)
+        line = next(line for line in summary_md.split("Test over models")[1].split("\n")
+                    if line.startswith(f"| {r['role']} | {name} | {r['label']} | "))
+        cells = [c.strip() for c in line.split("|")[4:-1]]
+        assert cells[:3] == [f"{x['arm_clear']:.1%}, {1e3 * x['seconds_per_plan']:.1f}" for x in [r] + models], line
+        assert cells[3].startswith(f"{statistics.mean(rates):.1%} ± {statistics.stdev(rates):.1%}, "), line
+# guidance_select.py refuses an FP file exported with the preset's end-game defaults (its grids add to them).
+unfit = os.path.join(root, "select_unfit_fp.pt")
+subprocess.run([flowplan, "export", "--ckpt", os.path.join(root, "train", "reach_fp"), "--out", unfit], check=True,
+               capture_output=True)
+refused = subprocess.run([sys.executable, os.path.join(repo, "scripts", "guidance_select.py"), "--planner",
+                          f"fp={unfit}", "--val", os.path.join(root, "select", "val.yaml"), "--test",
+                          os.path.join(root, "select", "test.yaml"), "--out", os.path.join(root, "select_unfit")],
+                         capture_output=True, text=True)
+assert refused.returncode != 0 and "export the flow planner with the paper's sampler" in refused.stderr, refused.stderr
+assert "sampler.final_iterations=20" in refused.stderr and not os.path.exists(os.path.join(root, "select_unfit"))
+os.remove(unfit)
 weights = [dict(torch.jit.load(os.path.join(root, "select", f"{name}.pt")).named_buffers())
            ["sampler.network.p_final_conv_weight"] for name in ("fp", "fp_s1")]
 assert weights[0].shape == weights[1].shape and not torch.equal(*weights)
