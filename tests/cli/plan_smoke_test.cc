@@ -42,6 +42,9 @@ class ParticlePlanTest : public ::testing::Test {
   static void SetUpTestSuite() {
     // ScratchDir() names a test, and no test runs yet: one folder for the suite.
     dir_ = new fs::path(fs::path(::testing::TempDir()) / ("flowplan_" + std::to_string(::getpid()) + "_ParticlePlanTest"));
+    // A folder of this name left by an earlier process with the same pid would hold a finished run, which `train`
+    // refuses to train into: the suite's set-up then failed and its tests were reported skipped.
+    fs::remove_all(*dir_);
     fs::create_directories(*dir_);
     const std::string paths = " generate.out=" + Path("data.h5") + " data.path=" + Path("data.h5") +
                               " run_dir=" + Path("run") + " --log-level warn";
@@ -49,7 +52,10 @@ class ParticlePlanTest : public ::testing::Test {
     ASSERT_EQ(Flowplan("train --config " + Source("tests/cli/tiny.yaml") + paths).exit_code, 0);
     ASSERT_EQ(Flowplan("export --ckpt " + Path("run") + " --log-level warn").exit_code, 0);
   }
-  static void TearDownTestSuite() { delete dir_; }
+  static void TearDownTestSuite() {
+    fs::remove_all(*dir_);
+    delete dir_;
+  }
   static std::string Path(const std::string& name) { return (*dir_ / name).string(); }
   static fs::path* dir_;
 };

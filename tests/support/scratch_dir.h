@@ -9,13 +9,15 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <set>
 #include <string>
 
 namespace flowplan::testing {
 
 // <TempDir>/flowplan_<pid>_<suite>_<test>, created on first use; every call in
 // one test returns the same directory. Parameterised names have their '/'
-// replaced so the result is one directory.
+// replaced so the result is one directory. A directory of that name left by an
+// earlier process with the same pid (pids are reused) is emptied on first use.
 inline std::filesystem::path ScratchDir() {
   const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
   std::string name = "flowplan_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name();
@@ -23,6 +25,8 @@ inline std::filesystem::path ScratchDir() {
     if (c == '/') c = '_';
   }
   const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / name;
+  static std::set<std::string> made;  // this process's directories
+  if (made.insert(name).second) std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
 }
