@@ -236,21 +236,19 @@ def main():
     if "fp" not in planners:
         sys.exit("--planner: expected fp=FILE, the flow planner whose settings are chosen")
     paper_sampler = ("sampler.final_iterations", "sampler.final_spread", "sampler.final_joint_speed_weight")
-    replicates = {}  # name -> [planner of each --replicate file of it, in order]
-    replicate_sources = {}  # name -> [identity of each of those files]
+    replicates = {}  # name -> [(planner, identity: path, size, time) of each --replicate file of it, in order]
     for spec in args.replicate:
         name, _, path = spec.partition("=")
         if name not in planners or not os.path.isfile(path):
             sys.exit(f"--replicate {spec}: expected NAME=FILE, NAME one of the --planner names "
                      f"({', '.join(planners)}) and FILE an exported planner")
-        replicates.setdefault(name, []).append(torch.jit.load(path))
-        identity = os.stat(path)  # a replicate row is kept for the file that made it (path, size, time)
-        replicate_sources.setdefault(name, []).append(
-            f"{os.path.realpath(path)} {identity.st_size} {identity.st_mtime_ns}")
+        identity = os.stat(path)  # a replicate row is kept for the file that made it
+        replicates.setdefault(name, []).append(
+            (torch.jit.load(path), f"{os.path.realpath(path)} {identity.st_size} {identity.st_mtime_ns}"))
     # The FP grids add end-game steps to the file's defaults: a file whose defaults already hold an end-game, a
     # spread or its hinge would turn their rows into other settings than their labels say.
     loaded = [(f"--planner {n}", n, planners[n]) for n in planners] + [
-        (f"--replicate {n} (model {m})", n, p) for n, ps in replicates.items() for m, p in enumerate(ps, start=2)]
+        (f"--replicate {n} (model {m})", n, p) for n, ps in replicates.items() for m, (p, _) in enumerate(ps, start=2)]
     for where, name, planner in loaded:
         if name in ("fp", "fp_split"):
             other = [f"{key}={planner.settings[key]:g}" for key in paper_sampler if planner.settings[key] != 0.0]
@@ -311,8 +309,10 @@ def main():
         runs.setdefault((fp_names[0], GRIDS[fp_names[0]][0][0]), "fp_default")
         for name, label in test_also:  # reported on test, never chosen from it
             runs.setdefault((name, label), "also")
-        for (name, label), key in runs.items():
-            k, entry = next((k, e) for k, e in enumerate(GRIDS.get(name, OTHER_GRID)) if e[0] == label)
+        # Each run's grid entry and its index in the grid (rows are kept by it).
+        entries = [(name, label, key) + next((k, e) for k, e in enumerate(GRIDS.get(name, OTHER_GRID)) if e[0] == label)
+                   for (name, label), key in runs.items()]
+        for name, label, key, k, entry in entries:
             row = dict(cached(os.path.join(args.out, "rows", f"test_{name}_{k}.json"), entry,
                               lambda: run(planners[name], entry, test, args.plans, 2, limits[name], args.warmup)))
             row |= {"planner": name, "role": key}
@@ -321,12 +321,10 @@ def main():
                   f"of problems, {1e3 * row['seconds_per_plan']:.1f} ms/plan", flush=True)
         # Stage 4: the same rows with the other models of a planner (model 2, 3, ...; model 1 is the row above).
         out["replicate_rows"] = []
-        for (name, label), key in runs.items():
-            k, entry = next((k, e) for k, e in enumerate(GRIDS.get(name, OTHER_GRID)) if e[0] == label)
-            for m, planner in enumerate(replicates.get(name, []), start=2):
+        for name, label, key, k, entry in entries:
+            for m, (planner, source) in enumerate(replicates.get(name, []), start=2):
                 row = dict(cached(os.path.join(args.out, "rows", f"test_{name}_model{m}_{k}.json"), entry,
-                                  lambda: run(planner, entry, test, args.plans, 2, limits[name], args.warmup),
-                                  replicate_sources[name][m - 2]))
+                                  lambda: run(planner, entry, test, args.plans, 2, limits[name], args.warmup), source))
                 row |= {"planner": name, "role": key, "model": m}
                 out["replicate_rows"].append(row)
                 print(f"test {key} ({name} | {label}), model {m}: {row['arm_clear']:.1%} of plans, "
