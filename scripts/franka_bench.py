@@ -20,8 +20,8 @@ where it stopped (a stopped training resumes from its newest checkpoint):
   examples    ROOT/results/example_*.png    a few plans of every planner, drawn
   train-cross ROOT/train/cross_*/done.json  `flowplan train` of every franka_cross row
   stitching   ROOT/stitching/<row>.json     `flowplan eval stitching` of every franka_cross row
-  train-long  ROOT/train/long_*/done.json   FP on franka_cross for 10,000 steps, one run per seed, a checkpoint
-                                            every 1,000 steps (the training-budget curve)
+  train-long  ROOT/train/long_*/done.json   FP on franka_cross for 10,000 steps, one run per seed, and one run of
+                                            20,000; a checkpoint every 1,000 steps (the training-budget curve)
   curve       ROOT/curve/<row>_k<step>.*    each long run at the steps of the curve: stitching without and with
                                             splitting, and guided around the paper's sphere on the stitching pair
   select      ROOT/select/                  guidance chosen on validation problems (seed 101) and reported on
@@ -99,11 +99,15 @@ TABLE1 = [("FP", "cross_fp", [], SEEDS),
 # The training-budget curve (stage curve): FP on franka_cross trained for the longest budget with its cosine
 # schedule, evaluated at the checkpoints of CURVE_STEPS; beside it, the 2,000-step rows of table 1, whose schedule
 # ends there.
-LONG_SEEDS = [0, 1]
+LONG_SEEDS = [0, 1, 2]
+# and one run of twice that length (its checkpoints of CURVE_STEPS up to 10,000 are mid-schedule too)
+LONGER_SEEDS = [0, 1]
 REACH_SEEDS = [0, 1, 2]  # training seeds of the reach FP and MPD in the select stage's seed rows
 CURVE_EVERY = 1000
 LONG_TRAIN = ["train.steps=10000", f"train.checkpoint_every={CURVE_EVERY}", "train.keep_checkpoints=10",
               f"train.eval_every={CURVE_EVERY}"]
+LONGER_TRAIN = ["train.steps=20000", f"train.checkpoint_every={CURVE_EVERY}", "train.keep_checkpoints=20",
+                f"train.eval_every={CURVE_EVERY}"]
 CURVE_RADII = [0.1, 0.15]
 # Guidance selection (stage select, scripts/guidance_select.py): validation and held-out test problems drawn with
 # two seeds; the planners it compares, each exported from its training row with these settings (the flow planner
@@ -156,15 +160,16 @@ FULL = {"episodes": None, "train": [], "plans_per_pair": 64, "radii": [round(0.0
         "sweep_plans": 64, "scales": [0.5, 1.0, 1.75, 2.5, 3.5, 5.0],
         "scale_radii": [0.1, 0.125, 0.15, 0.175, 0.2, 0.225, 0.25],
         "problems": 100, "problem_plans": 8, "example_radii": [0.1, 0.2], "example_plans": 8,
-        "curve_steps": [2000, 5000, 10000], "select_problems": 100, "select_plans": 8, "select_warmup": 3,
-        "select_rows": 0,
+        "curve_steps": [2000, 5000, 10000, 20000], "long_rows": None, "select_problems": 100, "select_plans": 8,
+        "select_warmup": 3, "select_rows": 0,
         "family_val_problems": 10, "family_val_plans": 2, "family_test_problems": 20, "family_test_plans": 4}
 QUICK = {"episodes": 256,
          "train": ["train.steps=20", "train.batch_size=16", "train.eval_every=0", "train.checkpoint_every=10",
                    "train.log_every=10", "train.val_batch_size=16"],
          "plans_per_pair": 4, "radii": [0.0, 0.1, 0.2, 0.3], "sweep_plans": 4, "scales": [1.0, 2.5],
          "scale_radii": [0.15], "problems": 2, "problem_plans": 2, "example_radii": [0.1], "example_plans": 2,
-         "curve_steps": [10, 20], "select_problems": 2, "select_plans": 2, "select_warmup": 1, "select_rows": 3,
+         "curve_steps": [10, 20], "long_rows": ["long_cross_fp_s0", "long_cross_fp_20k_s0"], "select_problems": 2,
+         "select_plans": 2, "select_warmup": 1, "select_rows": 3,
          "family_val_problems": 1, "family_val_plans": 1, "family_test_problems": 1, "family_test_plans": 1}
 
 
@@ -179,6 +184,8 @@ def train_rows():
             rows[f"{name[len('franka_'):]}_fp_s{seed}"] = (config, name, [], seed)
     for seed in LONG_SEEDS:  # the training-budget curve: one long run per seed, a checkpoint every CURVE_EVERY steps
         rows[f"long_cross_fp_s{seed}"] = (CROSS_SETS[0][1], "franka_cross", LONG_TRAIN, seed)
+    for seed in LONGER_SEEDS:
+        rows[f"long_cross_fp_20k_s{seed}"] = (CROSS_SETS[0][1], "franka_cross", LONGER_TRAIN, seed)
     rows["reach_fp"] = (REACH_CONFIG, "franka_reach", [], 0)
     rows["reach_mpd"] = (REACH_CONFIG, "franka_reach", ["objective.name=ddpm"], 0)
     # Two more training seeds of FP and MPD for the spread of the held-out comparison (the select stage's seed rows;
@@ -373,7 +380,7 @@ class Bench:
         self.train([row for row in train_rows() if row.startswith("cross_")])
 
     def train_long(self):
-        self.train([row for row in train_rows() if row.startswith("long_")])
+        self.train(self.long_rows())
 
     def train_joint(self):
         self.train([row for row in train_rows() if row.startswith("joint_")])
@@ -621,6 +628,17 @@ class Bench:
             lock.close()
 
     # -- training budget ------------------------------------------------------
+    def long_rows(self):
+        """The long rows of this size: every one in the full run; in the quick one, one of each length."""
+        rows = [row for row in train_rows() if row.startswith("long_")]
+        return rows if self.size["long_rows"] is None else self.size["long_rows"]
+
+    def curve_steps(self, row):
+        """The steps of curve_steps at which long row ROW has a checkpoint (those up to its last step)."""
+        _, _, overrides, _ = train_rows()[row]
+        last = [int(o.split("=", 1)[1]) for o in [*overrides, *self.size["train"]] if o.startswith("train.steps=")][-1]
+        return [step for step in self.size["curve_steps"] if step <= last]
+
     def curve_commands(self, row, step):
         """[(prefix, command, request, outputs)] of the evaluations of ROW's checkpoint at STEP: stitching without
         and with splitting, then the sphere of each radius in CURVE_RADII."""
@@ -644,11 +662,11 @@ class Bench:
         return cells
 
     def curve(self):
-        for row in self.selected([r for r in train_rows() if r.startswith("long_")]):
+        for row in self.selected(self.long_rows()):
             if not os.path.exists(self.path("train", row, "done.json")):
                 print(f"curve: {row} not trained yet, skipped", flush=True)
                 continue
-            for step in self.size["curve_steps"]:
+            for step in self.curve_steps(row):
                 for out, command, request, outputs in self.curve_commands(row, step):
                     with stale(lambda: os.path.exists(out) and recorded(out + ".request", request), out + ".lock",
                                outputs + [out + ".request"]) as ours:
@@ -985,16 +1003,15 @@ def select_table(bench, summary):
 def curve_table(bench, summary):
     """The training-budget curve: each long row's stitching error, validation loss and success around the paper's
     sphere at each checkpoint of curve_steps, beside the table-1 rows whose schedule ends at 2,000 steps."""
-    steps = bench.size["curve_steps"]
     summary["curve"] = {}
     text = ["### Training budget (FP on franka_cross)\n",
-            f"One run per seed trained for {steps[-1]} steps with its cosine schedule, evaluated (EMA weights) at the "
+            "Each run trained for its steps with its cosine schedule, evaluated (EMA weights) at the "
             "checkpoints below: a checkpoint before the end is mid-schedule, not a run of that length. Stitching: "
             "mean ± std over the test-pair plans; sphere: the cross planner guided around the paper's sphere on the "
             f"stitching pair ({' '.join(CURVE_GUIDANCE)}), {bench.size['sweep_plans']} plans, TCP / whole arm.\n",
             "| run | step | validation loss | stitching | stitching, split | " +
             " | ".join(f"sphere {r:g} m" for r in CURVE_RADII) + " |", "|---|---|---|---|---|" + "---|" * len(CURVE_RADII)]
-    for row in [r for r in train_rows() if r.startswith("long_")]:
+    for row in bench.long_rows():
         if bench.trained_row(row) is None:
             text.append(f"| {row} | not run | | | |" + " |" * len(CURVE_RADII))
             continue
@@ -1003,7 +1020,7 @@ def curve_table(bench, summary):
             record = json.loads(line)
             if "val_loss" in record:
                 losses[record["step"]] = record["val_loss"]
-        for step in steps:
+        for step in bench.curve_steps(row):
             cells, point = [], {"val_loss": losses.get(step)}
             for out, _, request, _ in bench.curve_commands(row, step):
                 if not bench.current(lambda: request, out + ".request"):

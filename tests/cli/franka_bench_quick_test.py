@@ -106,7 +106,7 @@ for row in cross:
 # The training-budget curve: each long row at each checkpoint. Its last checkpoint is the row's own model, so the
 # curve's stitching error there is what `flowplan eval stitching` of the run folder gives (same plans and noise);
 # the first checkpoint's differs.
-assert sorted(summary["curve"]) == ["long_cross_fp_s0", "long_cross_fp_s1"], summary["curve"]
+assert sorted(summary["curve"]) == ["long_cross_fp_20k_s0", "long_cross_fp_s0"], summary["curve"]
 for row, points in summary["curve"].items():
     assert sorted(int(k) for k in points) == [10, 20], (row, points)
     for point in points.values():
@@ -246,6 +246,12 @@ import franka_bench  # noqa: E402
 
 maker = franka_bench.Bench(argparse.Namespace(root="some/root", quick=True, flowplan="bin/flowplan", rows=None,
                                               threads=None))
+# The full run's long rows are evaluated at the checkpoints they reach: 10,000 steps and 20,000.
+full = franka_bench.Bench(argparse.Namespace(root="some/root", quick=False, flowplan="bin/flowplan", rows=None,
+                                             threads=None))
+assert full.curve_steps("long_cross_fp_s2") == [2000, 5000, 10000], full.curve_steps("long_cross_fp_s2")
+assert full.curve_steps("long_cross_fp_20k_s1") == [2000, 5000, 10000, 20000]
+assert {"long_cross_fp_s2", "long_cross_fp_20k_s1"} <= set(full.long_rows()), full.long_rows()
 config = os.path.join(scratch, "request.yaml")
 requests = []
 for text in ("train:\n  steps: 20\n", "# sized for the test\ntrain: {steps: 20}  # steps\n", "train:\n  steps: 21\n"):
