@@ -20,8 +20,9 @@ where it stopped (a stopped training resumes from its newest checkpoint):
   examples    ROOT/results/example_*.png    a few plans of every planner, drawn
   train-cross ROOT/train/cross_*/done.json  `flowplan train` of every franka_cross row
   stitching   ROOT/stitching/<row>.json     `flowplan eval stitching` of every franka_cross row
-  train-long  ROOT/train/long_*/done.json   FP on franka_cross for 10,000 steps, one run per seed, and one run of
-                                            20,000; a checkpoint every 1,000 steps (the training-budget curve)
+  train-long  ROOT/train/long_*/done.json   FP on franka_cross for 10,000 steps (three seeds) and 20,000 (two),
+                                            and the four-level UNet for 10,000; a checkpoint every 1,000 steps
+                                            (the training-budget curve)
   curve       ROOT/curve/<row>_k<step>.*    each long run at the steps of the curve: stitching without and with
                                             splitting, and guided around the paper's sphere on the stitching pair
   select      ROOT/select/                  guidance chosen on validation problems (seed 101) and reported on
@@ -96,18 +97,25 @@ TABLE1 = [("FP", "cross_fp", [], SEEDS),
           ("Transformer w/o inpainting", "cross_transformer_direct",
            ["model.name=transformer", "objective.conditioning=direct"], [0]),
           ("MPD", "cross_mpd", ["objective.name=ddpm"], [0])]
-# The training-budget curve (stage curve): FP on franka_cross trained for the longest budget with its cosine
-# schedule, evaluated at the checkpoints of CURVE_STEPS; beside it, the 2,000-step rows of table 1, whose schedule
-# ends there.
-LONG_SEEDS = [0, 1, 2]
-# and one run of twice that length (its checkpoints of CURVE_STEPS up to 10,000 are mid-schedule too)
-LONGER_SEEDS = [0, 1]
-REACH_SEEDS = [0, 1, 2]  # training seeds of the reach FP and MPD in the select stage's seed rows
+# The training-budget curve (stage curve): FP on franka_cross trained for longer budgets with its cosine schedule,
+# evaluated at the checkpoints of curve_steps each run reaches; beside it, the 2,000-step rows of table 1, whose
+# schedule ends there.
 CURVE_EVERY = 1000
-LONG_TRAIN = ["train.steps=10000", f"train.checkpoint_every={CURVE_EVERY}", "train.keep_checkpoints=10",
-              f"train.eval_every={CURVE_EVERY}"]
-LONGER_TRAIN = ["train.steps=20000", f"train.checkpoint_every={CURVE_EVERY}", "train.keep_checkpoints=20",
-                f"train.eval_every={CURVE_EVERY}"]
+
+
+def long_train(steps):
+    """Overrides of a long run of STEPS steps: a checkpoint (kept) and an evaluation every CURVE_EVERY steps."""
+    return [f"train.steps={steps}", f"train.checkpoint_every={CURVE_EVERY}",
+            f"train.keep_checkpoints={steps // CURVE_EVERY}", f"train.eval_every={CURVE_EVERY}"]
+
+
+# The long runs: row name -> (overrides, training seeds); the row long_cross_fp<suffix>_s<seed>. Three seeds of
+# 10,000 steps, two of 20,000 (their checkpoints up to 10,000 are mid-schedule too), and the paper's four-level UNet
+# for 10,000 steps.
+LONG_RUNS = {"": (long_train(10000), [0, 1, 2]),
+             "_20k": (long_train(20000), [0, 1]),
+             "_unet4": (long_train(10000) + ["model.unet.down_dims=[32,64,128,256]"], [0])}
+REACH_SEEDS = [0, 1, 2]  # training seeds of the reach FP and MPD in the select stage's seed rows
 CURVE_RADII = [0.1, 0.15]
 # Guidance selection (stage select, scripts/guidance_select.py): validation and held-out test problems drawn with
 # two seeds; the planners it compares, each exported from its training row with these settings (the flow planner
@@ -182,10 +190,9 @@ def train_rows():
     for seed in SEEDS:  # seed by seed, so that a partial run has every scheme
         for name, config, _ in CROSS_SETS[1:]:
             rows[f"{name[len('franka_'):]}_fp_s{seed}"] = (config, name, [], seed)
-    for seed in LONG_SEEDS:  # the training-budget curve: one long run per seed, a checkpoint every CURVE_EVERY steps
-        rows[f"long_cross_fp_s{seed}"] = (CROSS_SETS[0][1], "franka_cross", LONG_TRAIN, seed)
-    for seed in LONGER_SEEDS:
-        rows[f"long_cross_fp_20k_s{seed}"] = (CROSS_SETS[0][1], "franka_cross", LONGER_TRAIN, seed)
+    for suffix, (overrides, seeds) in LONG_RUNS.items():  # the training-budget curve
+        for seed in seeds:
+            rows[f"long_cross_fp{suffix}_s{seed}"] = (CROSS_SETS[0][1], "franka_cross", overrides, seed)
     rows["reach_fp"] = (REACH_CONFIG, "franka_reach", [], 0)
     rows["reach_mpd"] = (REACH_CONFIG, "franka_reach", ["objective.name=ddpm"], 0)
     # Two more training seeds of FP and MPD for the spread of the held-out comparison (the select stage's seed rows;
@@ -1038,7 +1045,7 @@ def curve_table(bench, summary):
             summary["curve"].setdefault(row, {})[step] = point
             loss = "" if point["val_loss"] is None else f"{point['val_loss']:.4f}"
             text.append(f"| {row} | {step} | {loss} | " + " | ".join(cells) + " |")
-    for seed in LONG_SEEDS:
+    for seed in LONG_RUNS[""][1]:
         report = bench.stitching_report(f"cross_fp_s{seed}")
         if report is not None:
             text.append(f"| cross_fp_s{seed} (schedule ends at its steps) | {bench.trained_row(f'cross_fp_s{seed}')['steps']}"
