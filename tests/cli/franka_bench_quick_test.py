@@ -253,7 +253,7 @@ assert full.curve_steps("long_cross_fp_s2") == [2000, 5000, 10000], full.curve_s
 assert full.curve_steps("long_cross_fp_20k_s1") == [2000, 5000, 10000, 20000]
 assert full.curve_steps("long_cross_fp_unet4_s0") == [2000, 5000, 10000]
 assert {"long_cross_fp_s2", "long_cross_fp_20k_s1", "long_cross_fp_unet4_s0"} <= set(full.long_rows())
-assert "model.unet.down_dims=[32,64,128,256]" in full.train_command("long_cross_fp_unet4_s0")[0]
+assert "model.unet.down_dims=[32,64,128,256]" in franka_bench.train_rows()["long_cross_fp_unet4_s0"][2]
 config = os.path.join(scratch, "request.yaml")
 requests = []
 for text in ("train:\n  steps: 20\n", "# sized for the test\ntrain: {steps: 20}  # steps\n", "train:\n  steps: 21\n"):
