@@ -638,7 +638,10 @@ class Bench:
     def long_rows(self):
         """The long rows of this size: every one in the full run; in the quick one, one of each length."""
         rows = [row for row in train_rows() if row.startswith("long_")]
-        return rows if self.size["long_rows"] is None else self.size["long_rows"]
+        if self.size["long_rows"] is None:
+            return rows
+        assert set(self.size["long_rows"]) <= set(rows), self.size["long_rows"]
+        return self.size["long_rows"]
 
     def curve_steps(self, row):
         """The steps of curve_steps at which long row ROW has a checkpoint (those up to its last step)."""

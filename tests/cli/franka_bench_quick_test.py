@@ -252,8 +252,15 @@ full = franka_bench.Bench(argparse.Namespace(root="some/root", quick=False, flow
 assert full.curve_steps("long_cross_fp_s2") == [2000, 5000, 10000], full.curve_steps("long_cross_fp_s2")
 assert full.curve_steps("long_cross_fp_20k_s1") == [2000, 5000, 10000, 20000]
 assert full.curve_steps("long_cross_fp_unet4_s0") == [2000, 5000, 10000]
-assert {"long_cross_fp_s2", "long_cross_fp_20k_s1", "long_cross_fp_unet4_s0"} <= set(full.long_rows())
-assert "model.unet.down_dims=[32,64,128,256]" in franka_bench.train_rows()["long_cross_fp_unet4_s0"][2]
+assert full.long_rows() == ["long_cross_fp_s0", "long_cross_fp_s1", "long_cross_fp_s2", "long_cross_fp_20k_s0",
+                            "long_cross_fp_20k_s1", "long_cross_fp_unet4_s0"], full.long_rows()
+# The rows' overrides are part of their training requests: runs trained before must stay theirs.
+rows = franka_bench.train_rows()
+assert rows["long_cross_fp_s2"][2] == ["train.steps=10000", "train.checkpoint_every=1000", "train.keep_checkpoints=10",
+                                       "train.eval_every=1000"], rows["long_cross_fp_s2"]
+assert rows["long_cross_fp_20k_s1"][2] == ["train.steps=20000", "train.checkpoint_every=1000",
+                                           "train.keep_checkpoints=20", "train.eval_every=1000"], rows["long_cross_fp_20k_s1"]
+assert rows["long_cross_fp_unet4_s0"][2] == rows["long_cross_fp_s0"][2] + ["model.unet.down_dims=[32,64,128,256]"]
 config = os.path.join(scratch, "request.yaml")
 requests = []
 for text in ("train:\n  steps: 20\n", "# sized for the test\ntrain: {steps: 20}  # steps\n", "train:\n  steps: 21\n"):
