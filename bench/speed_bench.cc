@@ -227,9 +227,9 @@ int Main(int argc, char** argv) {
   {
     torch::jit::Module network = flow->module().attr("sampler").toModule().attr("network").toModule();
     const experiment::TrainedPlanner portable = experiment::LoadTrainedPlanner(
-        checkpoint, "", {"sampler.splitting=none", "sampler.final_iterations=0", "sampler.network_kernels=portable"});
+        checkpoint, "", {"sampler.splitting=none", "sampler.final_iterations=0", "sampler.network_kernels=portable", "guidance.distance_kernels=portable"});
     const experiment::TrainedPlanner portable_split = experiment::LoadTrainedPlanner(
-        checkpoint, "", {"sampler.splitting=midpoint", "sampler.final_iterations=0", "sampler.network_kernels=portable"});
+        checkpoint, "", {"sampler.splitting=midpoint", "sampler.final_iterations=0", "sampler.network_kernels=portable", "guidance.distance_kernels=portable"});
     torch::jit::Module portable_network =
         portable.planner->module().attr("sampler").toModule().attr("network").toModule();
     for (int64_t B : {1, 64}) {
@@ -247,6 +247,17 @@ int Main(int argc, char** argv) {
     }
     ms["plan_guided_split_b1_portable"] =
         MedianMs(repeats, [&] { portable_split.planner->PlanWithNoise(s, g, noise, renoise, sphere); });
+    ms["plan_guided_split_b1_8_portable"] =
+        MedianMs(repeats, [&] { portable_split.planner->PlanWithNoise(s, g, noise, renoise, eight); });
+    ms["plan_guided_split_b1_shelf_portable"] =
+        MedianMs(repeats, [&] { portable_split.planner->PlanWithNoise(s, g, noise, renoise, shelf); });
+    // The native network with the distances on LibTorch's operators: what the native distances alone save.
+    const experiment::TrainedPlanner script_distances = experiment::LoadTrainedPlanner(
+        checkpoint, "", {"sampler.splitting=midpoint", "sampler.final_iterations=0", "guidance.distance_kernels=portable"});
+    ms["plan_guided_split_b1_8_script_distances"] =
+        MedianMs(repeats, [&] { script_distances.planner->PlanWithNoise(s, g, noise, renoise, eight); });
+    ms["plan_guided_split_b1_shelf_script_distances"] =
+        MedianMs(repeats, [&] { script_distances.planner->PlanWithNoise(s, g, noise, renoise, shelf); });
   }
 
   // Throughput: B = 64 plans in one call, guided and split (the flow planner) or guided (MPD: the same network as
@@ -326,11 +337,18 @@ int Main(int argc, char** argv) {
     std::printf("%-26s %12s %12s %9.2f ms %8s\n", "  bf16 against eager fp32", "", "", reference["train_step_b256"],
                 (std::to_string(reference["train_step_b256"] / ms["train_step_b256_bf16"]).substr(0, 4) + "x").c_str());
   }
-  // The planners' native UNet kernel against the same planners on LibTorch's operators.
+  // The planners' native kernels (the UNet's, the obstacle distances') against the same planners on LibTorch's
+  // operators; then the native distances alone (the network native in both columns).
   std::printf("\n%-26s %12s %12s %9s\n", "", "native", "portable", "speed-up");
-  for (const std::string key : {"planner_forward_b1", "planner_forward_b64", "plan_b1", "plan_guided_split_b1"}) {
+  for (const std::string key : {"planner_forward_b1", "planner_forward_b64", "plan_b1", "plan_guided_split_b1",
+                                "plan_guided_split_b1_8", "plan_guided_split_b1_shelf"}) {
     std::printf("%-26s %9.2f ms %9.2f ms %8.2fx\n", key.c_str(), ms[key], ms[key + "_portable"],
                 ms[key + "_portable"] / ms[key]);
+  }
+  std::printf("\n%-26s %12s %12s %9s\n", "distances alone", "native", "script", "speed-up");
+  for (const std::string key : {"plan_guided_split_b1_8", "plan_guided_split_b1_shelf"}) {
+    std::printf("%-26s %9.2f ms %9.2f ms %8.2fx\n", key.c_str(), ms[key], ms[key + "_script_distances"],
+                ms[key + "_script_distances"] / ms[key]);
   }
   // Throughput in plans and training samples per second.
   std::printf("\nthroughput (\"_8\": eight spheres)     flowplan        eager\n");

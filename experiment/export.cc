@@ -24,9 +24,9 @@ Command AddExportCommand(CLI::App& app) {
   command->add_option("--out", args->out, "output file (default: RUN_DIR/planner.pt)");
   command
       ->add_option("--kernels", args->kernels,
-                   "the network's code in the file: portable (PyTorch alone loads it) or native (faster; needs "
-                   "libflowplan_kernels loaded first, docs/export.md). This option decides, whatever "
-                   "sampler.network_kernels a config says")
+                   "the code in the file of the network and of the collision cost's distances: portable (PyTorch "
+                   "alone loads it) or native (faster; needs libflowplan_kernels loaded first, docs/export.md). "
+                   "This option decides, whatever sampler.network_kernels and guidance.distance_kernels a config says")
       ->check(CLI::IsMember({"portable", "native"}));
   args->overlay.Add(command, false, "YAML applied over the checkpoint's config");
   return {command, [args] {
@@ -34,6 +34,7 @@ Command AddExportCommand(CLI::App& app) {
             std::vector<std::string> overrides = args->overlay.overrides;
             overrides.push_back("device=cpu");
             overrides.push_back("sampler.network_kernels=" + args->kernels);
+            overrides.push_back("guidance.distance_kernels=" + args->kernels);
             const TrainedPlanner loaded = LoadTrainedPlanner(args->ckpt, args->overlay.path, overrides);
             const std::string out =
                 args->out.empty() ? trainer::RunDir(RunFolderOf(loaded.checkpoint)).planner() : args->out;

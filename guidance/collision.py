@@ -4,7 +4,8 @@
 #   C = sum over states, collision spheres s and obstacles k of
 #       relu(margin + r_s - d_k(c_s)),
 # d_k the signed distance of the sphere centre c_s to obstacle k. Submodule
-# robot; attribute weight_key. Shapes: B trajectories, T states, J joints,
+# robot and distances (geometry/distances.py or native_distances.py); attribute
+# weight_key. Shapes: B trajectories, T states, J joints,
 # S spheres, K obstacles.
 
 
@@ -29,7 +30,7 @@ def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], op
     S = centres.size(1)
     W = centres.size(2)
     points = centres.reshape(M * S, W)
-    distance = scene_distance_only(points, scene)
+    distance = self.distances.distance_only(points, scene)
     K = distance.size(1)
     reach = opts["guidance.margin"] + self.robot.sphere_radii.to(q.dtype).view(1, S, 1)
     penetration = torch.relu(reach - distance.view(M, S, K))
@@ -40,7 +41,7 @@ def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], op
     near = active.any(1).nonzero().squeeze(1)
     grad_near = torch.zeros([0, W], dtype=q.dtype, device=q.device)
     if near.size(0) > 0:
-        near_distance, normal = scene_distance(points.index_select(0, near), scene)
+        near_distance, normal = self.distances.distance(points.index_select(0, near), scene)
         weights = active.index_select(0, near).to(q.dtype).unsqueeze(1)
         grad_near = -torch.bmm(weights, normal).squeeze(1)
     grad_q = self.robot.spheres_vjp(centres, axes, origins, near, grad_near).view(B, T, J)

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "jit/library.h"
+#include "kernels/shape_distance_kernel.h"
 
 namespace flowplan::guidance {
 namespace {
@@ -15,6 +16,7 @@ namespace {
 struct CostContext {
   const kinematics::Robot& robot;
   double dt;
+  torch::jit::Module distances;  // geometry/distances.py or native_distances.py
 };
 
 /// A built-in cost term: its class, its file, the setting that weighs it.
@@ -32,10 +34,24 @@ const std::vector<CostTerm> kCostTerms = {
     {"JointSpeedCost", "guidance/joint_speed.py", "guidance.joint_speed_weight"},
 };
 
-/// Every term gets the robot, dt and its weight key; a class uses what it needs.
+/// The distance passes of the collision cost, in the code `kernels` asks for.
+torch::jit::Module BuildDistances(models::Kernels kernels) {
+  if (kernels == models::Kernels::kPortable) {
+    return jit::ModuleBuilder("Distances").Methods("geometry/distances.py").Build();
+  }
+  c10::List<std::string> kinds;
+  for (const std::string& kind : kernels::NativeShapeKinds()) kinds.push_back(kind);
+  return jit::ModuleBuilder("NativeDistances")
+      .Attribute("native_kinds", kinds)
+      .Methods("geometry/native_distances.py")
+      .Build();
+}
+
+/// Every term gets the robot, the scene's distance passes, dt and its weight key; a class uses what it needs.
 jit::ModuleBuilder TermBuilder(const char* class_name, const char* weight_key, const CostContext& context) {
   jit::ModuleBuilder builder(class_name);
   builder.Submodule("robot", context.robot.module())
+      .Submodule("distances", context.distances)
       .Attribute("dt", context.dt)
       .Attribute("weight_key", std::string(weight_key));
   return builder;
@@ -59,7 +75,7 @@ std::string ReadUserCost(const std::string& path) {
 
 torch::jit::Module BuildGuide(const GuidanceConfig& config, const kinematics::Robot& robot,
                               const torch::jit::Module& normalizer, double dt) {
-  const CostContext context{robot, dt};
+  const CostContext context{robot, dt, BuildDistances(config.distance_kernels)};
   std::vector<torch::jit::Module> terms;
   for (const CostTerm& term : kCostTerms) {
     terms.push_back(TermBuilder(term.class_name, term.weight_key, context).Methods(term.path).Build());

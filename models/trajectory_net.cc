@@ -28,11 +28,11 @@ void CheckTrajectoryInputs(const torch::Tensor& x, const torch::Tensor& t, const
   }
 }
 
-torch::jit::Module ScriptNetwork(const TrajectoryNet& net, NetworkKernels kernels) {
+torch::jit::Module ScriptNetwork(const TrajectoryNet& net, Kernels kernels) {
   const std::string D = std::to_string(net.state_dim()), C = std::to_string(net.cond_dim());
   jit::ModuleBuilder builder("TrajectoryNetwork");
   jit::ScriptWriter writer(builder, "p_");
-  if (kernels == NetworkKernels::kNative) net.WriteNativeKernel(writer);
+  if (kernels == Kernels::kNative) net.WriteNativeKernel(writer);
   const std::string out = net.WriteScript(writer);  // the variable holding the output
   std::string source = R"PY(
 def forward(self, x: Tensor, t: Tensor, cond: Optional[Tensor]) -> Tensor:

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "jit/script_writer.h"
-#include "models/network_kernels.h"
+#include "models/kernels.h"
 #include "models/network.h"
 
 namespace flowplan::models {
@@ -50,7 +50,7 @@ using TrajectoryNetPtr = std::shared_ptr<TrajectoryNet>;
 /// The network as a TorchScript module with one method,
 ///   forward(x (B, T, D), t (B,), cond: Optional[Tensor] (B, C)) -> (B, T, D),
 /// its parameters copied into buffers (what planners and exported files run).
-torch::jit::Module ScriptNetwork(const TrajectoryNet& net, NetworkKernels kernels);
+torch::jit::Module ScriptNetwork(const TrajectoryNet& net, Kernels kernels);
 
 /// Checks x (B, T, D), t (B,) and cond (B, C) against a network's dimensions.
 /// @throws flowplan::Error "expected (B, T, 4), got (…)" style messages.

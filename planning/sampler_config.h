@@ -1,7 +1,7 @@
 #pragma once
 
 #include "core/config.h"
-#include "models/network_kernels.h"
+#include "models/kernels.h"
 
 namespace flowplan::planning {
 
@@ -110,7 +110,7 @@ struct SamplerConfig {
   int midpoint_iterations = 0;      // splitting: gradient steps on the first stage's plan before re-noising
   // The network's code in the planner: native kernels where the network has them (in-process default), or
   // LibTorch's operators only (what `flowplan export` writes unless told --kernels native).
-  models::NetworkKernels network_kernels = models::NetworkKernels::kNative;
+  models::Kernels network_kernels = models::Kernels::kNative;
   DdpmSamplerConfig ddpm;
   LatentPlannerConfig latent;
 

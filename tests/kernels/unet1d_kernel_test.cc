@@ -54,8 +54,8 @@ TEST_P(NativeMatchesLibTorch, ScriptedNetworksAgree) {
   const Case c = GetParam();
   torch::manual_seed(7);
   const auto net = Perturbed(c);
-  torch::jit::Module native = models::ScriptNetwork(*net, models::NetworkKernels::kNative);
-  torch::jit::Module portable = models::ScriptNetwork(*net, models::NetworkKernels::kPortable);
+  torch::jit::Module native = models::ScriptNetwork(*net, models::Kernels::kNative);
+  torch::jit::Module portable = models::ScriptNetwork(*net, models::Kernels::kPortable);
   const torch::Tensor x = torch::randn({c.B, c.T, c.D}), t = torch::rand({c.B});
   const torch::Tensor cond = c.C > 0 ? torch::randn({c.B, c.C}) : torch::Tensor();
   torch::NoGradGuard no_grad;
@@ -96,7 +96,7 @@ TEST(UNet1DKernelTest, SameBitsForAnyThreadCount) {
   torch::manual_seed(3);
   const Case c{{32, 64, 128}, 14, 0, 64, 5};
   const auto net = Perturbed(c);
-  torch::jit::Module native = models::ScriptNetwork(*net, models::NetworkKernels::kNative);
+  torch::jit::Module native = models::ScriptNetwork(*net, models::Kernels::kNative);
   const torch::Tensor x = torch::randn({5, 64, 14}), t = torch::rand({5});
   torch::NoGradGuard no_grad;
   const int threads = at::get_num_threads();
@@ -114,8 +114,8 @@ TEST(UNet1DKernelTest, AnInputThatNeedsAGradientTakesLibTorchsOperators) {
   torch::manual_seed(4);
   const Case c{{16, 32}, 4, 6, 16, 2};
   const auto net = Perturbed(c);
-  torch::jit::Module native = models::ScriptNetwork(*net, models::NetworkKernels::kNative);
-  torch::jit::Module portable = models::ScriptNetwork(*net, models::NetworkKernels::kPortable);
+  torch::jit::Module native = models::ScriptNetwork(*net, models::Kernels::kNative);
+  torch::jit::Module portable = models::ScriptNetwork(*net, models::Kernels::kPortable);
   const torch::Tensor x0 = torch::randn({2, 16, 4}), t0 = torch::rand({2}), cond0 = torch::randn({2, 6});
   // The gradient with respect to each input in turn (x, t, cond), the others plain.
   for (int which = 0; which < 3; ++which) {

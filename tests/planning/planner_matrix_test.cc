@@ -187,10 +187,11 @@ TEST_P(PlannerMatrixTest, InProcessCppAndPythonPlanAlike) {
                                             << "    return torch.relu(" << (franka ? 0.4 : 0.1) << " - height).sum(1)\n";
   }
   parts.config_yaml = "{}\n";
-  // Half the cases (by the parity of their values) plan with the UNet's native kernel, half with LibTorch's
-  // operators only; Python loads libflowplan_kernels for the first half.
+  // Half the cases (by the parity of their values) plan with the native kernels (the UNet's and the obstacle
+  // distances'), half with LibTorch's operators only; Python loads libflowplan_kernels for the first half.
   const bool native = std::accumulate(c.begin(), c.end(), 0) % 2 == 0;
-  parts.sampler.network_kernels = native ? models::NetworkKernels::kNative : models::NetworkKernels::kPortable;
+  parts.sampler.network_kernels = native ? models::Kernels::kNative : models::Kernels::kPortable;
+  parts.guidance.distance_kernels = parts.sampler.network_kernels;
   const auto planner = AssemblePlanner(parts);
 
   // The network's TorchScript against the C++ network (the one computation written twice), at batches that
