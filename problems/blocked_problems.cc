@@ -23,6 +23,8 @@ double Distance(const Point& a, const Point& b) {
 void CheckConfig(const BlockedProblemsConfig& c) {
   if (c.min_spheres > c.max_spheres) throw Error("min_spheres: larger than max_spheres");
   if (c.min_radius > c.max_radius) throw Error("min_radius: larger than max_radius");
+  if (c.min_boxes > c.max_boxes) throw Error("min_boxes: larger than max_boxes");
+  if (c.min_box_side > c.max_box_side) throw Error("min_box_side: larger than max_box_side");
   if (c.lower.size() != 3 || c.upper.size() != 3) throw Error("lower, upper: expected 3 values each");
   for (int i = 0; i < 3; ++i) {
     if (!(c.lower[i] < c.upper[i])) throw Error("lower[" + std::to_string(i) + "]: not below upper");
@@ -30,14 +32,42 @@ void CheckConfig(const BlockedProblemsConfig& c) {
 }
 
 /// Whether both TCP points and every collision sphere of both postures q (2, J)
-/// keep `clearance` from `sphere`.
+/// keep `clearance` from every obstacle of `scene`.
 bool Clear(const kinematics::Robot& robot, const torch::Tensor& q, const torch::Tensor& tcp,
-           const geometry::SphereObstacle& sphere, double clearance) {
-  geometry::Scene scene;
-  scene.spheres.push_back(sphere);
+           const geometry::Scene& scene, double clearance) {
   const geometry::SceneRows rows = geometry::Rows(scene, 3, "blocked problems");
   return kinematics::Robot::PointClearance(tcp, rows).min().item<double>() >= clearance &&
          robot.Clearance(q, rows).min().item<double>() >= clearance;
+}
+
+template <class Obstacle>
+geometry::Scene SceneOf(const Obstacle& obstacle);
+template <>
+geometry::Scene SceneOf(const geometry::SphereObstacle& sphere) {
+  geometry::Scene scene;
+  scene.spheres.push_back(sphere);
+  return scene;
+}
+template <>
+geometry::Scene SceneOf(const geometry::BoxObstacle& box) {
+  geometry::Scene scene;
+  scene.boxes.push_back(box);
+  return scene;
+}
+
+/// A point of the straight TCP segment, moved by up to `reach` along each axis.
+std::vector<double> NearSegment(Rng& rng, const Point& start, const Point& goal, double reach) {
+  const double v = rng.Uniform(0.0, 1.0);
+  std::vector<double> out;
+  for (int k = 0; k < 3; ++k) out.push_back(start[k] + v * (goal[k] - start[k]) + rng.Uniform(-1.0, 1.0) * reach);
+  return out;
+}
+
+/// A uniformly random rotation (w, x, y, z) (Shoemake's method).
+std::vector<double> RandomQuaternion(Rng& rng) {
+  const double u1 = rng.Uniform(0.0, 1.0), u2 = rng.Uniform(0.0, 2.0 * M_PI), u3 = rng.Uniform(0.0, 2.0 * M_PI);
+  const double a = std::sqrt(1.0 - u1), b = std::sqrt(u1);
+  return {b * std::cos(u3), a * std::sin(u2), a * std::cos(u2), b * std::sin(u3)};
 }
 
 }  // namespace
@@ -75,20 +105,31 @@ ProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProble
         blocker.centre.push_back(problem.start_tcp[k] + u * (problem.goal_tcp[k] - problem.start_tcp[k]));
       }
       blocker.radius = rng.Uniform(config.min_radius, config.max_radius);
-      if (!Clear(arm, ik.q, both, blocker, config.clearance)) continue;
+      if (!Clear(arm, ik.q, both, SceneOf(blocker), config.clearance)) continue;
       problem.scene.spheres.push_back(blocker);
       // The others near the path: a point of the segment, moved by up to two largest radii.
       for (int s = 1; s < spheres; ++s) {
         for (int tries = 0; tries < 100; ++tries) {
           geometry::SphereObstacle other;
-          const double v = rng.Uniform(0.0, 1.0);
-          for (int k = 0; k < 3; ++k) {
-            other.centre.push_back(problem.start_tcp[k] + v * (problem.goal_tcp[k] - problem.start_tcp[k]) +
-                                   rng.Uniform(-2.0, 2.0) * config.max_radius);
-          }
+          other.centre = NearSegment(rng, problem.start_tcp, problem.goal_tcp, 2.0 * config.max_radius);
           other.radius = rng.Uniform(config.min_radius, config.max_radius);
-          if (Clear(arm, ik.q, both, other, config.clearance)) {
+          if (Clear(arm, ik.q, both, SceneOf(other), config.clearance)) {
             problem.scene.spheres.push_back(other);
+            break;
+          }
+        }
+      }
+      // Boxes near the path as well, after the spheres (a set without boxes draws nothing more).
+      const int boxes = config.max_boxes == 0 ? 0 : config.min_boxes + static_cast<int>(rng.Below(
+                                                        static_cast<uint64_t>(config.max_boxes - config.min_boxes + 1)));
+      for (int b = 0; b < boxes; ++b) {
+        for (int tries = 0; tries < 100; ++tries) {
+          geometry::BoxObstacle box;
+          box.centre = NearSegment(rng, problem.start_tcp, problem.goal_tcp, config.max_box_side);
+          for (int k = 0; k < 3; ++k) box.size.push_back(rng.Uniform(config.min_box_side, config.max_box_side));
+          box.quaternion = RandomQuaternion(rng);
+          if (Clear(arm, ik.q, both, SceneOf(box), config.clearance)) {
+            problem.scene.boxes.push_back(box);
             break;
           }
         }

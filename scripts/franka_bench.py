@@ -26,7 +26,7 @@ where it stopped (a stopped training resumes from its newest checkpoint):
   curve       ROOT/curve/<row>_k<step>.*    each long run at the steps of the curve: stitching without and with
                                             splitting, and guided around the paper's sphere on the stitching pair
   select      ROOT/select/                  guidance chosen on validation problems (seed 101) and reported on
-                                            held-out test problems (seed 202): scripts/guidance_select.py on FP,
+                                            held-out test problems (seed 202; spheres and boxes): guidance_select.py on FP,
                                             FP + split, MPD and the paper's MPD, exported from the reach rows;
                                             the test rows of FP, FP + split and MPD again with seeds 1 and 2
   train-joint ROOT/train/joint_*/done.json  `flowplan train` of FP, MPD and the VAE on franka_joint (configs/
@@ -122,6 +122,8 @@ CURVE_RADII = [0.1, 0.15]
 # with the paper's sampler, no end-game and the end-game's spread and hinge off, so that the grids' base setting is
 # that and a grid row that adds end-game steps without a spread adds plain ones, whatever the preset's defaults).
 SELECT_SEEDS = {"val": 101, "test": 202}
+# Both sets: 1-8 spheres (the first on the straight TCP path) and 1-3 boxes at random orientations near that path.
+SELECT_PROBLEMS = ["problems.min_boxes=1", "problems.max_boxes=3"]
 PAPER_SAMPLER = ["sampler.final_iterations=0", "sampler.final_spread=0", "sampler.final_joint_speed_weight=0"]
 SELECT_PLANNERS = [("fp", "reach_fp", ["sampler.splitting=none", *PAPER_SAMPLER]),
                    ("fp_split", "reach_fp", ["sampler.splitting=midpoint", *PAPER_SAMPLER]),
@@ -589,7 +591,7 @@ class Bench:
         commands, inputs = [], []
         for name, seed in SELECT_SEEDS.items():
             commands.append([self.flowplan, "problems", "--out", self.path("select", f"{name}.yaml"), f"seed={seed}",
-                             f"problems.count={self.size['select_problems']}"])
+                             f"problems.count={self.size['select_problems']}", *SELECT_PROBLEMS])
         selection = [self.python, "scripts/guidance_select.py"]
         for name, row, overrides in SELECT_PLANNERS:
             out = self.path("select", f"{name}.pt")

@@ -121,15 +121,25 @@ MAX_SPEED_RATIO = 1.5
 
 
 def load_problems(path):
+    """The problems of a `flowplan problems` file: start and goal states, the goal's TCP, and the scene's spheres
+    and boxes as the planner's keyword arguments."""
     problems = yaml.safe_load(open(path))["problems"]
     out = []
     for p in problems:
-        spheres = [list(s["centre"]) + [s["radius"]] for s in p["scene"]["spheres"]]
+        scene = p["scene"]
+        spheres = [list(s["centre"]) + [s["radius"]] for s in scene.get("spheres", [])]
+        # Boxes (K, 10): centre, full side lengths, quaternion (w, x, y, z) (docs/export.md, "Obstacles").
+        boxes = [list(b["centre"]) + list(b["size"]) + list(b.get("quaternion", [1.0, 0.0, 0.0, 0.0]))
+                 for b in scene.get("boxes", [])]
+        unknown = sorted(kind for kind, rows in scene.items() if rows and kind not in ("spheres", "boxes"))
+        if unknown:
+            sys.exit(f"{path}: problem {p['name']}: scene: {unknown[0]}: only spheres and boxes are read here")
         # States are [q, q̇]: at rest at both ends (as `flowplan plan --start/--goal` makes them).
         out.append({"start": torch.tensor(p["start_q"] + [0.0] * len(p["start_q"]), dtype=torch.float32),
                     "goal": torch.tensor(p["goal_q"] + [0.0] * len(p["goal_q"]), dtype=torch.float32),
                     "goal_tcp": torch.tensor(p["goal_tcp"], dtype=torch.float32),
-                    "spheres": torch.tensor(spheres, dtype=torch.float32).view(-1, 4)})
+                    "scene": {"spheres": torch.tensor(spheres, dtype=torch.float32).view(-1, 4),
+                              "boxes": torch.tensor(boxes, dtype=torch.float32).view(-1, 10)}})
     return out
 
 
@@ -137,7 +147,7 @@ def criteria(planner, plans, problem, limits):
     """(clear, at goal, within speed), each (plans,) bool, of raw plans (P, T, D)."""
     J = planner.num_joints
     q = plans[:, :, :J]
-    clear = planner.clearance(q, spheres=problem["spheres"]).flatten(1).min(1).values > 0.0
+    clear = planner.clearance(q, **problem["scene"]).flatten(1).min(1).values > 0.0
     goal = (planner.tcp(q[:, -1]) - problem["goal_tcp"]).norm(dim=-1) <= GOAL_TOLERANCE
     speed = ((q[:, 1:] - q[:, :-1]).abs() / planner.dt / limits).flatten(1).max(1).values <= MAX_SPEED_RATIO
     return clear, goal, speed
@@ -162,7 +172,7 @@ def run(planner, grid_entry, problems, plans, seed, limits, warmup=3):
         goal = problem["goal"].expand(plans, -1)
         with torch.inference_mode(), torch.jit.optimized_execution(False):
             begin = time.perf_counter()
-            out = planner.plan(start, goal, noise, renoise, spheres=problem["spheres"], settings=settings,
+            out = planner.plan(start, goal, noise, renoise, **problem["scene"], settings=settings,
                                schedule=schedule, guide_at=guide_at)
             seconds += time.perf_counter() - begin
             clear, at_goal, slow = criteria(planner, out, problem, limits)

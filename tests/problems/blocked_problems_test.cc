@@ -98,12 +98,78 @@ TEST(BlockedProblemsTest, ProblemIDependsOnlyOnTheSeedAndI) {
   EXPECT_THAT(back.source, ::testing::HasSubstr("min_spheres: 1"));
 }
 
+/// Signed distance from point c to a box (centre, full sizes, quaternion w, x, y, z), by plain geometry.
+double DistanceToBox(const geometry::BoxObstacle& box, const std::vector<double>& c) {
+  const double w = box.quaternion[0], x = box.quaternion[1], y = box.quaternion[2], z = box.quaternion[3];
+  const double n = std::sqrt(w * w + x * x + y * y + z * z);
+  const double a = w / n, b = x / n, cc = y / n, d = z / n;
+  const double R[3][3] = {{1 - 2 * (cc * cc + d * d), 2 * (b * cc - a * d), 2 * (b * d + a * cc)},
+                          {2 * (b * cc + a * d), 1 - 2 * (b * b + d * d), 2 * (cc * d - a * b)},
+                          {2 * (b * d - a * cc), 2 * (cc * d + a * b), 1 - 2 * (b * b + cc * cc)}};
+  double outside = 0.0, inside = -1e9;
+  for (int j = 0; j < 3; ++j) {
+    double local = 0.0;
+    for (int i = 0; i < 3; ++i) local += R[i][j] * (c[i] - box.centre[i]);
+    const double gap = std::abs(local) - 0.5 * box.size[j];
+    outside += std::max(gap, 0.0) * std::max(gap, 0.0);
+    inside = std::max(inside, gap);
+  }
+  return std::sqrt(outside) + std::min(inside, 0.0);
+}
+
+TEST(BlockedProblemsTest, BoxesNearThePathKeepClearOfStartAndGoalAndLeaveTheRestAsItWas) {
+  BlockedProblemsConfig config;
+  config.count = 6;
+  const ProblemSet spheres_only = MakeBlockedProblems(Franka(), config, 4);
+  config.min_boxes = 1;
+  config.max_boxes = 3;
+  const ProblemSet with_boxes = MakeBlockedProblems(Franka(), config, 4);
+  ASSERT_EQ(with_boxes.problems.size(), 6u);
+  size_t boxes = 0;
+  for (size_t i = 0; i < 6; ++i) {
+    const Problem& p = with_boxes.problems[i];
+    const Problem& before = spheres_only.problems[i];
+    // The boxes are drawn last: ends and spheres are those of the set without boxes.
+    EXPECT_EQ(p.start_q, before.start_q);
+    EXPECT_EQ(config::ToYaml(p.scene.spheres), config::ToYaml(before.scene.spheres));
+    EXPECT_TRUE(before.scene.boxes.empty());
+    EXPECT_LE(p.scene.boxes.size(), 3u);
+    boxes += p.scene.boxes.size();
+    const torch::Tensor both = torch::cat({torch::tensor(p.start_q, torch::kFloat64).view({1, 7}),
+                                           torch::tensor(p.goal_q, torch::kFloat64).view({1, 7})});
+    const torch::Tensor centres = Franka().SphereCentres(both), radii = Franka().SphereRadii();
+    for (const geometry::BoxObstacle& box : p.scene.boxes) {
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_GE(box.size[k], config.min_box_side);
+        EXPECT_LE(box.size[k], config.max_box_side);
+      }
+      EXPECT_GE(DistanceToBox(box, p.start_tcp), config.clearance - 1e-9);
+      EXPECT_GE(DistanceToBox(box, p.goal_tcp), config.clearance - 1e-9);
+      for (int64_t m = 0; m < 2; ++m) {
+        for (int64_t s = 0; s < centres.size(1); ++s) {
+          const torch::Tensor c = centres[m][s];
+          const double gap = DistanceToBox(box, {c[0].item<double>(), c[1].item<double>(), c[2].item<double>()}) -
+                             radii[s].item<double>();
+          EXPECT_GE(gap, config.clearance - 1e-9) << p.name << " sphere " << s;
+        }
+      }
+    }
+    EXPECT_GE(std::min(p.start_clearance, p.goal_clearance), config.clearance - 1e-9);
+  }
+  EXPECT_GE(boxes, 6u);  // one to three per problem, unless a box found no free place in 100 tries
+}
+
 TEST(BlockedProblemsTest, InconsistentSettingsAreNamed) {
   BlockedProblemsConfig config;
   config.min_spheres = 3;
   config.max_spheres = 2;
   EXPECT_THAT([&] { MakeBlockedProblems(Franka(), config, 0); },
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("min_spheres")));
+  config = BlockedProblemsConfig{};
+  config.min_boxes = 2;
+  config.max_boxes = 1;
+  EXPECT_THAT([&] { MakeBlockedProblems(Franka(), config, 0); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("min_boxes")));
   config = BlockedProblemsConfig{};
   config.lower = {0.35, -0.5};
   EXPECT_THAT([&] { MakeBlockedProblems(Franka(), config, 0); },
