@@ -56,10 +56,14 @@ Command AddProblemsCommand(CLI::App& app) {
             }
             EnsureParentFolder(args->out);
             WriteFileAtomically(args->out, problems::ProblemSetYaml(set));
-            size_t spheres = 0;
-            for (const auto& problem : set.problems) spheres += problem.scene.spheres.size();
-            spdlog::info("wrote {}: {} problems, {} spheres, each blocking the straight TCP path with its first",
-                         args->out, set.problems.size(), spheres);
+            size_t spheres = 0, boxes = 0;
+            for (const auto& problem : set.problems) {
+              spheres += problem.scene.spheres.size();
+              boxes += problem.scene.boxes.size();
+            }
+            spdlog::info("wrote {}: {} problems, {} spheres and {} boxes, each blocking the straight TCP path with its "
+                         "first sphere",
+                         args->out, set.problems.size(), spheres, boxes);
           }};
 }
 

@@ -26,7 +26,8 @@ stage does; an fp or fp_split file with other defaults is refused. VAL and TEST 
      the FP setting of highest success whose time per plan is at most that
      planner's (FP "at equal time"), and FP's best setting at any time;
   3. test: the chosen settings and every other planner's default on the test
-     problems, with other noise;
+     problems, with other noise, and each planner's budgets (BUDGETS: its
+     success-versus-time curve, cheapest first; reported, never chosen from);
   4. other training seeds (`--replicate NAME=FILE`, e.g. the same preset
      trained with seed=1 and exported as NAME's file was): every test row of
      planner NAME planned again with that file, with the same problems and
@@ -114,8 +115,22 @@ OTHER_GRID = [
     ("default", {}, None, None),
     ("best of 4", {"guidance.candidates": 4.0}, None, None),
 ]
-MPD_GRID = OTHER_GRID + [("halved noise", {"sampler.ddpm.noise_scale": 0.5}, None, None)]
+MPD_GRID = OTHER_GRID + [("halved noise", {"sampler.ddpm.noise_scale": 0.5}, None, None),
+                         # Fewer gradient steps than the default's 60 (5 in each of the last 7 denoising steps and
+                         # of 5 noise-free steps after them): 10, one per guided step and 3 noise-free steps.
+                         ("10 gradient steps", {"sampler.ddpm.guide_iterations": 1.0, "sampler.ddpm.extra_steps": 3.0},
+                          None, None),
+                         ("best of 2", {"guidance.candidates": 2.0}, None, None)]
 GRIDS = {"fp": FP_GRID, "fp_split": FP_SPLIT_GRID, "mpd": MPD_GRID}
+# Each planner's budgets, cheapest first: the settings of its success-versus-time curve on the test problems (role
+# "budget"; reported, never chosen from). Labels of its grid.
+BUDGETS = {"fp": ["base: x_t, rising, s 1.75"] + [f"base + end-game G {g}, spread 4, end joint speed 0.1"
+                                                   for g in (5, 10, 20)],
+           "fp_split": ["split base"] + [f"split + end-game G {g}, spread 4, end joint speed 0.1" for g in (5, 10)],
+           "mpd": ["10 gradient steps", "default", "best of 2", "best of 4"],
+           "paper_mpd": ["default", "best of 4"]}
+for _name, _labels in BUDGETS.items():
+    assert set(_labels) <= {e[0] for e in GRIDS.get(_name, OTHER_GRID)}, f"BUDGETS[{_name!r}]: not a grid label"
 GOAL_TOLERANCE = 0.03
 MAX_SPEED_RATIO = 1.5
 
@@ -319,6 +334,9 @@ def main():
         runs.setdefault((fp_names[0], GRIDS[fp_names[0]][0][0]), "fp_default")
         for name, label in test_also:  # reported on test, never chosen from it
             runs.setdefault((name, label), "also")
+        for name in planners:  # each planner's curve over its budgets, on test; never chosen from
+            for label in BUDGETS.get(name, []):
+                runs.setdefault((name, label), "budget")
         # Each run's grid entry and its index in the grid (rows are kept by it).
         entries = [(name, label, key) + next((k, e) for k, e in enumerate(GRIDS.get(name, OTHER_GRID)) if e[0] == label)
                    for (name, label), key in runs.items()]
@@ -332,6 +350,8 @@ def main():
         # Stage 4: the same rows with the other models of a planner (model 2, 3, ...; model 1 is the row above).
         out["replicate_rows"] = []
         for name, label, key, k, entry in entries:
+            if key == "budget":
+                continue  # the curves are of model 1 only
             for m, (planner, source) in enumerate(replicates.get(name, []), start=2):
                 row = dict(cached(os.path.join(args.out, "rows", f"test_{name}_model{m}_{k}.json"), entry,
                                   lambda: run(planner, entry, test, args.plans, 2, limits[name], args.warmup), source))
@@ -399,6 +419,15 @@ def write_report(out, validation, test_result):
         lo, hi = wilson(r["arm_clear"], n)
         lines.append(f"| {r['role']} | {r['planner']} | {r['label']} | {r['arm_clear']:.1%} | {lo:.1%}–{hi:.1%} | "
                      f"{r['problems_solved']:.0%} | {1e3 * r['seconds_per_plan']:.1f} | {failing(r)} |")
+    curves = [(name, label) for name, labels in BUDGETS.items() for label in labels]
+    by_key = {(r["planner"], r["label"]): r for r in test_result["rows"]}
+    if any(key in by_key for key in curves):
+        lines += ["", "Test, each planner's budgets (its success-versus-time curve; cheapest first):", "",
+                  "| planner | budget | success (whole arm) | time per plan (ms) |", "|---|---|---|---|"]
+        for key in curves:
+            if key in by_key:
+                r = by_key[key]
+                lines.append(f"| {key[0]} | {key[1]} | {r['arm_clear']:.1%} | {1e3 * r['seconds_per_plan']:.1f} |")
     lines += over_models(test_result)
     with open(os.path.join(out, "selection.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
@@ -423,13 +452,20 @@ def write_report(out, validation, test_result):
         axes[1].scatter([1e3 * r["seconds_per_plan"]], [100 * r["arm_clear"]], color=colours[r["planner"]], s=24)
         axes[1].annotate(str(k + 1), (1e3 * r["seconds_per_plan"], 100 * r["arm_clear"]), fontsize=8,
                          xytext=(3, 3), textcoords="offset points")
+    for name in validation["planners"]:  # each planner's budgets, cheapest first, as a line
+        by_label = {r["label"]: r for r in test_result["rows"] if r["planner"] == name}
+        curve = [by_label[label] for label in BUDGETS.get(name, []) if label in by_label]
+        if len(curve) > 1:
+            axes[1].plot([1e3 * r["seconds_per_plan"] for r in curve], [100 * r["arm_clear"] for r in curve],
+                         color=colours[name], linewidth=1, label=f"{name}: its budgets")
     for r in test_result.get("replicate_rows", []):  # other training seeds: crosses
         axes[1].scatter([1e3 * r["seconds_per_plan"]], [100 * r["arm_clear"]], color=colours[r["planner"]], s=24,
                         marker="x")
     axes[1].text(0.02, 0.02, "\n".join(f"{k + 1}: {r['planner']}: {r['label']}" for k, r in enumerate(test_result["rows"])),
                  transform=axes[1].transAxes, fontsize=7, va="bottom")
     axes[0].set_title("validation: every setting; line: best within a time", fontsize=10)
-    axes[1].set_title("held-out test: chosen settings, defaults", fontsize=10)
+    axes[1].set_title("held-out test: chosen settings, defaults; lines: each planner's budgets", fontsize=10)
+    axes[1].legend(fontsize=7, loc="lower right")
     for ax in axes:
         ax.set_xscale("log")
         ax.set_xlabel("time per plan (ms, log; 1 thread)")
