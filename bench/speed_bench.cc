@@ -305,6 +305,14 @@ int Main(int argc, char** argv) {
     torch::NoGradGuard no_grad;
     ms["plan_guided_split_b1_exported"] =
         MedianMs(repeats, [&] { module.run_method("plan", s, g, noise, renoise, obstacles); });
+    // The eight spheres and the shelf scene's shapes as the file's keyword arguments (docs/export.md, "Obstacles").
+    torch::jit::Method plan = module.get_method("plan");
+    for (const auto& [suffix, rows] : {std::pair<std::string, geometry::SceneRows>{"_8", eight}, {"_shelf", shelf}}) {
+      torch::jit::Kwargs kwargs;
+      for (const auto& entry : rows) kwargs[entry.key()] = entry.value();
+      ms["plan_guided_split_b1" + suffix + "_exported"] =
+          MedianMs(repeats, [&] { plan({s, g, noise, renoise}, kwargs); });
+    }
   }
 
   std::map<std::string, double> reference;

@@ -190,8 +190,16 @@ for row in ("reach_fp", "reach_mpd"):
         assert yaml.safe_load(open(os.path.join(root, "train", f"{row}_s{seed}", "config.yaml")))["seed"] == seed
 tested = {r["planner"] for r in summary["select"]["test"]}
 assert {"fp", "mpd"} <= tested, tested  # FP + split has test rows only where chosen
+# Each planner's budgets (its success-versus-time curve) are planned on test, with the first model only.
+test_rows = {(r["planner"], r["label"]) for r in summary["select"]["test"]}
+for name, labels in {"fp": ["base: x_t, rising, s 1.75", "base + end-game G 20, spread 4, end joint speed 0.1"],
+                     "mpd": ["10 gradient steps", "default", "best of 2", "best of 4"],
+                     "paper_mpd": ["default", "best of 4"]}.items():
+    assert all((name, label) in test_rows for label in labels), (name, sorted(test_rows))
+assert "Test, each planner's budgets" in open(os.path.join(root, "select", "selection.md")).read()
+assert not any(x["role"] == "budget" for x in summary["select"]["test_other_seeds"])
 for name in {"fp", "fp_split", "mpd"} & tested:
-    for r in [r for r in summary["select"]["test"] if r["planner"] == name]:
+    for r in [r for r in summary["select"]["test"] if r["planner"] == name and r["role"] != "budget"]:
         models = sorted((x for x in summary["select"]["test_other_seeds"]
                          if (x["planner"], x["role"], x["label"]) == (name, r["role"], r["label"])),
                         key=lambda x: x["model"])
