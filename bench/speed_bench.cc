@@ -222,8 +222,8 @@ int Main(int argc, char** argv) {
   ms["plan_guided_split_b1_shelf"] =
       MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, shelf); });
   // The planner's network as the planners call it (the TorchScript module, with flowplan's native UNet kernel),
-  // and the same planners with LibTorch's operators only (sampler.network_kernels=portable, what an export
-  // without --kernels native holds), side by side.
+  // and the same planners with LibTorch's operators only (sampler.network_kernels=portable and
+  // guidance.distance_kernels=portable, what an export without --kernels native holds), side by side.
   {
     torch::jit::Module network = flow->module().attr("sampler").toModule().attr("network").toModule();
     const experiment::TrainedPlanner portable = experiment::LoadTrainedPlanner(

@@ -3,13 +3,18 @@
 # one call of the native operator flowplan::shape_distance
 # (kernels/shape_distance_kernel.h) instead of some twenty LibTorch operators.
 # The kinds the operator knows are the attribute native_kinds; any other kind,
-# and points that need autograd, go to the kind's script (geometry/scene.py).
+# and tensors the CPU operator does not take (on a GPU, of another dtype, or
+# needing autograd), go to the kind's script (geometry/scene.py).
 # A planner saved with it loads where libflowplan_kernels is loaded
 # (docs/export.md).
 
 
-def native(self, kind: str, points: Tensor) -> bool:
-    return kind in self.native_kinds and not points.requires_grad
+def native(self, kind: str, points: Tensor, params: Tensor) -> bool:
+    """Whether the operator takes this kind and these tensors: a known kind,
+    float32 or float64 points on the CPU, nothing that needs autograd."""
+    return (kind in self.native_kinds and points.get_device() < 0
+            and points.is_floating_point() and points.element_size() >= 4
+            and not points.requires_grad and not params.requires_grad)
 
 
 def distance(self, points: Tensor, scene: Dict[str, Tensor]) -> Tuple[Tensor, Tensor]:
@@ -19,7 +24,7 @@ def distance(self, points: Tensor, scene: Dict[str, Tensor]) -> Tuple[Tensor, Te
     distances: List[Tensor] = []
     gradients: List[Tensor] = []
     for kind, params in scene.items():
-        if self.native(kind, points):
+        if self.native(kind, points, params):
             distance, gradient = ops.flowplan.shape_distance(kind, points, shape_prepared(kind, params, W), True)
         else:
             distance, gradient = shape_distance(kind, points, params.to(points.dtype))
@@ -38,7 +43,7 @@ def distance_only(self, points: Tensor, scene: Dict[str, Tensor]) -> Tensor:
     W = points.size(1)
     distances: List[Tensor] = []
     for kind, params in scene.items():
-        if self.native(kind, points):
+        if self.native(kind, points, params):
             distances.append(ops.flowplan.shape_distance(kind, points, shape_prepared(kind, params, W), False)[0])
         else:
             distances.append(shape_distance_only(kind, points, params.to(points.dtype)))

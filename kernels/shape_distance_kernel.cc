@@ -21,13 +21,20 @@ S SignOf(S x) {
   return x < S(0) ? S(-1) : S(1);
 }
 
-/// R^T (p - c): the point in a rotated shape's frame (geometry/frames.py to_local).
+/// R^T (p - c): the point in a rotated shape's frame, as geometry/frames.py's
+/// to_local computes it, p^T R - c^T R. (Where a point lies on a rotated
+/// shape's plane of symmetry, the last bit of that difference, and so the
+/// side sign_of takes, depends on how each side's products round; exactly
+/// only for unrotated shapes.)
 template <class S, int W>
 void ToLocal(const S* p, const S* centre, const S* R, S* local) {
   for (int j = 0; j < W; ++j) {
-    S total = 0;
-    for (int i = 0; i < W; ++i) total += (p[i] - centre[i]) * R[i * W + j];
-    local[j] = total;
+    S point = 0, shift = 0;
+    for (int i = 0; i < W; ++i) {
+      point += p[i] * R[i * W + j];
+      shift += centre[i] * R[i * W + j];
+    }
+    local[j] = point - shift;
   }
 }
 

@@ -3,7 +3,8 @@
 // Signed distances from points to obstacle shapes, and their gradients, as
 // one native loop per shape kind: what the TorchScript distances of
 // geometry/sphere.py, box.py, cylinder.py and capsule.py compute (the same
-// formulas, the same conventions at ties and on axes), for the guidance
+// formulas, the same conventions at ties and on axes; on a rotated shape's
+// plane of symmetry either side may round differently), for the guidance
 // steps of a plan, where a shape's script takes some twenty LibTorch
 // operators per distance pass and their per-operator cost is most of the
 // pass (docs/performance.md, "Native distances"). Registered as the

@@ -189,10 +189,11 @@ for row in ("reach_fp", "reach_mpd"):
     for seed in (1, 2):
         assert yaml.safe_load(open(os.path.join(root, "train", f"{row}_s{seed}", "config.yaml")))["seed"] == seed
 tested = {r["planner"] for r in summary["select"]["test"]}
-assert {"fp", "mpd"} <= tested, tested  # FP + split has test rows only where chosen
+assert {"fp", "fp_split", "mpd"} <= tested, tested
 # Each planner's budgets (its success-versus-time curve) are planned on test, with the first model only.
 test_rows = {(r["planner"], r["label"]) for r in summary["select"]["test"]}
 for name, labels in {"fp": ["base: x_t, rising, s 1.75", "base + end-game G 20, spread 4, end joint speed 0.1"],
+                     "fp_split": ["split + end-game G 5, spread 4, end joint speed 0.1"],
                      "mpd": ["10 gradient steps", "default", "best of 2", "best of 4"],
                      "paper_mpd": ["default", "best of 4"]}.items():
     assert all((name, label) in test_rows for label in labels), (name, sorted(test_rows))

@@ -77,9 +77,36 @@ TEST_P(NativeMatchesScript, DistancesAndGradientsAgreeInBothPrecisions) {
   const auto [d32, g32] = ShapeDistance(kind, points32, prepared, true);  // rows converted to the points' dtype
   EXPECT_EQ(d32.scalar_type(), torch::kFloat32);
   EXPECT_LT((d32 - script32->elements()[0].toTensor()).abs().max().item<double>(), 2e-6) << kind;
-  // A gradient may turn where two faces are nearly equally near; float32 rounding picks either side there, so
-  // compare where the float64 answer is not at such a tie.
-  EXPECT_LT((g32.to(torch::kFloat64) - g64).abs().max().item<double>(), 1e-3) << kind;
+  // Gradients: a unit direction each, equal to the float32 script's up to rounding (a point within rounding of a
+  // tie between two faces could turn either way; none of these random points is).
+  EXPECT_LT((g32 - script32->elements()[1].toTensor()).abs().max().item<double>(), 1e-4) << kind;
+  EXPECT_LT((g32.to(torch::kFloat64) - g64).abs().max().item<double>(), 1e-4) << kind;
+}
+
+TEST(ShapeDistanceKernelTest, TiesAndAxesGoWhereTheScriptsSendThem) {
+  // Unrotated shapes, where both compute a point's local coordinates exactly: a cube's centre and its diagonal
+  // (all faces equally near: the first axis, as torch.argmax), a cylinder's axis (local x, then the axial
+  // direction where the cap is nearer) and a point as near the mantle as the cap (the mantle).
+  const torch::Tensor cube = Prepared("boxes", torch::tensor({{0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0}},
+                                                             torch::kFloat64), 3);
+  const torch::Tensor cylinder = Prepared(
+      "cylinders", torch::tensor({{0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 0.0, 0.0, 0.0}}, torch::kFloat64), 3);
+  const torch::Tensor points = torch::tensor({{0.0, 0.0, 0.0}, {0.1, 0.1, 0.1}, {-0.1, -0.1, -0.1}, {0.0, 0.0, 0.2},
+                                              {0.0, 0.0, -0.45}, {0.2, 0.0, 0.2}, {0.0, -0.2, -0.2}},
+                                             torch::kFloat64);
+  for (const auto& [kind, rows] : {std::pair<std::string, torch::Tensor>{"boxes", cube}, {"cylinders", cylinder}}) {
+    const auto script = jit::CallFunction("shape_distance", {kind, points, rows}).toTuple();
+    const auto [d, g] = ShapeDistance(kind, points, rows, true);
+    EXPECT_TRUE(torch::equal(d, script->elements()[0].toTensor())) << kind;
+    EXPECT_TRUE(torch::equal(g, script->elements()[1].toTensor())) << kind << "\n" << g << script->elements()[1];
+  }
+  const auto [d, g] = ShapeDistance("boxes", points, cube, true);
+  EXPECT_TRUE(torch::equal(g[0][0], torch::tensor({1.0, 0.0, 0.0}, torch::kFloat64))) << "the centre: first face";
+  EXPECT_TRUE(torch::equal(g[2][0], torch::tensor({-1.0, 0.0, 0.0}, torch::kFloat64))) << "its side of the x face";
+  const auto [dc, gc] = ShapeDistance("cylinders", points, cylinder, true);
+  EXPECT_TRUE(torch::equal(gc[0][0], torch::tensor({1.0, 0.0, 0.0}, torch::kFloat64))) << "on the axis: local x";
+  EXPECT_TRUE(torch::equal(gc[4][0], torch::tensor({0.0, 0.0, -1.0}, torch::kFloat64))) << "near the lower cap";
+  EXPECT_TRUE(torch::equal(gc[5][0], torch::tensor({1.0, 0.0, 0.0}, torch::kFloat64))) << "mantle as near as cap";
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinds, NativeMatchesScript,
@@ -154,6 +181,31 @@ TEST(ShapeDistanceKernelTest, BadRowsAreOneClearError) {
   } catch (const std::runtime_error& e) {
     EXPECT_THAT(e.what(), HasSubstr("float32 or float64"));
   }
+  try {
+    ShapeDistance("spheres", points.clone().requires_grad_(true), RandomRows("spheres", 3, 1), true);
+    FAIL() << "points that need a gradient were accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("no autograd"));
+  }
+  // Through the registered operator the same message reaches the caller, as LibTorch's error.
+  const c10::OperatorHandle op = c10::Dispatcher::singleton().findSchemaOrThrow("flowplan::shape_distance", "");
+  try {
+    torch::jit::Stack stack{c10::IValue(std::string("boxes")), points, box, true};
+    op.callBoxed(&stack);
+    FAIL() << "the operator accepted unprepared boxes";
+  } catch (const c10::Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("boxes: expected (K, 19) rows (prepared_scene), got (1, 10)"));
+  }
+  torch::jit::Module native = jit::ModuleBuilder("NativeDistances")
+                                  .Attribute("native_kinds", c10::List<std::string>(NativeShapeKinds()))
+                                  .Methods("geometry/native_distances.py")
+                                  .Build();
+  // Points that need a gradient go to the scripts, which autograd can follow.
+  const torch::Tensor tracked = torch::rand({5, 3}, torch::kFloat64).requires_grad_(true);
+  c10::Dict<std::string, torch::Tensor> scene;
+  scene.insert("boxes", RandomRows("boxes", 3, 2));
+  const torch::Tensor d = jit::Call(native, "distance_only", {tracked, scene}).toTensor();
+  EXPECT_TRUE(d.requires_grad());
 }
 
 }  // namespace

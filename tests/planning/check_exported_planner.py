@@ -14,7 +14,7 @@ attributes and methods. Then, for the flow planner, each guide_at variant
 plans alike under both modes (MODE "inference"), and best of 3 returns, per
 request, the candidate of least guidance cost as the planner's own guide
 scores the candidates planned one by one. A planner saved with flowplan's
-native network kernels needs KERNELS.so (libflowplan_kernels) loaded first.
+native kernels (network, obstacle distances) needs KERNELS.so (libflowplan_kernels) loaded first.
 """
 import sys
 
