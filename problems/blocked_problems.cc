@@ -40,15 +40,12 @@ bool Clear(const kinematics::Robot& robot, const torch::Tensor& q, const torch::
          robot.Clearance(q, rows).min().item<double>() >= clearance;
 }
 
-template <class Obstacle>
-geometry::Scene SceneOf(const Obstacle& obstacle);
-template <>
+/// The scene of one obstacle.
 geometry::Scene SceneOf(const geometry::SphereObstacle& sphere) {
   geometry::Scene scene;
   scene.spheres.push_back(sphere);
   return scene;
 }
-template <>
 geometry::Scene SceneOf(const geometry::BoxObstacle& box) {
   geometry::Scene scene;
   scene.boxes.push_back(box);
