@@ -42,8 +42,17 @@ backward and AdamW step on a random normalized batch of 256 trajectories; the
 second with the loss under bf16 autocast), plan_b1 (10 Euler steps,
 unguided, under torch.inference_mode()), plan_guided_split_b1 (guided around
 one sphere, with splitting; the network under torch.no_grad(), guidance with
-autograd). flops_b1 is the multiply-add count x 2 of the convolutions and
-linear layers in one forward pass at B = 1.
+autograd), plan_guided_split_b1_8 and plan_guided_split_b1_shelf (the same
+around eight spheres, and among the two boxes and the cylinder of
+configs/scenes/franka_shelf.yaml), plan_guided_split_b64 and
+plan_guided_split_b64_8 (64 plans in one call around one and eight spheres).
+Every forward and plan timing is also taken with the network under bf16 CPU
+autocast (key + "_bf16"): the network's convolutions and linear layers in
+bfloat16, its GroupNorm and Mish in float32 (as under
+train.precision=bf16), its velocity returned as float32; the sampler and
+the guidance stay float32, as a user wrapping the network call in
+torch.autocast would have them. flops_b1 is the multiply-add count x 2 of the
+convolutions and linear layers in one forward pass at B = 1.
 
 Shapes: B trajectories, T states per trajectory, D state dimensions, J joints,
 L links, S collision spheres, K obstacles, W = 3 workspace dimensions.
@@ -51,6 +60,7 @@ L links, S collision spheres, K obstacles, W = 3 workspace dimensions.
 import argparse
 import json
 import math
+import os
 import statistics
 import sys
 import time
@@ -62,6 +72,8 @@ import yaml
 
 TOLERANCE = 1e-4  # max abs difference allowed for the network and the unguided plans
 GUIDED_TOLERANCE = 1e-3  # for guided plans: autograd here, written-out gradients there, amplified by the sampler
+# The shapes of the B = 1 "shelf" timings (two boxes and a cylinder), as bench/speed_bench.cc plans among them.
+SHELF_SCENE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "configs", "scenes", "franka_shelf.yaml")
 
 # The C++ defaults (models/unet1d.h, guidance/guide.h) of keys a config may lack.
 UNET_DEFAULTS = {"down_dims": [32, 64, 128, 256], "kernel_size": 5, "groups": 8, "time_embed_dim": 32,
@@ -172,6 +184,18 @@ class UNet1D(nn.Module):
             h = getattr(self, f"up{u}_up")(h)                            # T -> 2T
         h = self.final_conv(self.final_block(h)).float()                 # (B, D, T)
         return h.transpose(1, 2)                                         # (B, T, D)
+
+
+class Bf16Autocast(nn.Module):
+    """net under bf16 CPU autocast: the same call, its output float32."""
+
+    def __init__(self, net):
+        super().__init__()
+        self.net = net
+
+    def forward(self, x, t, cond=None):
+        with torch.autocast("cpu", dtype=torch.bfloat16):
+            return self.net(x, t, cond).float()
 
 
 def count_flops(net, x, t, cond=None):
@@ -560,6 +584,24 @@ def load_network(checkpoint, prefix, config, state_dim, cond_dim):
     return net
 
 
+def load_scene(path):
+    """A flowplan scene YAML (spheres, boxes, cylinders, capsules) -> {kind: rows} in this file's layout: spheres
+    (K, 4) centre, radius; boxes (K, 10) centre, size, quaternion (w, x, y, z); cylinders (K, 9) centre, radius,
+    height, quaternion; capsules (K, 7) ends a, b, radius. A shape without a quaternion is unrotated."""
+    with open(path) as f:
+        entries = yaml.safe_load(f) or {}
+    unrotated = [1.0, 0.0, 0.0, 0.0]
+    layouts = {"spheres": lambda e: e["centre"] + [e["radius"]],
+               "boxes": lambda e: e["centre"] + e["size"] + e.get("quaternion", unrotated),
+               "cylinders": lambda e: e["centre"] + [e["radius"], e["height"]] + e.get("quaternion", unrotated),
+               "capsules": lambda e: e["a"] + e["b"] + [e["radius"]]}
+    unknown = sorted(set(entries) - set(layouts))
+    if unknown:
+        raise ValueError(f"{path}: unknown obstacle kinds {unknown}")
+    return {kind: torch.tensor([layouts[kind](e) for e in rows], dtype=torch.float64).float()
+            for kind, rows in entries.items() if rows}
+
+
 def median_ms(body, repeats, warmup=3):
     for _ in range(warmup):
         body()
@@ -708,12 +750,16 @@ def main():
         return 1 if failed else 0
 
     # ---- timings (the inputs of bench/speed_bench.cc) ------------------------
+    # Each forward and plan timing twice: the network in float32, then under bf16 autocast (key + "_bf16").
+    net_bf16 = Bf16Autocast(net)
+    precisions = (("", net), ("_bf16", net_bf16))
     ms = {}
     for B in (1, 64):
         xb, tb = torch.randn(B, T, D), torch.full([B], 0.5)
         cb = torch.zeros(B, C) if C > 0 else None
-        with torch.inference_mode():
-            ms[f"forward_b{B}"] = median_ms(lambda: net(xb, tb, cb), args.repeats)
+        for suffix, network in precisions:
+            with torch.inference_mode():
+                ms[f"forward_b{B}{suffix}"] = median_ms(lambda: network(xb, tb, cb), args.repeats)
     flops_b1 = count_flops(net, torch.randn(1, T, D), torch.full([1], 0.5), torch.zeros(1, C) if C > 0 else None)
 
     # A copy of the EMA weights trained with AdamW(1e-4, weight decay 0.01), as bench/speed_bench.cc does.
@@ -731,29 +777,38 @@ def main():
         optimizer.step()
     ms["train_step_b256_bf16"] = median_ms(train_step_bf16, max(5, args.repeats // 4), warmup=1)
 
+    # Plans at B = 1 between two fixed states (40 % and 60 % of the normalizer range): unguided, then guided and
+    # split around the sphere, the eight spheres of bench/speed_bench.cc (EightSpheres) and the shelf scene's shapes.
+    eight = {"spheres": torch.tensor([[0.5, 0.0, 0.2, 0.1], [0.3, -0.5, 0.6, 0.05], [0.3, 0.5, 0.6, 0.05],
+                                      [0.7, -0.4, 0.5, 0.05], [0.7, 0.4, 0.5, 0.05], [0.6, 0.0, 0.8, 0.05],
+                                      [0.2, -0.3, 0.1, 0.05], [0.2, 0.3, 0.1, 0.05]])}           # (K = 8, 4)
+    shelf = load_scene(SHELF_SCENE)
     plan_start = (normalizer.lo * 0.6 + normalizer.hi * 0.4).unsqueeze(0)   # (1, D) raw
     plan_goal = (normalizer.lo * 0.4 + normalizer.hi * 0.6).unsqueeze(0)
     torch.manual_seed(1)
     plan_noise, plan_renoise = torch.randn(1, T, D), torch.randn(1, T, D)
-    with torch.inference_mode():
-        ms["plan_b1"] = median_ms(lambda: planner.plan(plan_start, plan_goal, plan_noise), args.repeats)
-    with torch.no_grad():
-        ms["plan_guided_split_b1"] = median_ms(
-            lambda: planner.plan(plan_start, plan_goal, plan_noise, plan_renoise, sphere, scale, split=True),
-            args.repeats)
+    planners = [(suffix, FlowPlanner(network, normalizer, conditioning, steps, guide, planner.final_iterations,
+                                     planner.final_spread, planner.final_speed_weight))
+                for suffix, network in precisions]
+    for suffix, flow in planners:
+        with torch.inference_mode():
+            ms["plan_b1" + suffix] = median_ms(lambda: flow.plan(plan_start, plan_goal, plan_noise), args.repeats)
+        for scene_suffix, scene in (("", sphere), ("_8", eight), ("_shelf", shelf)):
+            with torch.no_grad():
+                ms["plan_guided_split_b1" + scene_suffix + suffix] = median_ms(
+                    lambda: flow.plan(plan_start, plan_goal, plan_noise, plan_renoise, scene, scale, split=True),
+                    args.repeats)
 
     # Throughput: 64 guided, split plans in one call between the postures of the TCPs (0.5, -/+0.3, 0.2), around
-    # the sphere and around the eight spheres of bench/speed_bench.cc (EightSpheres).
-    eight = {"spheres": torch.tensor([[0.5, 0.0, 0.2, 0.1], [0.3, -0.5, 0.6, 0.05], [0.3, 0.5, 0.6, 0.05],
-                                      [0.7, -0.4, 0.5, 0.05], [0.7, 0.4, 0.5, 0.05], [0.6, 0.0, 0.8, 0.05],
-                                      [0.2, -0.3, 0.1, 0.05], [0.2, 0.3, 0.1, 0.05]])}           # (K = 8, 4)
+    # the sphere and around the eight spheres.
     start64, goal64 = start.expand(64, D), goal.expand(64, D)                                   # (64, D) raw
     noise64, renoise64 = torch.randn(64, T, D), torch.randn(64, T, D)                           # (64, T, D)
-    for suffix, scene in (("", sphere), ("_8", eight)):
-        with torch.no_grad():
-            ms["plan_guided_split_b64" + suffix] = median_ms(
-                lambda: planner.plan(start64, goal64, noise64, renoise64, scene, scale, split=True),
-                max(3, args.repeats // 10), warmup=1)
+    for suffix, flow in planners:
+        for scene_suffix, scene in (("", sphere), ("_8", eight)):
+            with torch.no_grad():
+                ms["plan_guided_split_b64" + scene_suffix + suffix] = median_ms(
+                    lambda: flow.plan(start64, goal64, noise64, renoise64, scene, scale, split=True),
+                    max(3, args.repeats // 10), warmup=1)
 
     result = dict(ms)
     result.update({
@@ -776,7 +831,7 @@ def main():
 
     print(f"PyTorch {torch.__version__} eager, {torch.get_num_threads()} threads, median of {args.repeats}")
     for key, value in ms.items():
-        print(f"  {key:<22} {value:10.3f} ms")
+        print(f"  {key:<34} {value:10.3f} ms")
     print(f"  {'flops_b1':<22} {flops_b1 / 1e6:10.1f} MFLOP")
     print("max abs difference to the export")
     for key, value in checks.items():

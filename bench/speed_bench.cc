@@ -1,10 +1,12 @@
 // flowplan beside PyTorch eager on the same weights, in one run: the Franka
 // UNet's forward pass at B = 1 and 64, a training step at B = 256 (fp32 and bf16), and a
-// 10-step plan at B = 1 (unguided, and guided around one sphere with
-// splitting), in-process and from the exported TorchScript file; then
+// 10-step plan at B = 1 (unguided, and guided with splitting around one
+// sphere, eight spheres and the shelf scene's shapes), in-process and from the
+// exported TorchScript file; throughput at B = 64; then
 // bench/eager_reference.py runs the same work in plain PyTorch with the same
-// thread count, checks that its plans equal the exported planner's, and the
-// ratios are printed. docs/performance.md has the figures.
+// thread count, in float32 and with the network under bf16 autocast, checks
+// that its plans equal the exported planner's, and the ratios are printed.
+// docs/performance.md has the figures.
 //
 //   speed_bench [--checkpoint CKPT] [--threads N] [--repeats R] [--out DIR] [--python PY]
 //
@@ -328,18 +330,34 @@ int Main(int argc, char** argv) {
     reference = ReadNumbers(json);
   }
 
-  std::printf("\n%-26s %12s %12s %12s %9s\n", "", "flowplan", "exported", "eager", "eager/fp");
+  // Every figure beside eager PyTorch's: in float32, and with eager's network under bf16 autocast (the
+  // reference's "_bf16" keys; the training rows are their own fp32 and bf16 pair).
+  const auto cell = [](const std::map<std::string, double>& figures, const std::string& key, double divisor) {
+    const auto found = figures.find(key);
+    if (found == figures.end()) return std::pair<std::string, std::string>{"-", "-"};
+    char time[32], ratio[32];
+    std::snprintf(time, sizeof(time), "%.2f ms", found->second);
+    std::snprintf(ratio, sizeof(ratio), "%.2fx", found->second / divisor);
+    return std::pair<std::string, std::string>{time, ratio};
+  };
+  std::printf("\n%-28s %12s %12s %12s %9s %12s %9s\n", "", "flowplan", "exported", "eager fp32", "eager/fp",
+              "eager bf16", "bf16/fp");
   for (const std::string key : {"forward_b1", "forward_b64", "planner_forward_b1", "planner_forward_b64",
                                 "train_step_b256", "train_step_b256_bf16", "plan_b1", "plan_guided_split_b1",
                                 "plan_guided_split_b1_8", "plan_guided_split_b1_shelf", "plan_guided_split_b64", "plan_guided_split_b64_8",
                                 "mpd_guided_b64", "mpd_guided_b64_8", "rrt_connect_per_plan",
                                 "rrt_connect_per_plan_8"}) {
     const auto exported = ms.find(key + "_exported");
-    const auto ref = reference.find(key);
-    std::printf("%-26s %9.2f ms %9s    %9s    %8s\n", key.c_str(), ms[key],
-                exported == ms.end() ? "" : (std::to_string(exported->second).substr(0, 6) + " ms").c_str(),
-                ref == reference.end() ? "-" : (std::to_string(ref->second).substr(0, 6) + " ms").c_str(),
-                ref == reference.end() ? "-" : (std::to_string(ref->second / ms[key]).substr(0, 4) + "x").c_str());
+    char exported_ms[32] = "";
+    if (exported != ms.end()) std::snprintf(exported_ms, sizeof(exported_ms), "%.2f ms", exported->second);
+    // The planners' network is the forward pass eager's figures are of.
+    const std::string eager_key = key.rfind("planner_", 0) == 0 ? key.substr(8) : key;
+    const auto [fp32, fp32_ratio] = cell(reference, eager_key, ms[key]);
+    const bool training = key.rfind("train_step", 0) == 0;
+    const auto [bf16, bf16_ratio] = training ? std::pair<std::string, std::string>{"", ""}
+                                             : cell(reference, eager_key + "_bf16", ms[key]);
+    std::printf("%-28s %9.2f ms %12s %12s %9s %12s %9s\n", key.c_str(), ms[key], exported_ms, fp32.c_str(),
+                fp32_ratio.c_str(), bf16.c_str(), bf16_ratio.c_str());
   }
   if (reference.count("train_step_b256") > 0) {
     std::printf("%-26s %12s %12s %9.2f ms %8s\n", "  bf16 against eager fp32", "", "", reference["train_step_b256"],
@@ -359,11 +377,17 @@ int Main(int argc, char** argv) {
                 ms[key + "_script_distances"] / ms[key]);
   }
   // Throughput in plans and training samples per second.
-  std::printf("\nthroughput (\"_8\": eight spheres)     flowplan        eager\n");
+  std::printf("\nthroughput (\"_8\": eight spheres)     flowplan       eager fp32     eager bf16\n");
   for (const std::string key : {"plan_guided_split_b64", "plan_guided_split_b64_8", "mpd_guided_b64", "mpd_guided_b64_8"}) {
-    const auto ref = reference.find(key);
-    std::printf("%-34s %8.1f plans/s %8s\n", key.c_str(), 64e3 / ms[key],
-                ref == reference.end() ? "-" : (std::to_string(64e3 / ref->second).substr(0, 5) + " plans/s").c_str());
+    std::string rates[2] = {"-", "-"};
+    for (int i = 0; i < 2; ++i) {
+      const auto ref = reference.find(key + (i == 0 ? "" : "_bf16"));
+      if (ref == reference.end()) continue;
+      char rate[32];
+      std::snprintf(rate, sizeof(rate), "%.1f plans/s", 64e3 / ref->second);
+      rates[i] = rate;
+    }
+    std::printf("%-34s %8.1f plans/s %14s %14s\n", key.c_str(), 64e3 / ms[key], rates[0].c_str(), rates[1].c_str());
   }
   for (const std::string key : {"rrt_connect_per_plan", "rrt_connect_per_plan_8"}) {
     std::printf("%-34s %8.1f plans/s\n", key.c_str(), 1e3 / ms[key]);
