@@ -17,7 +17,8 @@ code: the exported planner only serves as the reference the results are
 checked against (and its ik() gives the checks' start and goal joints).
 
 usage: eager_reference.py --checkpoint CKPT --export PLANNER.pt --threads THREADS
-                          --json OUT.json [--repeats R] [--check-only]
+                          --json OUT.json [--repeats R] [--kernels LIB]
+                          [--mpd-checkpoint CKPT --mpd-export PLANNER.pt] [--check-only]
 
 Checks (max abs differences, written to the JSON under "checks"):
   network              the network's velocity at a fixed input against the export's velocity()
@@ -26,11 +27,14 @@ Checks (max abs differences, written to the JSON under "checks"):
   guided_plan          guided around one sphere, without splitting
   guided_split_plan    guided around one sphere, with splitting
   guided_shapes_split_plan  guided around a box, a cylinder and a capsule, with splitting
+  mpd_unguided_plan    with --mpd-*: MPD's DDPM plan at B = 1 against its export's plan()
+  mpd_guided_plan      the same, guided around one sphere
 The export computes a plan with the splitting it was exported with
 (`splitting` attribute); the other variant is composed from the export's
 normalize / denormalize methods and its sampler's integrate() as its plan()
-composes them. The script exits with status 1 if `network`, `unguided_plan` or
-`unguided_split_plan` exceeds 1e-4, or a guided plan 1e-3. Guided plans take
+composes them. The script exits with status 1 if `network`, `unguided_plan`,
+`unguided_split_plan` or `mpd_unguided_plan` exceeds 1e-4, or a guided plan
+1e-3. Guided plans take
 the cost gradient by autograd here and by written-out formulas in the export,
 so they agree to rounding, amplified by the sampler. --check-only skips the
 timings (the test suite runs it so on a tiny network).
@@ -45,7 +49,9 @@ one sphere, with splitting; the network under torch.no_grad(), guidance with
 autograd), plan_guided_split_b1_8 and plan_guided_split_b1_shelf (the same
 around eight spheres, and among the two boxes and the cylinder of
 configs/scenes/franka_shelf.yaml), plan_guided_split_b64 and
-plan_guided_split_b64_8 (64 plans in one call around one and eight spheres).
+plan_guided_split_b64_8 (64 plans in one call around one and eight spheres),
+with --mpd-*: mpd_guided_b64 and mpd_guided_b64_8 (MPD's 64 guided plans in
+one call, the same scenes).
 Every forward and plan timing is also taken with the network under bf16 CPU
 autocast (key + "_bf16"): the network's convolutions and linear layers in
 bfloat16, its GroupNorm and Mish in float32 (as under
@@ -78,6 +84,9 @@ SHELF_SCENE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "co
 # The C++ defaults (models/unet1d.h, guidance/guide.h) of keys a config may lack.
 UNET_DEFAULTS = {"down_dims": [32, 64, 128, 256], "kernel_size": 5, "groups": 8, "time_embed_dim": 32,
                  "time_scale": 1.0}
+DDPM_DEFAULTS = {"steps": 25, "schedule": "exponential", "beta_start": 1e-4, "beta_end": 1.0, "beta_max": 0.999}
+DDPM_SAMPLER_DEFAULTS = {"guide_on": "posterior_mean", "guide_fraction": 0.25, "guide_iterations": 5, "extra_steps": 5,
+                         "noise_scale": 1.0}
 GUIDANCE_DEFAULTS = {"scale": 1.0, "schedule": "one_minus_t", "clip": 0.0, "collision_weight": 0.1,
                      "smoothness_weight": 1e-6, "margin": 0.05, "smoothness_sigma": 1.0}
 
@@ -539,6 +548,75 @@ class FlowPlanner:
         return inpaint(plan, start, goal) if self.inpaint else plan
 
 
+class DdpmPlanner:
+    """Motion Planning Diffusion's sampler: `steps` ancestral DDPM steps k = N-1 .. 0 of an epsilon-predicting
+    network, guided in the last ceil(guide_fraction N) steps by guide_iterations gradient steps on the posterior
+    mean before the step's noise, then extra_steps noise-free guided steps at k = 0. The schedule (objective.ddpm):
+    beta_k exponential, beta_start exp(a x_k) with x = linspace(0, N, N) and a = ln(beta_end / beta_start) / N, or
+    linear, linspace(beta_start, beta_end, N); clipped at beta_max; alpha_bar_k = prod_{i <= k} (1 - beta_i)."""
+
+    def __init__(self, net, normalizer, conditioning, schedule, sampler, guide):
+        self.net = net
+        self.normalizer = normalizer
+        self.inpaint = conditioning == "inpaint"
+        self.guide = guide
+        n = int(schedule["steps"])
+        x = torch.linspace(0.0, float(n), n, dtype=torch.float64)
+        if schedule["schedule"] == "exponential":
+            a = math.log(schedule["beta_end"] / schedule["beta_start"]) / n
+            betas = schedule["beta_start"] * torch.exp(a * x)
+        else:
+            betas = torch.linspace(schedule["beta_start"], schedule["beta_end"], n, dtype=torch.float64)
+        betas = betas.clamp(max=schedule["beta_max"])                         # (N,) float64
+        alpha_bars = torch.cumprod(1.0 - betas, 0)
+        before = torch.cat([torch.ones(1, dtype=torch.float64), alpha_bars[:-1]])
+        # The posterior q(x_{k-1} | x_k, x0): mean = mean_x0 x0 + mean_x x_k, std noise_std; x0 from x_k and eps.
+        self.x0_from_x = (1.0 / alpha_bars.sqrt()).tolist()
+        self.x0_from_eps = (1.0 / alpha_bars - 1.0).sqrt().tolist()
+        self.mean_x0 = (betas * before.sqrt() / (1.0 - alpha_bars)).tolist()
+        self.mean_x = ((1.0 - before) * (1.0 - betas).sqrt() / (1.0 - alpha_bars)).tolist()
+        self.noise_std = (betas * (1.0 - before) / (1.0 - alpha_bars)).sqrt().tolist()
+        self.steps = n
+        if sampler["guide_on"] != "posterior_mean":
+            raise ValueError(f"sampler.ddpm.guide_on {sampler['guide_on']!r}: only posterior_mean is written here")
+        self.guided_steps = math.ceil(float(sampler["guide_fraction"]) * n - 1e-9)
+        self.iterations = int(sampler["guide_iterations"])
+        self.extra_steps = int(sampler["extra_steps"])
+        self.noise_scale = float(sampler["noise_scale"])
+
+    def conditioned(self, x, s, g):
+        return inpaint(x, s, g) if self.inpaint else x
+
+    def denoise(self, x, k, s, g, scene, scale):
+        """The posterior mean (B, T, D) of step k from x (B, T, D) normalized, guided when a scene is given."""
+        t = torch.full([x.size(0)], float(k), dtype=x.dtype)
+        eps = self.net(x, t, None if self.inpaint else torch.cat([s, g], -1))
+        x0 = torch.clamp(self.x0_from_x[k] * x - self.x0_from_eps[k] * eps, -1.0, 1.0)
+        mean = self.mean_x0[k] * x0 + self.mean_x[k] * x
+        for _ in range(self.iterations if scene is not None else 0):
+            mean = self.conditioned(mean - scale * self.guide.gradient(mean, scene), s, g)
+        return mean
+
+    def plan(self, start, goal, noise, renoise, scene=None, scale=0.0):
+        """start, goal (B, D) raw; noise (B, T, D), renoise (B, N - 1, T, D) standard normal; scene {kind: rows}
+        -> (B, T, D) raw plans. Unguided without obstacles or at scale 0."""
+        guided = ({kind: rows.float() for kind, rows in scene.items()}
+                  if scene and scale != 0.0 and sum(len(r) for r in scene.values()) > 0 else None)
+        start, goal = start.float(), goal.float()
+        s, g = self.normalizer.normalize(start), self.normalizer.normalize(goal)
+        x = self.conditioned(noise.float(), s, g)
+        for j in range(self.steps):
+            k = self.steps - 1 - j
+            x = self.denoise(x, k, s, g, guided if k < self.guided_steps else None, scale)
+            if k > 0:
+                x = x + (self.noise_scale * self.noise_std[k]) * renoise[:, j].float()
+            x = self.conditioned(x, s, g)
+        for _ in range(self.extra_steps):
+            x = self.conditioned(self.denoise(x, 0, s, g, guided, scale), s, g)
+        plan = self.normalizer.denormalize(x)
+        return inpaint(plan, start, goal) if self.inpaint else plan
+
+
 # ----------------------------------------------------------------------------
 # Training step: conditional flow matching on the OT path, AdamW
 # ----------------------------------------------------------------------------
@@ -657,8 +735,13 @@ def main():
     parser.add_argument("--json", required=True, help="output JSON file")
     parser.add_argument("--repeats", type=int, default=20, help="timed repeats per measurement (median)")
     parser.add_argument("--kernels", help="libflowplan_kernels.so, loaded first when --export uses native kernels")
+    parser.add_argument("--mpd-checkpoint", help="a DDPM (MPD) checkpoint of the same network: its plans are checked "
+                                                 "against --mpd-export and timed too")
+    parser.add_argument("--mpd-export", help="the exported planner of --mpd-checkpoint's weights (.pt)")
     parser.add_argument("--check-only", action="store_true", help="the checks without the timings")
     args = parser.parse_args()
+    if (args.mpd_checkpoint is None) != (args.mpd_export is None):
+        parser.error("--mpd-checkpoint and --mpd-export go together")
 
     torch.set_num_threads(args.threads)
     torch.set_flush_denormal(True)  # as bench/speed_bench.cc does for the C++ side
@@ -739,8 +822,39 @@ def main():
     # Guidance must have moved the plans for its checks to mean anything.
     moved = {name: (plans[name] - plans["unguided_split_plan" if "split" in name else "unguided_plan"]).abs().max().item()
              for name in plans if name.startswith("guided")}
-    failed = [k for k in ("network", "unguided_plan", "unguided_split_plan") if not checks[k] <= TOLERANCE]
-    failed += [k for k in checks if k.startswith("guided") and not checks[k] <= GUIDED_TOLERANCE]
+    # MPD: its plans against its export's plan() with the same noise, unguided and around the sphere.
+    mpd = mpd_bf16 = None
+    if args.mpd_checkpoint:
+        mpd_checkpoint = torch.jit.load(args.mpd_checkpoint, map_location="cpu")
+        mpd_config = yaml.safe_load(mpd_checkpoint.config)
+        mpd_objective = mpd_config.get("objective", {})
+        if mpd_config["model"].get("name", "unet1d") != "unet1d" or mpd_objective.get("name") != "ddpm":
+            sys.exit(f"{args.mpd_checkpoint}: expected model.name unet1d and objective.name ddpm")
+        mpd_conditioning = mpd_objective.get("conditioning", "inpaint")
+        mpd_normalizer = Normalizer(mpd_checkpoint.normalizer_lo, mpd_checkpoint.normalizer_hi)
+        mpd_net = load_network(mpd_checkpoint, "ema", mpd_config, D, 2 * D if mpd_conditioning == "direct" else 0).eval()
+        mpd_settings = dict(GUIDANCE_DEFAULTS, **mpd_config.get("guidance", {}))
+        mpd_guide = Guide(mpd_settings, kinematics, float(mpd_checkpoint.dt), mpd_normalizer, robot["velocity_limit"])
+        schedule = dict(DDPM_DEFAULTS, **mpd_objective.get("ddpm", {}))
+        sampler_ddpm = dict(DDPM_SAMPLER_DEFAULTS, **mpd_config.get("sampler", {}).get("ddpm", {}))
+        mpd, mpd_bf16 = (DdpmPlanner(network, mpd_normalizer, mpd_conditioning, schedule, sampler_ddpm, mpd_guide)
+                         for network in (mpd_net, Bf16Autocast(mpd_net)))
+        mpd_scale = float(mpd_settings["scale"])
+        mpd_export = torch.jit.load(args.mpd_export, map_location="cpu")
+        if mpd_export.settings.get("guidance.candidates", 1.0) != 1.0:
+            sys.exit(f"{args.mpd_export}: guidance.candidates > 1 is not written here")
+        mpd_renoise = torch.randn(1, mpd.steps - 1, T, D)                         # (1, N - 1, T, D)
+        mpd_plans = {}
+        for name, scene, s_ in (("mpd_unguided_plan", None, 0.0), ("mpd_guided_plan", sphere, mpd_scale)):
+            with torch.no_grad():
+                ours = mpd.plan(start, goal, noise, mpd_renoise, scene, s_)
+                theirs = mpd_export.plan(start, goal, noise, mpd_renoise, scale=s_, **dict(scene or {}))
+            checks[name], references[name] = (ours - theirs).abs().max().item(), "mpd_export.plan"
+            mpd_plans[name] = ours
+        moved["mpd_guided_plan"] = (mpd_plans["mpd_guided_plan"] - mpd_plans["mpd_unguided_plan"]).abs().max().item()
+    failed = [k for k in ("network", "unguided_plan", "unguided_split_plan", "mpd_unguided_plan")
+              if k in checks and not checks[k] <= TOLERANCE]
+    failed += [k for k in checks if "guided" in k and "unguided" not in k and not checks[k] <= GUIDED_TOLERANCE]
     failed += [f"{k} (guidance moved the plan by {v:.1e} only)" for k, v in moved.items() if not v > 1e-4]
     if args.check_only:
         for key, value in checks.items():
@@ -810,6 +924,15 @@ def main():
                     lambda: flow.plan(start64, goal64, noise64, renoise64, scene, scale, split=True),
                     max(3, args.repeats // 10), warmup=1)
 
+    if mpd is not None:  # MPD's 64 guided plans in one call, around the sphere and the eight spheres
+        mpd_renoise64 = torch.randn(64, mpd.steps - 1, T, D)                    # (64, N - 1, T, D)
+        for suffix, planner_ in (("", mpd), ("_bf16", mpd_bf16)):
+            for scene_suffix, scene in (("", sphere), ("_8", eight)):
+                with torch.no_grad():
+                    ms["mpd_guided_b64" + scene_suffix + suffix] = median_ms(
+                        lambda: planner_.plan(start64, goal64, noise64, mpd_renoise64, scene, mpd_scale),
+                        max(3, args.repeats // 10), warmup=1)
+
     result = dict(ms)
     result.update({
         "flops_b1": flops_b1,
@@ -818,6 +941,8 @@ def main():
         "repeats": args.repeats,
         "checkpoint": args.checkpoint,
         "export": args.export,
+        "mpd_checkpoint": args.mpd_checkpoint,
+        "mpd_export": args.mpd_export,
         "export_splitting": export.splitting,
         "guidance_scale": scale,
         "checks": {f"{k}_max_abs_diff": v for k, v in checks.items()},

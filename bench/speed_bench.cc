@@ -2,7 +2,8 @@
 // UNet's forward pass at B = 1 and 64, a training step at B = 256 (fp32 and bf16), and a
 // 10-step plan at B = 1 (unguided, and guided with splitting around one
 // sphere, eight spheres and the shelf scene's shapes), in-process and from the
-// exported TorchScript file; throughput at B = 64; then
+// exported TorchScript file; throughput at B = 64 (the flow planner, MPD,
+// RRT-Connect); then
 // bench/eager_reference.py runs the same work in plain PyTorch with the same
 // thread count, in float32 and with the network under bf16 autocast, checks
 // that its plans equal the exported planner's, and the ratios are printed.
@@ -262,12 +263,14 @@ int Main(int argc, char** argv) {
         MedianMs(repeats, [&] { script_distances.planner->PlanWithNoise(s, g, noise, renoise, shelf); });
   }
 
+  const std::string mpd_checkpoint = WriteFreshCheckpoint(out, {"objective.name=ddpm"}, "fresh_franka_mpd.pt");
+  const std::string mpd_file = out + "/mpd_planner.pt";
   // Throughput: B = 64 plans in one call, guided and split (the flow planner) or guided (MPD: the same network as
   // a DDPM, fresh weights), around one sphere and around eight; RRT-Connect per plan (8 searches, one per plan, the
   // call's wall time over 8). The start and goal are the postures of the TCPs (0.5, -/+0.3, 0.2), gripper down.
   {
-    const experiment::TrainedPlanner mpd =
-        experiment::LoadTrainedPlanner(WriteFreshCheckpoint(out, {"objective.name=ddpm"}, "fresh_franka_mpd.pt"), "", {});
+    const experiment::TrainedPlanner mpd = experiment::LoadTrainedPlanner(mpd_checkpoint, "", {});
+    mpd.planner->Save(mpd_file);  // the eager reference checks its DDPM sampler against this file
     const classical::RrtConnectPlanner rrt(plain.planner->info(), config.rrt_connect);
     const torch::Tensor ends =
         jit::Call(flow->module(), "ik", {torch::tensor({{0.5, -0.3, 0.2}, {0.5, 0.3, 0.2}}, torch::kFloat64)}).toTensor();
@@ -324,7 +327,8 @@ int Main(int argc, char** argv) {
     const std::string command = python + " " + FLOWPLAN_SOURCE_DIR + "/bench/eager_reference.py --checkpoint " +
                                 checkpoint + " --export " + split_file + " --threads " + std::to_string(threads) +
                                 " --repeats " + std::to_string(repeats) + " --json " + json +
-                                " --kernels " + FLOWPLAN_KERNELS_LIBRARY;
+                                " --kernels " + FLOWPLAN_KERNELS_LIBRARY + " --mpd-checkpoint " + mpd_checkpoint +
+                                " --mpd-export " + mpd_file;
     spdlog::info("running {}", command);
     if (std::system(command.c_str()) != 0) throw Error("the eager reference failed: " + command);
     reference = ReadNumbers(json);

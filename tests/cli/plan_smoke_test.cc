@@ -185,11 +185,17 @@ TEST(EagerReferenceTest, TheNetworkAndThePlansMatchAPlainPyTorchImplementation) 
   ExpectOk(Flowplan("generate" + config));
   ExpectOk(Flowplan("train" + config));
   ExpectOk(Flowplan("export --ckpt " + path("run") + " --out " + path("split.pt") + " sampler.splitting=midpoint --log-level warn"));
+  // The same network as MPD's DDPM, for the reference's DDPM sampler.
+  ExpectOk(Flowplan("train" + config + " run_dir=" + path("run_mpd") + " objective.name=ddpm"));
+  ExpectOk(Flowplan("export --ckpt " + path("run_mpd") + " --out " + path("mpd.pt") + " --log-level warn"));
   const Outcome check = RunCommand(std::string(FLOWPLAN_PYTHON) + " " + Source("bench/eager_reference.py") +
                                    " --checkpoint " + path("run/checkpoints/step_00000003.pt") + " --export " +
-                                   path("split.pt") + " --threads 1 --json " + path("eager.json") + " --check-only");
+                                   path("split.pt") + " --mpd-checkpoint " + path("run_mpd/checkpoints/step_00000003.pt") +
+                                   " --mpd-export " + path("mpd.pt") + " --threads 1 --json " + path("eager.json") +
+                                   " --check-only");
   EXPECT_EQ(check.exit_code, 0) << check.output;
   EXPECT_THAT(check.output, HasSubstr("guided_shapes_split_plan"));
+  EXPECT_THAT(check.output, HasSubstr("mpd_guided_plan"));
 }
 
 TEST(InstalledPlanTest, AnInstalledBinaryPlansAndDrawsFromAnotherFolder) {
