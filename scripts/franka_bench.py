@@ -607,7 +607,8 @@ class Bench:
                                  *overrides])
                 inputs.append(self.model_request(f"{row}_s{seed}"))
                 selection += ["--replicate", f"{name}={out}"]
-        commands.append(selection + ["--val", self.path("select", "val.yaml"), "--test", self.path("select", "test.yaml"),
+        commands.append(selection + ["--flowplan", self.flowplan,
+                                     "--val", self.path("select", "val.yaml"), "--test", self.path("select", "test.yaml"),
                                      "--out", self.path("select"), "--plans", str(self.size["select_plans"]),
                                      "--warmup", str(self.size["select_warmup"]), "--rows", str(self.size["select_rows"])])
         request = "".join(self.request(c) for c in commands)
@@ -1001,7 +1002,8 @@ def select_table(bench, summary):
     if not all(os.path.exists(p) for p in made) or not bench.current(lambda: bench.select_commands()[1], marker):
         return ["### Guidance chosen on validation problems\n", "Not run.\n"]
     test = json.load(open(bench.path("select", "test.json")))
-    summary["select"] = {"chosen": test["chosen"], "test": test["rows"], "test_other_seeds": test["replicate_rows"]}
+    summary["select"] = {"chosen": test["chosen"], "test": test["rows"], "test_other_seeds": test["replicate_rows"],
+                         "test_checked": test.get("checked_rows", [])}
     shutil.copyfile(bench.path("select", "success_vs_time.png"), bench.path("results", "success_vs_time.png"))
     seeds = ", ".join(f"{name} seed {seed}" for name, seed in SELECT_SEEDS.items())
     return ["### Guidance chosen on validation problems\n",

@@ -5,7 +5,7 @@ guidance on validation problems").
 
 usage: /usr/bin/python3 scripts/guidance_select.py --planner NAME=FILE.pt ... --val VAL.yaml --test TEST.yaml
                                                    --out DIR [--plans 8] [--threads 1] [--warmup 3] [--rows K]
-                                                   [--replicate NAME=FILE ...]
+                                                   [--replicate NAME=FILE ...] [--flowplan BINARY]
 
 --planner names an exported planner (`flowplan export`): `fp` (the flow planner
 whose settings are chosen), `fp_split` (the same network exported with
@@ -33,13 +33,21 @@ stage does; an fp or fp_split file with other defaults is refused. VAL and TEST 
      planner NAME planned again with that file, with the same problems and
      noise, nothing chosen again; the report gives each model's success and
      the mean ± sample standard deviation over the models (the --planner file
-     first, then the --replicate files of NAME in the order given).
+     first, then the --replicate files of NAME in the order given);
+  5. the plan checker (`--flowplan BINARY`): every test row of stages 3 and 4
+     but the budgets planned again by `flowplan plan --planner FILE --problems
+     TEST -n PLANS --batch PLANS` with the row's settings (other noise: seed 3),
+     whose report counts a success as the one plan checker does (docs/planning.md,
+     "Valid or nothing": the motion between states too, self-collision and
+     floor, joint limits, speeds within 1.0 × the limits); the report gives its
+     success and failure kinds beside the state count.
 
 A plan succeeds (whole arm) when every collision sphere of every state stays
 outside every obstacle (the planner's own `clearance`, the flowplan kinematics),
 the TCP of its last state is within 3 cm of the goal's and the joint speeds its
-positions imply stay within 1.5 times the velocity limits (as `flowplan plan`
-counts). Each setting's result is kept in DIR/rows/ and not made again (delete
+positions imply stay within 1.5 times the velocity limits (the state count
+`arm_clear` of `flowplan plan`'s reports, not the plan checker's success:
+stage 5 gives that). Each setting's result is kept in DIR/rows/ and not made again (delete
 the folder after changing a planner file); then DIR/validation.json,
 DIR/test.json, DIR/selection.md and DIR/success_vs_time.png are written from them.
 """
@@ -48,6 +56,7 @@ import json
 import math
 import os
 import statistics
+import subprocess
 import sys
 import time
 
@@ -91,7 +100,15 @@ FP_GRID = [
 ] + [(f"base + end-game G {g}, spread {l:g}" + (f", end joint speed {w:g}" if w else ""),
       {"sampler.final_iterations": float(g), "sampler.final_spread": float(l), "sampler.final_joint_speed_weight": w},
       None, None)
-     for g, l, w in ((10, 4, 0.0), (10, 1, 0.1), (10, 4, 0.1), (10, 16, 0.1), (10, 4, 0.3), (5, 4, 0.1), (20, 4, 0.1))]
+     for g, l, w in ((10, 4, 0.0), (10, 1, 0.1), (10, 4, 0.1), (10, 16, 0.1), (10, 4, 0.3), (5, 4, 0.1), (20, 4, 0.1))] + [
+    # The covariant end-game at other guidance scales and with fewer Euler steps (the scale of the rows above is the
+    # preset's 1.75).
+    (f"base + end-game G 10, spread {l:g}, end joint speed 0.1, {what}",
+     {"sampler.final_iterations": 10.0, "sampler.final_spread": float(l), "sampler.final_joint_speed_weight": 0.1,
+      **extra}, None, None)
+    for l in (4, 16)
+    for what, extra in (("s 1", {"guidance.scale": 1.0}), ("s 2.5", {"guidance.scale": 2.5}),
+                        ("5 steps", {"sampler.steps": 5.0}))]
 # FP + split: the same planner exported with splitting; its grid adds the re-noise time and midpoint steps.
 FP_SPLIT_GRID = [
     ("split base", {}, None, None),
@@ -222,6 +239,33 @@ def cached(path, entry, make, source=None):
     return result
 
 
+def checked(flowplan, path, grid_entry, problems_file, plans, limit, prefix):
+    """The plan checker's count of a setting on a problem file: `flowplan plan --planner PATH --problems FILE` with
+    the setting's overrides, one thread, PLANS plans per problem in one call; its report's success rate, state count
+    (`arm_clear`), failures by kind and mean time per plan."""
+    label, settings, guide_at, schedule = grid_entry
+    command = [flowplan, "plan", "--planner", path, "--problems", problems_file, "-n", str(plans), "--batch", str(plans),
+               "--seed", "3", "--no-plot", "--out", prefix, "--log-level", "warn", "threads=1",
+               *[f"{key}={value:g}" for key, value in settings.items()]]
+    command += [f"sampler.guide_at={guide_at}"] if guide_at else []
+    command += [f"guidance.schedule={schedule}"] if schedule else []
+    command += ["--limit", str(limit)] if limit > 0 else []
+    done = subprocess.run(command, capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"failed: {' '.join(command)}\n{done.stderr[-2000:]}")
+    report = json.load(open(prefix + ".json"))
+    samples = [sample for problem in report["problems"] for sample in problem.get("samples", [])]
+    failures = {}
+    for sample in samples:
+        if not sample["success"]:
+            failures[sample["failure"]] = failures.get(sample["failure"], 0) + 1
+    return {"label": label, "settings": settings, "guide_at": guide_at, "schedule": schedule,
+            "success": sum(sample["success"] for sample in samples) / len(samples),
+            "arm_clear": sum(sample["arm_clear"] for sample in samples) / len(samples),
+            "plans": len(samples), "failures": failures, "refused": report["refused"],
+            "seconds_per_plan": statistics.mean(sample["planning_time_s"] for sample in samples)}
+
+
 def wilson(p, n):
     """95 % Wilson interval of a rate p over n trials."""
     z = 1.96
@@ -250,14 +294,16 @@ def main():
     parser.add_argument("--test-also", action="append", default=[], metavar="NAME:LABEL",
                         help="a grid setting to report on the test problems besides the chosen ones (role \"also\"; "
                              "it takes no part in the choice), e.g. 'fp:base + end-game G 10'")
+    parser.add_argument("--flowplan", help="the flowplan binary: stage 5 counts the test rows by its plan checker")
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
-    planners = {}
+    planners, paths = {}, {}
     for spec in args.planner:
         name, _, path = spec.partition("=")
         if not path or not os.path.isfile(path):
             sys.exit(f"--planner {spec}: expected NAME=FILE of an exported planner")
         planners[name] = torch.jit.load(path)
+        paths[name] = path
     if "fp" not in planners:
         sys.exit("--planner: expected fp=FILE, the flow planner whose settings are chosen")
     paper_sampler = ("sampler.final_iterations", "sampler.final_spread", "sampler.final_joint_speed_weight")
@@ -270,6 +316,7 @@ def main():
         identity = os.stat(path)  # a replicate row is kept for the file that made it
         replicates.setdefault(name, []).append(
             (torch.jit.load(path), f"{os.path.realpath(path)} {identity.st_size} {identity.st_mtime_ns}"))
+        paths.setdefault(f"{name} replicates", []).append(path)
     # The FP grids add end-game steps to the file's defaults: a file whose defaults already hold an end-game, a
     # spread or its hinge would turn their rows into other settings than their labels say.
     loaded = [(f"--planner {n}", n, planners[n]) for n in planners] + [
@@ -359,6 +406,22 @@ def main():
                 out["replicate_rows"].append(row)
                 print(f"test {key} ({name} | {label}), model {m}: {row['arm_clear']:.1%} of plans, "
                       f"{1e3 * row['seconds_per_plan']:.1f} ms/plan", flush=True)
+        # Stage 5: the same rows (not the budgets) counted by the plan checker, through `flowplan plan --problems`.
+        out["checked_rows"] = []
+        for name, label, key, k, entry in entries if args.flowplan else []:
+            if key == "budget":
+                continue
+            files = [(1, paths[name], None)] + [(m, path, source) for m, (path, (_, source)) in enumerate(
+                zip(paths.get(f"{name} replicates", []), replicates.get(name, [])), start=2)]
+            for m, path, source in files:
+                stem = os.path.join(args.out, "rows", f"checked_{name}_model{m}_{k}")
+                row = dict(cached(stem + ".json", entry, lambda: checked(args.flowplan, path, entry, args.test,
+                                                                          args.plans, args.limit, stem + "_plans"),
+                                  source))
+                row |= {"planner": name, "role": key, "model": m}
+                out["checked_rows"].append(row)
+                print(f"test {key} ({name} | {label}), model {m}, plan checker: {row['success']:.1%} of plans "
+                      f"(state count {row['arm_clear']:.1%}), {1e3 * row['seconds_per_plan']:.1f} ms/plan", flush=True)
         return out
 
     test_result = held_out()
@@ -391,6 +454,38 @@ def over_models(test_result):
         cells = [f"{x['arm_clear']:.1%}, {1e3 * x['seconds_per_plan']:.1f}" for x in rows]
         cells += [""] * (models - len(rows))  # a planner given fewer models
         lines.append(f"| {r['role']} | {r['planner']} | {r['label']} | " + " | ".join(cells) + f" | {spread} |")
+    return lines
+
+
+def by_checker(test_result):
+    """The test rows counted by the plan checker (stage 5): per row and model its success, the state count and the
+    time per plan, then the mean ± sample standard deviation of success over the models; and the failures by kind,
+    summed over the models. [] without --flowplan."""
+    checked_rows = test_result.get("checked_rows", [])
+    if not checked_rows:
+        return []
+    models = max(r["model"] for r in checked_rows)
+    lines = ["", "Test, counted by the plan checker (`flowplan plan --problems`: states and the motion between them, "
+             "self-collision and floor, joint limits, speeds within 1.0 × the limits; other noise than the rows "
+             "above): success (state count), time per plan in ms; failures by kind over all models.", "",
+             "| role | planner | setting | " + " | ".join(f"model {m}" for m in range(1, models + 1)) +
+             " | mean ± std over models | failures |", "|---|---|---|" + "---|" * (models + 2)]
+    for r in test_result["rows"]:
+        rows = sorted((x for x in checked_rows if (x["planner"], x["role"], x["label"]) ==
+                       (r["planner"], r["role"], r["label"])), key=lambda x: x["model"])
+        if not rows:
+            continue
+        rates = [x["success"] for x in rows]
+        spread = f"{statistics.mean(rates):.1%}" + (f" ± {statistics.stdev(rates):.1%}" if len(rates) > 1 else "")
+        cells = [f"{x['success']:.1%} ({x['arm_clear']:.1%}), {1e3 * x['seconds_per_plan']:.1f}" for x in rows]
+        cells += [""] * (models - len(rows))
+        failures = {}
+        for x in rows:
+            for kind, count in x["failures"].items():
+                failures[kind] = failures.get(kind, 0) + count
+        kinds = ", ".join(f"{kind} {count}" for kind, count in sorted(failures.items(), key=lambda kc: -kc[1]))
+        lines.append(f"| {r['role']} | {r['planner']} | {r['label']} | " + " | ".join(cells) +
+                     f" | {spread} | {kinds or 'none'} |")
     return lines
 
 
@@ -429,6 +524,7 @@ def write_report(out, validation, test_result):
                 r = by_key[key]
                 lines.append(f"| {key[0]} | {key[1]} | {r['arm_clear']:.1%} | {1e3 * r['seconds_per_plan']:.1f} |")
     lines += over_models(test_result)
+    lines += by_checker(test_result)
     with open(os.path.join(out, "selection.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
     print("\n".join(lines))

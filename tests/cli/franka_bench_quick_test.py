@@ -211,6 +211,18 @@ for name in {"fp", "fp_split", "mpd"} & tested:
         cells = [c.strip() for c in line.split("|")[4:-1]]
         assert cells[:3] == [f"{x['arm_clear']:.1%}, {1e3 * x['seconds_per_plan']:.1f}" for x in [r] + models], line
         assert cells[3].startswith(f"{statistics.mean(rates):.1%} ± {statistics.stdev(rates):.1%}, "), line
+# Every test row but the budgets is counted by the plan checker too, for every model of its planner, from a report of
+# `flowplan plan --problems` that the row's file names.
+checked = summary["select"]["test_checked"]
+for r in [r for r in summary["select"]["test"] if r["role"] != "budget"]:
+    models = sorted(x["model"] for x in checked if (x["planner"], x["role"], x["label"]) ==
+                    (r["planner"], r["role"], r["label"]))
+    assert models == ([1, 2, 3] if r["planner"] in tested & {"fp", "fp_split", "mpd"} else [1]), (r, models)
+for x in checked:
+    # a checked success has its states clear, at the goal and within the speed limit: the state count holds it
+    assert 0.0 <= x["success"] <= x["arm_clear"] + 1e-9 and x["plans"] > 0 and x["seconds_per_plan"] > 0, x
+    assert x["plans"] - round(x["success"] * x["plans"]) == sum(x["failures"].values()), x
+assert "counted by the plan checker" in summary_md
 # guidance_select.py refuses an FP file exported with the preset's end-game defaults (its grids add to them).
 unfit = os.path.join(root, "select_unfit_fp.pt")
 subprocess.run([flowplan, "export", "--ckpt", os.path.join(root, "train", "reach_fp"), "--out", unfit], check=True,
