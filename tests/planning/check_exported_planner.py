@@ -86,7 +86,8 @@ with torch.no_grad():
 
 if planner.planner == "flow_matching":
     variants = {"sampler.final_iterations": 2.0, "sampler.final_denoise_time": 0.95, "sampler.prediction_iterations": 2.0,
-                "sampler.final_spread": 4.0, "sampler.final_joint_speed_weight": 0.1}
+                "sampler.final_spread": 4.0, "sampler.final_joint_speed_weight": 0.1, "sampler.guide_from": 0.2,
+                "sampler.midpoint_iterations": 2.0, "sampler.split_time": 0.6}
     for at in ("state", "velocity", "prediction"):
         with torch.no_grad():
             guided = planner.plan(start, goal, noise, renoise, schedule=schedule, guide_at=at, settings=variants, **scene)
