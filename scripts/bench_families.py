@@ -25,8 +25,10 @@ JOINT_CONFIG = "configs/franka_joint.yaml"
 # whole joint range, so a normalized step is several times larger in radians), see docs/results.md.
 SCALES = [0.05, 0.1, 0.2, 0.4]
 # The flow planner's grid: the paper's sampler and 10 plain end-game steps at each scale, then the covariant
-# end-game (20 steps spread over 4 states, the joint-speed hinge in them at weight 0.1 or 1; docs/planning.md).
-FP_GRID = ([[f"guidance.scale={s}", f"sampler.final_iterations={g}"] for s in SCALES for g in (0, 10)] +
+# end-game (20 steps spread over 4 states, the joint-speed hinge in them at weight 0.1 or 1; docs/planning.md). Every
+# row names its end-game in full: the preset's defaults are the covariant one.
+FP_GRID = ([[f"guidance.scale={s}", f"sampler.final_iterations={g}", "sampler.final_spread=0",
+             "sampler.final_joint_speed_weight=0"] for s in SCALES for g in (0, 10)] +
            [[f"guidance.scale={s}", "sampler.final_iterations=20", "sampler.final_spread=4",
              f"sampler.final_joint_speed_weight={w}"] for s in SCALES for w in (0.1, 1)])
 # Learned planners: name, label, training row, fixed overrides, validation grid (a list of override lists).
