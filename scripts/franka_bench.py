@@ -26,7 +26,7 @@ where it stopped (a stopped training resumes from its newest checkpoint):
   curve       ROOT/curve/<row>_k<step>.*    each long run at the steps of the curve: stitching without and with
                                             splitting, and guided around the paper's sphere on the stitching pair
   select      ROOT/select/                  guidance chosen on validation problems (seed 101) and reported on
-                                            held-out test problems (seed 202; spheres and boxes): guidance_select.py on FP,
+                                            held-out test problems (seed 303; spheres and boxes): guidance_select.py on FP,
                                             FP + split, MPD and the paper's MPD, exported from the reach rows;
                                             the test rows of FP, FP + split and MPD again with seeds 1 and 2
   train-joint ROOT/train/joint_*/done.json  `flowplan train` of FP, MPD and the VAE on franka_joint (configs/
@@ -121,7 +121,9 @@ CURVE_RADII = [0.1, 0.15]
 # two seeds; the planners it compares, each exported from its training row with these settings (the flow planner
 # with the paper's sampler, no end-game and the end-game's spread and hinge off, so that the grids' base setting is
 # that and a grid row that adds end-game steps without a spread adds plain ones, whatever the preset's defaults).
-SELECT_SEEDS = {"val": 101, "test": 202}
+# The test seed is 303: seed 202's set was reported at every round of the guidance work that led to the end-game
+# (docs/results.md), so its figures were seen while the grid was designed; 303 was drawn for the final report only.
+SELECT_SEEDS = {"val": 101, "test": 303}
 # Both sets: 1-8 spheres (the first on the straight TCP path) and 1-3 boxes at random orientations near that path.
 SELECT_PROBLEMS = ["problems.min_boxes=1", "problems.max_boxes=3"]
 PAPER_SAMPLER = ["sampler.final_iterations=0", "sampler.final_spread=0", "sampler.final_joint_speed_weight=0"]
