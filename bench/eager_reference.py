@@ -565,8 +565,10 @@ class DdpmPlanner:
         if schedule["schedule"] == "exponential":
             a = math.log(schedule["beta_end"] / schedule["beta_start"]) / n
             betas = schedule["beta_start"] * torch.exp(a * x)
-        else:
+        elif schedule["schedule"] == "linear":
             betas = torch.linspace(schedule["beta_start"], schedule["beta_end"], n, dtype=torch.float64)
+        else:
+            raise ValueError(f"objective.ddpm.schedule {schedule['schedule']!r}: expected exponential or linear")
         betas = betas.clamp(max=schedule["beta_max"])                         # (N,) float64
         alpha_bars = torch.cumprod(1.0 - betas, 0)
         before = torch.cat([torch.ones(1, dtype=torch.float64), alpha_bars[:-1]])
@@ -828,21 +830,31 @@ def main():
         mpd_checkpoint = torch.jit.load(args.mpd_checkpoint, map_location="cpu")
         mpd_config = yaml.safe_load(mpd_checkpoint.config)
         mpd_objective = mpd_config.get("objective", {})
-        if mpd_config["model"].get("name", "unet1d") != "unet1d" or mpd_objective.get("name") != "ddpm":
+        if (mpd_config["model"].get("name", mpd_config["model"].get("architecture", "unet1d")) != "unet1d"
+                or mpd_objective.get("name") != "ddpm"):
             sys.exit(f"{args.mpd_checkpoint}: expected model.name unet1d and objective.name ddpm")
-        mpd_conditioning = mpd_objective.get("conditioning", "inpaint")
         mpd_normalizer = Normalizer(mpd_checkpoint.normalizer_lo, mpd_checkpoint.normalizer_hi)
+        if (mpd_normalizer.lo.numel(), int(mpd_checkpoint.horizon)) != (D, T):
+            sys.exit(f"{args.mpd_checkpoint}: expected states of {D} dimensions and a horizon of {T}, as "
+                     f"{args.checkpoint}'s")
+        mpd_conditioning = mpd_objective.get("conditioning", "inpaint")
         mpd_net = load_network(mpd_checkpoint, "ema", mpd_config, D, 2 * D if mpd_conditioning == "direct" else 0).eval()
+        # The guidance and sampler settings the exported file plans with (its defaults, which export overrides set),
+        # and the noise schedule of the checkpoint (compiled into the file).
+        mpd_export = torch.jit.load(args.mpd_export, map_location="cpu")
         mpd_settings = dict(GUIDANCE_DEFAULTS, **mpd_config.get("guidance", {}))
+        mpd_settings.update({key[len("guidance."):]: value for key, value in mpd_export.settings.items()
+                             if key.startswith("guidance.")})
+        sampler_ddpm = dict(DDPM_SAMPLER_DEFAULTS, **{key[len("sampler.ddpm."):]: value for key, value
+                                                      in mpd_export.settings.items() if key.startswith("sampler.ddpm.")})
+        sampler_ddpm["guide_on"] = mpd_export.sampler.guide_on
+        if mpd_settings.get("candidates", 1.0) != 1.0:
+            sys.exit(f"{args.mpd_export}: guidance.candidates > 1 is not written here")
         mpd_guide = Guide(mpd_settings, kinematics, float(mpd_checkpoint.dt), mpd_normalizer, robot["velocity_limit"])
         schedule = dict(DDPM_DEFAULTS, **mpd_objective.get("ddpm", {}))
-        sampler_ddpm = dict(DDPM_SAMPLER_DEFAULTS, **mpd_config.get("sampler", {}).get("ddpm", {}))
         mpd, mpd_bf16 = (DdpmPlanner(network, mpd_normalizer, mpd_conditioning, schedule, sampler_ddpm, mpd_guide)
                          for network in (mpd_net, Bf16Autocast(mpd_net)))
         mpd_scale = float(mpd_settings["scale"])
-        mpd_export = torch.jit.load(args.mpd_export, map_location="cpu")
-        if mpd_export.settings.get("guidance.candidates", 1.0) != 1.0:
-            sys.exit(f"{args.mpd_export}: guidance.candidates > 1 is not written here")
         mpd_renoise = torch.randn(1, mpd.steps - 1, T, D)                         # (1, N - 1, T, D)
         mpd_plans = {}
         for name, scene, s_ in (("mpd_unguided_plan", None, 0.0), ("mpd_guided_plan", sphere, mpd_scale)):
@@ -957,7 +969,7 @@ def main():
     print(f"PyTorch {torch.__version__} eager, {torch.get_num_threads()} threads, median of {args.repeats}")
     for key, value in ms.items():
         print(f"  {key:<34} {value:10.3f} ms")
-    print(f"  {'flops_b1':<22} {flops_b1 / 1e6:10.1f} MFLOP")
+    print(f"  {'flops_b1':<34} {flops_b1 / 1e6:10.1f} MFLOP")
     print("max abs difference to the export")
     for key, value in checks.items():
         print(f"  {key:<22} {value:10.3e}  ({references.get(key, 'export.sampler.network')})")

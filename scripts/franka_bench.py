@@ -1005,7 +1005,8 @@ def select_table(bench, summary):
         return ["### Guidance chosen on validation problems\n", "Not run.\n"]
     test = json.load(open(bench.path("select", "test.json")))
     summary["select"] = {"chosen": test["chosen"], "test": test["rows"], "test_other_seeds": test["replicate_rows"],
-                         "test_checked": test.get("checked_rows", [])}
+                         "test_checked": test.get("checked_rows", []), "test_problems": test["problems"],
+                         "plans_per_problem": test["plans_per_problem"]}
     shutil.copyfile(bench.path("select", "success_vs_time.png"), bench.path("results", "success_vs_time.png"))
     seeds = ", ".join(f"{name} seed {seed}" for name, seed in SELECT_SEEDS.items())
     return ["### Guidance chosen on validation problems\n",

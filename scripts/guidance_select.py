@@ -239,6 +239,12 @@ def cached(path, entry, make, source=None):
     return result
 
 
+def identity(path):
+    """A file's identity for the row cache: its real path, size and modification time."""
+    stat = os.stat(path)
+    return f"{os.path.realpath(path)} {stat.st_size} {stat.st_mtime_ns}"
+
+
 def checked(flowplan, path, grid_entry, problems_file, plans, limit, prefix):
     """The plan checker's count of a setting on a problem file: `flowplan plan --planner PATH --problems FILE` with
     the setting's overrides, one thread, PLANS plans per problem in one call; its report's success rate, state count
@@ -255,15 +261,16 @@ def checked(flowplan, path, grid_entry, problems_file, plans, limit, prefix):
         sys.exit(f"failed: {' '.join(command)}\n{done.stderr[-2000:]}")
     report = json.load(open(prefix + ".json"))
     samples = [sample for problem in report["problems"] for sample in problem.get("samples", [])]
-    failures = {}
+    total = report["num_problems"] * report["num_samples"]  # a refused problem's plans count as failures
+    failures = {"refused": total - len(samples)} if total > len(samples) else {}
     for sample in samples:
         if not sample["success"]:
             failures[sample["failure"]] = failures.get(sample["failure"], 0) + 1
     return {"label": label, "settings": settings, "guide_at": guide_at, "schedule": schedule,
-            "success": sum(sample["success"] for sample in samples) / len(samples),
-            "arm_clear": sum(sample["arm_clear"] for sample in samples) / len(samples),
-            "plans": len(samples), "failures": failures, "refused": report["refused"],
-            "seconds_per_plan": statistics.mean(sample["planning_time_s"] for sample in samples)}
+            "success": sum(sample["success"] for sample in samples) / total,
+            "arm_clear": sum(sample["arm_clear"] for sample in samples) / total,
+            "plans": total, "failures": failures, "refused": report["refused"],
+            "seconds_per_plan": statistics.mean(sample["planning_time_s"] for sample in samples) if samples else 0.0}
 
 
 def wilson(p, n):
@@ -313,9 +320,7 @@ def main():
         if name not in planners or not os.path.isfile(path):
             sys.exit(f"--replicate {spec}: expected NAME=FILE, NAME one of the --planner names "
                      f"({', '.join(planners)}) and FILE an exported planner")
-        identity = os.stat(path)  # a replicate row is kept for the file that made it
-        replicates.setdefault(name, []).append(
-            (torch.jit.load(path), f"{os.path.realpath(path)} {identity.st_size} {identity.st_mtime_ns}"))
+        replicates.setdefault(name, []).append((torch.jit.load(path), identity(path)))  # a row is kept for its file
         paths.setdefault(f"{name} replicates", []).append(path)
     # The FP grids add end-game steps to the file's defaults: a file whose defaults already hold an end-game, a
     # spread or its hinge would turn their rows into other settings than their labels say.
@@ -411,10 +416,13 @@ def main():
         for name, label, key, k, entry in entries if args.flowplan else []:
             if key == "budget":
                 continue
-            files = [(1, paths[name], None)] + [(m, path, source) for m, (path, (_, source)) in enumerate(
-                zip(paths.get(f"{name} replicates", []), replicates.get(name, [])), start=2)]
-            for m, path, source in files:
+            files = [(1, paths[name])] + [(m, path) for m, path in enumerate(paths.get(f"{name} replicates", []),
+                                                                              start=2)]
+            for m, path in files:
                 stem = os.path.join(args.out, "rows", f"checked_{name}_model{m}_{k}")
+                # kept for the same planner file, problem file, checker binary and plan count
+                source = " ".join([identity(path), identity(args.test), identity(args.flowplan),
+                                   f"plans {args.plans} limit {args.limit}"])
                 row = dict(cached(stem + ".json", entry, lambda: checked(args.flowplan, path, entry, args.test,
                                                                           args.plans, args.limit, stem + "_plans"),
                                   source))

@@ -160,8 +160,12 @@ assert "--hybrid" in open(os.path.join(root, "families", "test", "hybrid_sphere.
 for family in ("table", "shelf"):
     val = open(os.path.join(root, "families", "problems", f"val_{family}.yaml")).read()
     test = open(os.path.join(root, "families", "problems", f"test_{family}.yaml")).read()
-    assert "seed: 101" in val and "seed: 303" in test and val.split("problems:")[1] != test.split("problems:")[1]
+    assert "seed: 101" in val and "seed: 202" in test and val.split("problems:")[1] != test.split("problems:")[1]
 assert os.path.exists(os.path.join(root, "results", "families_success_vs_time.png"))
+# The select stage's sets: validation seed 101, the held-out test set seed 303.
+select_val = open(os.path.join(root, "select", "val.yaml")).read()
+select_test = open(os.path.join(root, "select", "test.yaml")).read()
+assert "seed: 101" in select_val and "seed: 303" in select_test, (select_val[:300], select_test[:300])
 
 # The select stage: FP and FP + split exported with the paper's sampler (the grids' base row), as the driver's sweep
 # rows plan; every planner's grid on the validation problems; FP's best setting chosen from validation alone, then
@@ -221,7 +225,8 @@ for r in [r for r in summary["select"]["test"] if r["role"] != "budget"]:
 for x in checked:
     # a checked success has its states clear, at the goal and within the speed limit: the state count holds it
     assert 0.0 <= x["success"] <= x["arm_clear"] + 1e-9 and x["plans"] > 0 and x["seconds_per_plan"] > 0, x
-    assert x["plans"] - round(x["success"] * x["plans"]) == sum(x["failures"].values()), x
+    # every plan of every test problem counts, refused problems' plans as failures
+    assert x["plans"] == summary["select"]["test_problems"] * summary["select"]["plans_per_problem"], x
 assert "counted by the plan checker" in summary_md
 # guidance_select.py refuses an FP file exported with the preset's end-game defaults (its grids add to them).
 unfit = os.path.join(root, "select_unfit_fp.pt")
