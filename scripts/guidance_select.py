@@ -108,7 +108,12 @@ FP_GRID = [
       **extra}, None, None)
     for l in (4, 16)
     for what, extra in (("s 1", {"guidance.scale": 1.0}), ("s 2.5", {"guidance.scale": 2.5}),
-                        ("5 steps", {"sampler.steps": 5.0}))]
+                        ("5 steps", {"sampler.steps": 5.0}))] + [
+    # Below the scale of 1 that the rows above found best, at the spread of 4 that works with splitting too.
+    (f"base + end-game G 10, spread 4, end joint speed 0.1, s {scale:g}",
+     {"sampler.final_iterations": 10.0, "sampler.final_spread": 4.0, "sampler.final_joint_speed_weight": 0.1,
+      "guidance.scale": scale}, None, None)
+    for scale in (0.5, 0.75)]
 # FP + split: the same planner exported with splitting; its grid adds the re-noise time and midpoint steps.
 FP_SPLIT_GRID = [
     ("split base", {}, None, None),
@@ -127,7 +132,11 @@ FP_SPLIT_GRID = [
 ] + [(f"split + end-game G {g}, spread {l:g}, end joint speed {w:g}",
       {"sampler.final_iterations": float(g), "sampler.final_spread": float(l), "sampler.final_joint_speed_weight": w},
       None, None)
-     for g, l, w in ((10, 4, 0.1), (5, 4, 0.1), (10, 16, 0.1))]
+     for g, l, w in ((10, 4, 0.1), (5, 4, 0.1), (10, 16, 0.1))] + [
+    (f"split + end-game G 10, spread 4, end joint speed 0.1, s {scale:g}",
+     {"sampler.final_iterations": 10.0, "sampler.final_spread": 4.0, "sampler.final_joint_speed_weight": 0.1,
+      "guidance.scale": scale}, None, None)
+    for scale in (0.5, 1.0)]
 OTHER_GRID = [
     ("default", {}, None, None),
     ("best of 4", {"guidance.candidates": 4.0}, None, None),
