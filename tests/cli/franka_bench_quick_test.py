@@ -237,7 +237,7 @@ refused = subprocess.run([sys.executable, os.path.join(repo, "scripts", "guidanc
                           os.path.join(root, "select", "test.yaml"), "--out", os.path.join(root, "select_unfit")],
                          capture_output=True, text=True)
 assert refused.returncode != 0 and "export the flow planner with the paper's sampler" in refused.stderr, refused.stderr
-assert "sampler.final_iterations=20" in refused.stderr and not os.path.exists(os.path.join(root, "select_unfit"))
+assert "sampler.final_iterations=10" in refused.stderr and not os.path.exists(os.path.join(root, "select_unfit"))
 os.remove(unfit)
 weights = [dict(torch.jit.load(os.path.join(root, "select", f"{name}.pt")).named_buffers())
            ["sampler.network.p_final_conv_weight"] for name in ("fp", "fp_s1")]
