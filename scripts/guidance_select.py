@@ -157,6 +157,7 @@ BUDGETS = {"fp": ["base: x_t, rising, s 1.75"] + [f"base + end-game G {g}, sprea
            "paper_mpd": ["default", "best of 4"]}
 for _name, _labels in BUDGETS.items():
     assert set(_labels) <= {e[0] for e in GRIDS.get(_name, OTHER_GRID)}, f"BUDGETS[{_name!r}]: not a grid label"
+BASE_SCALE = 1.75  # the guidance scale of the FP files, which every FP row without a scale of its own plans at
 GOAL_TOLERANCE = 0.03
 MAX_SPEED_RATIO = 1.5
 
@@ -337,6 +338,10 @@ def main():
         (f"--replicate {n} (model {m})", n, p) for n, ps in replicates.items() for m, (p, _) in enumerate(ps, start=2)]
     for where, name, planner in loaded:
         if name in ("fp", "fp_split"):
+            # the grids' rows without a scale of their own are labelled and chosen at the file's 1.75
+            if planner.settings["guidance.scale"] != BASE_SCALE:
+                sys.exit(f"{where}: exported with guidance.scale={planner.settings['guidance.scale']:g}; the FP grids "
+                         f"take {BASE_SCALE:g} as their base (export with guidance.scale={BASE_SCALE:g})")
             other = [f"{key}={planner.settings[key]:g}" for key in paper_sampler if planner.settings[key] != 0.0]
             if other:
                 sys.exit(f"{where}: exported with {', '.join(other)}; export the flow planner with the paper's "
