@@ -224,6 +224,17 @@ int Main(int argc, char** argv) {
   ms["plan_guided_split_b1_8"] = MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, eight); });
   ms["plan_guided_split_b1_shelf"] =
       MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, shelf); });
+  // The same split plans with the preset's own sampler defaults (its end-game: configs/franka_reach.yaml), which a
+  // planner exported from the preset plans with unless a call says otherwise.
+  {
+    const experiment::TrainedPlanner defaults = experiment::LoadTrainedPlanner(checkpoint, "", {"sampler.splitting=midpoint"});
+    ms["plan_guided_split_b1_defaults"] =
+        MedianMs(repeats, [&] { defaults.planner->PlanWithNoise(s, g, noise, renoise, sphere); });
+    ms["plan_guided_split_b1_8_defaults"] =
+        MedianMs(repeats, [&] { defaults.planner->PlanWithNoise(s, g, noise, renoise, eight); });
+    ms["plan_guided_split_b1_shelf_defaults"] =
+        MedianMs(repeats, [&] { defaults.planner->PlanWithNoise(s, g, noise, renoise, shelf); });
+  }
   // The planner's network as the planners call it (the TorchScript module, with flowplan's native UNet kernel),
   // and the same planners with LibTorch's operators only (sampler.network_kernels=portable and
   // guidance.distance_kernels=portable, what an export without --kernels native holds), side by side.
@@ -375,6 +386,11 @@ int Main(int argc, char** argv) {
                                 "plan_guided_split_b1_8", "plan_guided_split_b1_shelf"}) {
     std::printf("%-26s %9.2f ms %9.2f ms %8.2fx\n", key.c_str(), ms[key], ms[key + "_portable"],
                 ms[key + "_portable"] / ms[key]);
+  }
+  std::printf("\n%-28s %12s %12s\n", "guided split plan, B = 1", "paper's", "preset's");
+  std::printf("%-28s %12s %12s\n", "(sampler)", "", "end-game");
+  for (const std::string key : {"plan_guided_split_b1", "plan_guided_split_b1_8", "plan_guided_split_b1_shelf"}) {
+    std::printf("%-28s %9.2f ms %9.2f ms\n", key.c_str(), ms[key], ms[key + "_defaults"]);
   }
   std::printf("\n%-26s %12s %12s %9s\n", "distances alone", "native", "script", "speed-up");
   for (const std::string key : {"plan_guided_split_b1_8", "plan_guided_split_b1_shelf"}) {
