@@ -215,26 +215,26 @@ int Main(int argc, char** argv) {
     c10::InferenceMode inference;
     ms["plan_b1"] = MedianMs(repeats, [&] { flow->PlanWithNoise(s, g, noise); });
   }
-  ms["plan_guided_split_b1"] = MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, sphere); });
   // The same plans around eight spheres, and among the boxes and the cylinder of configs/scenes/franka_shelf.yaml.
   const geometry::SceneRows eight = geometry::SphereRows(EightSpheres());
   const geometry::SceneRows shelf =
       geometry::Rows(geometry::LoadScene(std::string(FLOWPLAN_SOURCE_DIR) + "/configs/scenes/franka_shelf.yaml"), 3,
                      "configs/scenes/franka_shelf.yaml");
-  ms["plan_guided_split_b1_8"] = MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, eight); });
-  ms["plan_guided_split_b1_shelf"] =
-      MedianMs(repeats, [&] { flow_split->PlanWithNoise(s, g, noise, renoise, shelf); });
+  using Scenes = std::vector<std::pair<std::string, const geometry::SceneRows*>>;
+  const Scenes every_scene = {{"", &sphere}, {"_8", &eight}, {"_shelf", &shelf}};
+  // A guided split plan at B = 1 by `planner` around each scene, as ms["plan_guided_split_b1" + scene + suffix].
+  const auto time_split_plans = [&](const planning::LearnedPlanner& planner, const std::string& suffix,
+                                    const Scenes& scenes) {
+    for (const auto& [scene, rows] : scenes) {
+      ms["plan_guided_split_b1" + scene + suffix] =
+          MedianMs(repeats, [&] { planner.PlanWithNoise(s, g, noise, renoise, *rows); });
+    }
+  };
+  time_split_plans(*flow_split, "", every_scene);
   // The same split plans with the preset's own sampler defaults (its end-game: configs/franka_reach.yaml), which a
   // planner exported from the preset plans with unless a call says otherwise.
-  {
-    const experiment::TrainedPlanner defaults = experiment::LoadTrainedPlanner(checkpoint, "", {"sampler.splitting=midpoint"});
-    ms["plan_guided_split_b1_defaults"] =
-        MedianMs(repeats, [&] { defaults.planner->PlanWithNoise(s, g, noise, renoise, sphere); });
-    ms["plan_guided_split_b1_8_defaults"] =
-        MedianMs(repeats, [&] { defaults.planner->PlanWithNoise(s, g, noise, renoise, eight); });
-    ms["plan_guided_split_b1_shelf_defaults"] =
-        MedianMs(repeats, [&] { defaults.planner->PlanWithNoise(s, g, noise, renoise, shelf); });
-  }
+  time_split_plans(*experiment::LoadTrainedPlanner(checkpoint, "", {"sampler.splitting=midpoint"}).planner, "_defaults",
+                   every_scene);
   // The planner's network as the planners call it (the TorchScript module, with flowplan's native UNet kernel),
   // and the same planners with LibTorch's operators only (sampler.network_kernels=portable and
   // guidance.distance_kernels=portable, what an export without --kernels native holds), side by side.
@@ -259,19 +259,11 @@ int Main(int argc, char** argv) {
       c10::InferenceMode inference;
       ms["plan_b1_portable"] = MedianMs(repeats, [&] { portable.planner->PlanWithNoise(s, g, noise); });
     }
-    ms["plan_guided_split_b1_portable"] =
-        MedianMs(repeats, [&] { portable_split.planner->PlanWithNoise(s, g, noise, renoise, sphere); });
-    ms["plan_guided_split_b1_8_portable"] =
-        MedianMs(repeats, [&] { portable_split.planner->PlanWithNoise(s, g, noise, renoise, eight); });
-    ms["plan_guided_split_b1_shelf_portable"] =
-        MedianMs(repeats, [&] { portable_split.planner->PlanWithNoise(s, g, noise, renoise, shelf); });
+    time_split_plans(*portable_split.planner, "_portable", every_scene);
     // The native network with the distances on LibTorch's operators: what the native distances alone save.
     const experiment::TrainedPlanner script_distances = experiment::LoadTrainedPlanner(
         checkpoint, "", {"sampler.splitting=midpoint", "sampler.final_iterations=0", "guidance.distance_kernels=portable"});
-    ms["plan_guided_split_b1_8_script_distances"] =
-        MedianMs(repeats, [&] { script_distances.planner->PlanWithNoise(s, g, noise, renoise, eight); });
-    ms["plan_guided_split_b1_shelf_script_distances"] =
-        MedianMs(repeats, [&] { script_distances.planner->PlanWithNoise(s, g, noise, renoise, shelf); });
+    time_split_plans(*script_distances.planner, "_script_distances", {{"_8", &eight}, {"_shelf", &shelf}});
   }
 
   const std::string mpd_checkpoint = WriteFreshCheckpoint(out, {"objective.name=ddpm"}, "fresh_franka_mpd.pt");
