@@ -1,15 +1,17 @@
 """The scene-family stage of scripts/franka_bench.py: every planner on the procedural scene families and on the
 paper's sphere scene, each plan checked by `flowplan`'s plan checker and executed in MuJoCo with the real shapes.
 
-  ROOT/families/problems/{val,test}_<family>.yaml   `flowplan problems --family` (validation seed 101, test seed 202)
+  ROOT/families/problems/{val,test}_<family>.yaml   `flowplan problems --family` (validation seed 101, test seed 303)
   ROOT/families/problems/test_sphere.yaml           the paper's scene: one sphere of each radius of SPHERE_RADII
                                                     between the TCP points (0.5, -0.3, 0.2) and (0.5, 0.3, 0.2)
   ROOT/families/val/<planner>_<k>_<family>.*        `flowplan plan --problems` of setting k of the planner's grid
   ROOT/families/test/<planner>_<set>.*              the setting chosen on validation, on the test sets, executed
 
 Every learned planner chooses its guidance (the grid below) on the validation problems of all families pooled:
-the most valid plans, then the shorter median time per plan; the hybrid chooses its setting the same way
-with the flow planner's chosen setting as its proposer. Test problems are never looked at before the choice. Every
+the most valid plans, then the shorter median time per plan. The hybrid, with the flow planner's chosen setting as
+its proposer, chooses the setting of shortest median time among those with at least as many valid plans as
+RRT-Connect on the same validation problems (the goal the hybrid is held to), and the most valid plans when none
+has. Test problems are never looked at before the choice. Every
 plan is made by its own call on one thread (`--batch 1`, `threads=1`; the hybrid's call proposes its N plans in one
 batch), so that the time per plan is the wall time of the call that made it, for every planner alike.
 """
@@ -17,10 +19,15 @@ import json
 import os
 
 FAMILIES = ["table", "shelf", "box", "cage", "under_table"]
-FAMILY_SEEDS = {"val": 101, "test": 202}
+# Test seed 303: the sets of seed 202 were reported at every round of the work on these planners (docs/results.md),
+# so their figures were seen while the grids and defaults were designed; 303 was drawn for the final report only.
+FAMILY_SEEDS = {"val": 101, "test": 303}
 SPHERE_RADII = [0.05, 0.1, 0.15]
 SPHERE_START_TCP, SPHERE_GOAL_TCP = "0.5,-0.3,0.2", "0.5,0.3,0.2"
 JOINT_CONFIG = "configs/franka_joint.yaml"
+# The family whose test problems are also planned as read from MoveIt files (moveit_set), and that set's name.
+MOVEIT_FAMILY = "table"
+MOVEIT_SET = "table_moveit"
 # Guidance scales of the grid: the reach preset's 1.75 moves the joints of this planner too far (its data spans the
 # whole joint range, so a normalized step is several times larger in radians), see docs/results.md.
 SCALES = [0.05, 0.1, 0.2, 0.4]
@@ -81,6 +88,7 @@ class Families:
         self.families = FAMILIES[:2] if bench.quick else FAMILIES
         self.grids = {name: (grid[:2 if name == "fp" else 1] if bench.quick else grid) for name, *_, grid in LEARNED}
         self.grids["hybrid"] = HYBRID_GRID[:1] if bench.quick else HYBRID_GRID
+        self.grids["rrt_connect"] = [[]]  # no setting to choose: its validation cells are the hybrid's bar
         self.counts = {"val": size["family_val_problems"], "test": size["family_test_problems"]}
         self.plans = {"val": size["family_val_plans"], "test": size["family_test_plans"]}
 
@@ -128,8 +136,35 @@ class Families:
                                                     default_flow_style=None, sort_keys=False))
                 self.write_text(out + ".request", request)
 
+    # -- the MoveIt copy of a test set ---------------------------------------------
+    def moveit_command(self):
+        """MOVEIT_FAMILY's test problems written as MoveIt scene and request files (write_moveit) and read back by
+        `flowplan scenes import`, every obstacle kept (--grasped none), so that the imported set must equal the
+        original: (problem file, folder of MoveIt files, command, request)."""
+        source, source_request = self.set_request("test", MOVEIT_FAMILY)
+        out = self.path("problems", f"test_{MOVEIT_SET}.yaml")
+        folder = self.path("problems", f"test_{MOVEIT_SET}_files")
+        command = [self.bench.flowplan, "scenes", "import", "--dir", folder, "--grasped", "none", "--out", out]
+        return out, source, folder, command, self.bench.request(command, source_request)
+
+    def moveit_set(self):
+        out, source, folder, command, request = self.moveit_command()
+        with self.stale(lambda: self.recorded(out + ".request", request), out + ".lock",
+                        [out, out + ".request"]) as ours:
+            if ours:
+                import shutil
+                import yaml
+                shutil.rmtree(folder, ignore_errors=True)
+                write_moveit(yaml.safe_load(open(source)), folder)
+                self.bench.call(command)
+                compare_imported(yaml.safe_load(open(source)), yaml.safe_load(open(out)), out)
+                print(f"families: {MOVEIT_SET}: {source} through MoveIt files equals the original", flush=True)
+                self.write_text(out + ".request", request)
+
     def set_request(self, split, family):
-        if family == "sphere":
+        if family == MOVEIT_SET:
+            out, _, _, _, request = self.moveit_command()
+        elif family == "sphere":
             out, _, _, request = self.sphere_command()
         else:
             out, _, request = self.problems_command(split, family)
@@ -201,28 +236,45 @@ class Families:
         return rows
 
     def chosen(self, planner):
-        """The setting of PLANNER's grid with the most valid validation plans, then the shorter median time; None
-        until every setting has been planned."""
+        """The setting of PLANNER's grid with the most valid validation plans, then the shorter median time; for
+        the hybrid, the shortest median time among the settings with at least RRT-Connect's validation success
+        (the most valid plans when none has). None until every setting (and RRT-Connect's) has been planned."""
         rows = self.validation(planner)
         if len(rows) < len(self.grids[planner]):
             return None
+        if planner == "rrt_connect":
+            return []
+        if planner == "hybrid":
+            bar = self.validation("rrt_connect")
+            if not bar:
+                return None
+            level = [row for row in rows if row[1] >= bar[0][1]]
+            if level:
+                return min(level, key=lambda row: (row[2], -row[1]))[0]
         return max(rows, key=lambda row: (row[1], -row[2]))[0]
 
     def run(self):
         self.problem_sets()
-        for planner in [name for name, *_ in LEARNED] + ["hybrid"]:
+        self.moveit_set()
+        # The VAE planner last: the other planners' cells do not wait for its training.
+        for planner in [name for name in PLANNERS if name != "vae"] + ["vae"]:
             for k, setting in enumerate(self.grids[planner]):
                 for family in self.families:
                     self.cell(self.val_prefix(planner, k, family), planner, setting, "val", family, False)
-            print(f"families: {planner} chose {self.chosen(planner)} on validation", flush=True)
-        for planner in PLANNERS:
-            setting = [] if planner == "rrt_connect" else self.chosen(planner)
+            setting = self.chosen(planner)
+            if planner != "rrt_connect":
+                print(f"families: {planner} chose {setting} on validation", flush=True)
             if setting is None:  # another driver is still planning its validation cells
                 print(f"families: {planner} has not chosen yet; its test problems wait for the next run", flush=True)
                 continue
-            for family in self.families + ["sphere"]:
+            for family in self.test_sets():
                 self.cell(self.path("test", f"{planner}_{family}"), planner, setting, "test", family, True)
             print(f"families: {planner} planned the test problems", flush=True)
+
+    def test_sets(self):
+        """The test problem sets: every family, the paper's sphere scene, and MOVEIT_FAMILY's set as imported from
+        MoveIt files."""
+        return self.families + ["sphere", MOVEIT_SET]
 
     # -- results ----------------------------------------------------------------
     def results(self, summary):
@@ -243,11 +295,16 @@ class Families:
                 {"setting": s, "success": v, "median_time_s": t, "plans": n} for s, v, t, n in rows]
             grid = "; ".join(f"{' '.join(s)}: {v:.0%}, {t:.3f} s" for s, v, t, _ in rows)
             text.append(f"- {LABELS[planner]}: **{' '.join(choice) if choice else 'not chosen yet'}** ({grid})")
+        bar = self.validation("rrt_connect")
+        summary["families"]["validation"]["rrt_connect"] = [
+            {"setting": s, "success": v, "median_time_s": t, "plans": n} for s, v, t, n in bar]
+        text.append("- RRT-Connect (no setting; the hybrid's bar): " +
+                    (f"{bar[0][1]:.0%}, {bar[0][2]:.3f} s" if bar else "not planned yet"))
         text.append("")
         header = ("| planner | success | executed | median time (s) | p95 time (s) | joint path (rad) | TCP path (m) "
                   "| max speed ratio | mean squared jerk (rad²/s⁶) | duration (s) | routes |")
         points = {}
-        for family in self.families + ["sphere"]:
+        for family in self.test_sets():
             text += [f"**{family}**\n", header, "|---" * 11 + "|"]
             for planner in PLANNERS:
                 setting = [] if planner == "rrt_connect" else self.chosen(planner)
@@ -282,8 +339,77 @@ class Families:
         text += ["Path length, speed ratio, jerk and duration: medians over the valid plans (over all plans when none is "
                  "valid). Routes: how the hybrid made its plans. Published anchors, not measured here: "
                  f"{CUROBO}; {VAMP}.\n"]
-        plot_families(points, self.families + ["sphere"], self.bench.path("results", "families_success_vs_time.png"))
+        plot_families(points, self.test_sets(), self.bench.path("results", "families_success_vs_time.png"))
         return text
+
+
+def write_moveit(problem_set, folder):
+    """Writes every problem of PROBLEM_SET (a parsed flowplan problem file) as MotionBenchMaker does: FOLDER/
+    sceneNNNN.yaml, a MoveIt planning scene (world.collision_objects, one primitive each, named as the problem names
+    its obstacles; quaternions as x, y, z, w), and requestNNNN.yaml, a motion-plan request (start_state by joint
+    name, the fingers included; the goal as joint constraints). Written here from the problem file alone, with
+    nothing of flowplan's importer."""
+    import yaml
+    os.makedirs(folder, exist_ok=True)
+    joints = [f"panda_joint{j + 1}" for j in range(7)]
+    for i, problem in enumerate(problem_set["problems"], start=1):
+        scene, names = problem["scene"], problem["obstacle_names"]
+        objects = []
+
+        def add(primitive, centre, quaternion=(1.0, 0.0, 0.0, 0.0)):
+            w, x, y, z = quaternion
+            objects.append({"header": {"frame_id": "panda_link0"}, "id": names[len(objects)],
+                            "primitives": [primitive],
+                            "primitive_poses": [{"position": list(centre), "orientation": [x, y, z, w]}],
+                            "operation": 0})
+        for sphere in scene.get("spheres", []):  # the scene's numbering: spheres, boxes, cylinders
+            add({"type": "sphere", "dimensions": [sphere["radius"]]}, sphere["centre"])
+        for box in scene.get("boxes", []):
+            add({"type": "box", "dimensions": list(box["size"])}, box["centre"], box["quaternion"])
+        for cylinder in scene.get("cylinders", []):
+            add({"type": "cylinder", "dimensions": [cylinder["height"], cylinder["radius"]]}, cylinder["centre"],
+                cylinder["quaternion"])
+        if scene.get("capsules"):
+            raise ValueError(f"{problem['name']}: MoveIt has no capsule primitive")
+        planning_scene = {"name": problem["name"], "robot_model_name": "panda", "is_diff": True,
+                          "world": {"collision_objects": objects}}
+        request = {"group_name": "panda_arm", "num_planning_attempts": 1, "allowed_planning_time": 10.0,
+                   "start_state": {"joint_state": {"name": joints + ["panda_finger_joint1", "panda_finger_joint2"],
+                                                   "position": list(problem["start_q"]) + [0.035, 0.035]}},
+                   "goal_constraints": [{"joint_constraints": [
+                       {"joint_name": name, "position": q, "tolerance_above": 0.001, "tolerance_below": 0.001,
+                        "weight": 1.0} for name, q in zip(joints, problem["goal_q"])]}]}
+        for stem, content in ((f"scene{i:04d}", planning_scene), (f"request{i:04d}", request)):
+            with open(os.path.join(folder, stem + ".yaml"), "w") as f:
+                yaml.safe_dump(content, f, default_flow_style=None, sort_keys=False)
+
+
+def compare_imported(original, imported, path):
+    """Raises ValueError naming the first difference between ORIGINAL's problems and IMPORTED's (parsed problem
+    files): the same count, starts and goals exactly, every obstacle's numbers within 1e-12 (the importer
+    normalizes quaternions)."""
+    first, second = original["problems"], imported["problems"]
+    if len(first) != len(second):
+        raise ValueError(f"{path}: {len(second)} problems imported from {len(first)}")
+
+    def close(a, b, where):
+        if isinstance(a, (list, tuple)):
+            if not isinstance(b, (list, tuple)) or len(a) != len(b):
+                raise ValueError(f"{path}: {where}: {b!r} imported from {a!r}")
+            for k, (x, y) in enumerate(zip(a, b)):
+                close(x, y, f"{where}[{k}]")
+        elif isinstance(a, dict):
+            for key in a:
+                close(a[key], b.get(key), f"{where}.{key}")
+        elif isinstance(a, float) or isinstance(b, float):
+            if b is None or abs(float(a) - float(b)) > 1e-12:
+                raise ValueError(f"{path}: {where}: {b!r} imported from {a!r}")
+    for k, (a, b) in enumerate(zip(first, second)):
+        for key in ("start_q", "goal_q"):
+            if list(a[key]) != list(b[key]):
+                raise ValueError(f"{path}: problem {k}: {key} {b[key]} imported from {a[key]}")
+        for kind in ("spheres", "boxes", "cylinders"):
+            close(a["scene"].get(kind, []), b["scene"].get(kind, []), f"problem {k}: scene.{kind}")
 
 
 def summarize(report):

@@ -175,7 +175,7 @@ FULL = {"episodes": None, "train": [], "plans_per_pair": 64, "radii": [round(0.0
         "problems": 100, "problem_plans": 8, "example_radii": [0.1, 0.2], "example_plans": 8,
         "curve_steps": [2000, 5000, 10000, 20000], "long_rows": None, "select_problems": 100, "select_plans": 8,
         "select_warmup": 3, "select_rows": 0,
-        "family_val_problems": 10, "family_val_plans": 2, "family_test_problems": 20, "family_test_plans": 4}
+        "family_val_problems": 20, "family_val_plans": 2, "family_test_problems": 20, "family_test_plans": 4}
 QUICK = {"episodes": 256,
          "train": ["train.steps=20", "train.batch_size=16", "train.eval_every=0", "train.checkpoint_every=10",
                    "train.log_every=10", "train.val_batch_size=16"],
