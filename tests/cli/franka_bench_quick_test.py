@@ -28,6 +28,7 @@ import subprocess
 import sys
 
 import h5py
+import numpy
 import yaml
 
 flowplan, scratch = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
@@ -141,6 +142,13 @@ for planner, rows in families["validation"].items():
     assert rows and families["chosen"][planner] == best["setting"], (planner, rows)
 fp_grid = [r["setting"] for r in families["validation"]["fp"]]
 assert len(fp_grid) == 2 and fp_grid[0] != fp_grid[1], fp_grid
+# The rule itself, on made-up rows (the quick grid has one hybrid setting): the bar keeps out the fast row below it,
+# picks the fastest above it, and falls back to the most valid when no row reaches it.
+sys.path.insert(0, os.path.join(repo, "scripts"))
+import bench_families  # noqa: E402
+made_up = [(["slow"], 0.98, 0.020, 200), (["fast"], 0.965, 0.013, 200), (["below"], 0.955, 0.010, 200)]
+assert bench_families.choose(made_up, 0.96) == ["fast"]
+assert bench_families.choose(made_up, 0.99) == ["slow"] == bench_families.choose(made_up)
 test_cells = {f"{p}/{s}" for p in ("fp", "fp_split", "mpd", "vae", "rrt_connect", "hybrid")
               for s in ("table", "shelf", "sphere", "table_moveit")}
 assert sorted(families["test"]) == sorted(test_cells), sorted(families["test"])
@@ -180,7 +188,8 @@ for planner in ("fp", "fp_split", "mpd", "vae", "rrt_connect", "hybrid"):
         for a, b in zip(reports[0]["problems"], reports[1]["problems"]):
             assert a["status"] == b["status"] == "planned", (planner, a, b)
             for key in ("start", "goal", "plans"):
-                assert (native[a["group"]][key][()] == imported[b["group"]][key][()]).all(), (planner, a["name"], key)
+                assert numpy.array_equal(native[a["group"]][key][()], imported[b["group"]][key][()]), \
+                    (planner, a["name"], key)
 assert os.path.exists(os.path.join(root, "results", "families_success_vs_time.png"))
 # The select stage's sets: validation seed 101, the held-out test set seed 303.
 select_val = open(os.path.join(root, "select", "val.yaml")).read()
