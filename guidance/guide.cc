@@ -16,6 +16,7 @@ namespace {
 struct CostContext {
   const kinematics::Robot& robot;
   double dt;
+  models::Kernels kernels;       // guidance.distance_kernels
   torch::jit::Module distances;  // geometry/distances.py or native_distances.py
 };
 
@@ -34,15 +35,19 @@ const std::vector<CostTerm> kCostTerms = {
     {"JointSpeedCost", "guidance/joint_speed.py", "guidance.joint_speed_weight"},
 };
 
+c10::List<std::string> NativeKinds() {
+  c10::List<std::string> kinds;
+  for (const std::string& kind : kernels::NativeShapeKinds()) kinds.push_back(kind);
+  return kinds;
+}
+
 /// The distance passes of the collision cost, in the code `kernels` asks for.
 torch::jit::Module BuildDistances(models::Kernels kernels) {
   if (kernels == models::Kernels::kPortable) {
     return jit::ModuleBuilder("Distances").Methods("geometry/distances.py").Build();
   }
-  c10::List<std::string> kinds;
-  for (const std::string& kind : kernels::NativeShapeKinds()) kinds.push_back(kind);
   return jit::ModuleBuilder("NativeDistances")
-      .Attribute("native_kinds", kinds)
+      .Attribute("native_kinds", NativeKinds())
       .Methods("geometry/native_distances.py")
       .Build();
 }
@@ -55,6 +60,24 @@ jit::ModuleBuilder TermBuilder(const char* class_name, const char* weight_key, c
       .Attribute("dt", context.dt)
       .Attribute("weight_key", std::string(weight_key));
   return builder;
+}
+
+/// A built-in term's module. With native kernels an arm's collision hinge is one call of
+/// flowplan::arm_collision (guidance/arm_collision.py), holding the script's term for what the operator
+/// does not take.
+torch::jit::Module BuildTerm(const CostTerm& term, const CostContext& context) {
+  torch::jit::Module scripted = TermBuilder(term.class_name, term.weight_key, context).Methods(term.path).Build();
+  if (std::string(term.class_name) != "CollisionCost" || context.kernels != models::Kernels::kNative ||
+      !context.robot.is_arm()) {
+    return scripted;
+  }
+  return jit::ModuleBuilder("ArmCollisionCost")
+      .Submodule("robot", context.robot.module())
+      .Submodule("scripted", scripted)
+      .Attribute("native_kinds", NativeKinds())
+      .Attribute("weight_key", std::string(term.weight_key))
+      .Methods("guidance/arm_collision.py")
+      .Build();
 }
 
 std::string ReadUserCost(const std::string& path) {
@@ -75,11 +98,9 @@ std::string ReadUserCost(const std::string& path) {
 
 torch::jit::Module BuildGuide(const GuidanceConfig& config, const kinematics::Robot& robot,
                               const torch::jit::Module& normalizer, double dt) {
-  const CostContext context{robot, dt, BuildDistances(config.distance_kernels)};
+  const CostContext context{robot, dt, config.distance_kernels, BuildDistances(config.distance_kernels)};
   std::vector<torch::jit::Module> terms;
-  for (const CostTerm& term : kCostTerms) {
-    terms.push_back(TermBuilder(term.class_name, term.weight_key, context).Methods(term.path).Build());
-  }
+  for (const CostTerm& term : kCostTerms) terms.push_back(BuildTerm(term, context));
   if (!config.user_cost.empty()) {
     const std::string source = ReadUserCost(config.user_cost);
     terms.push_back(TermBuilder("UserCost", "guidance.user_cost_weight", context)

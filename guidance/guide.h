@@ -51,8 +51,9 @@ struct GuidanceConfig {
   double joint_speed_ratio = 1.0;   // share of each joint's velocity limit above which that hinge acts
   std::string user_cost;            // a TorchScript file defining cost(self, q, qd, scene); empty: none
   double user_cost_weight = 1.0;    // weight of the user cost
-  // The collision cost's obstacle distances: native kernels (flowplan::shape_distance), or LibTorch's operators
-  // only (what `flowplan export` writes unless told --kernels native).
+  // The collision cost's obstacle distances: native kernels (flowplan::shape_distance; for an arm the whole
+  // hinge, kinematics included, as flowplan::arm_collision), or LibTorch's operators only (what `flowplan
+  // export` writes unless told --kernels native).
   models::Kernels distance_kernels = models::Kernels::kNative;
 
   template <class V>
@@ -80,8 +81,8 @@ struct GuidanceConfig {
             "TorchScript file defining `def cost(self, q, qd, scene) -> Tensor` (docs/planning.md); empty for none");
     v.Field("user_cost_weight", user_cost_weight, "weight of the user cost", config::NonNegative());
     v.Field("distance_kernels", distance_kernels,
-            "the collision cost's obstacle distances: native kernels (needs libflowplan_kernels where the planner "
-            "runs) or portable");
+            "the collision cost's obstacle distances (for an arm the whole cost): native kernels (needs "
+            "libflowplan_kernels where the planner runs) or portable");
   }
 };
 
