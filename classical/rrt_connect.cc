@@ -228,8 +228,10 @@ RrtConnectPlanner::RrtConnectPlanner(const kinematics::TrajectoryInfo& trajector
 
 torch::Tensor RrtConnectPlanner::Valid(const torch::Tensor& q, const geometry::SceneRows& scene) const {
   const int64_t M = q.size(0), J = q.size(1);
-  torch::Tensor valid = geometry::CountObstacles(scene) == 0 ? torch::ones({M}, torch::kBool)
-                                                             : (robot_->Clearance(q, scene) >= config_.margin).all(1);
+  torch::Tensor valid =
+      geometry::CountObstacles(scene) == 0
+          ? torch::ones({M}, torch::kBool)
+          : std::get<0>(robot_->NearestObstacles(q, scene).clearance.min(1)) >= config_.margin;
   if (configuration_check_) {
     const torch::Tensor q64 = q.to(torch::kFloat64).contiguous();
     const double* values = q64.data_ptr<double>();
@@ -260,6 +262,7 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
   geometry::CheckRows(request.scene, static_cast<int>(robot_->workspace_dim()), "plan");
   geometry::SceneRows scene;
   for (const auto& entry : request.scene) scene.insert(entry.key(), entry.value().to(torch::kFloat64));
+  scene = geometry::PreparedRows(scene, static_cast<int>(robot_->workspace_dim()));  // once for every check
   torch::NoGradGuard no_grad;
   const auto& d = robot_->description();
   planning::PlanResult result;

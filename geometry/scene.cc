@@ -256,6 +256,14 @@ Scene SceneOf(const SceneRows& rows, int W, const std::string& where) {
   return scene;
 }
 
+SceneRows PreparedRows(const SceneRows& rows, int W) {
+  SceneRows prepared;
+  for (const auto& entry : jit::CallFunction("prepared_scene", {rows, static_cast<int64_t>(W)}).toGenericDict()) {
+    prepared.insert(entry.key().toStringRef(), entry.value().toTensor());
+  }
+  return prepared;
+}
+
 SceneRows SphereRows(const torch::Tensor& spheres) {
   SceneRows rows;
   if (spheres.defined() && spheres.size(0) > 0) rows.insert("spheres", spheres);

@@ -33,6 +33,12 @@ void CheckRows(const SceneRows& rows, int workspace_dim, const std::string& wher
 /// @throws flowplan::Error as CheckRows.
 Scene SceneOf(const SceneRows& rows, int workspace_dim, const std::string& where);
 
+/// The same rows with what every distance would compute from them appended
+/// (a box's or cylinder's rotation matrix: geometry/scene.py's
+/// prepared_scene); every distance takes either form. For a caller that
+/// measures one scene many times (a search, a plan check).
+SceneRows PreparedRows(const SceneRows& rows, int workspace_dim);
+
 /// The rows of a sphere tensor (K, W + 1) (the older form of a scene).
 SceneRows SphereRows(const torch::Tensor& spheres);
 

@@ -3,7 +3,9 @@
 #include <ATen/Parallel.h>
 
 #include <array>
+#include <limits>
 #include <stdexcept>
+#include <type_traits>
 
 #include "kernels/shape_distance_math.h"
 
@@ -80,110 +82,168 @@ S SquaredDistance(const S* a, const S* b) {
   return dx * dx + dy * dy + dz * dz;
 }
 
+/// An obstacle of any kind: its distance, its prepared row, its bounding ball (centre (3), radius).
 template <class S>
-void Run(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& reach_in,
-         const std::vector<std::string>& kinds, const std::vector<torch::Tensor>& rows_in, torch::Tensor& value,
-         torch::Tensor* gradient) {
-  // The tables are read as float64 (the Arm's buffers are; no copy then) and each number rounded to S, as
-  // the script's .to(q.dtype) does.
-  const auto options = q.options();
-  const auto as_double = torch::TensorOptions().dtype(torch::kFloat64);
-  const torch::Tensor fixed = arm.fixed.to(as_double).contiguous();
-  const torch::Tensor fixed_cross = arm.fixed_cross.to(as_double).contiguous();
-  const torch::Tensor fixed_cross_sq = arm.fixed_cross_sq.to(as_double).contiguous();
-  const torch::Tensor link_turns = arm.link_turns.to(as_double).contiguous();
-  const torch::Tensor link_joint = arm.link_joint.to(torch::kInt64).contiguous();
-  const torch::Tensor frame_points = arm.frame_points.to(as_double).contiguous();
-  const torch::Tensor ancestors = arm.ancestors.to(as_double).contiguous();
-  const torch::Tensor reach = reach_in.to(options).contiguous();
-  const int64_t M = q.size(0), J = q.size(1), L = fixed.size(0), S_ = reach.size(0), C = S_ + 2 * J;
+struct Obstacle {
+  S (*distance)(const S*, const S*, S*);
+  const S* row;
+  const S* bound;
+};
+
+/// A scene's obstacles in the kinds' order, then the rows' (the scene's numbering), in dtype S.
+template <class S>
+struct SceneObstacles {
+  std::vector<torch::Tensor> rows;  // kept alive: the obstacles point into them
+  std::vector<Obstacles<S>> kinds;
+  std::vector<Obstacle<S>> all;
+
+  SceneObstacles(const std::vector<std::string>& kind_names, const std::vector<torch::Tensor>& rows_in,
+                 const torch::TensorOptions& options) {
+    for (size_t i = 0; i < kind_names.size(); ++i) {
+      rows.push_back(rows_in[i].to(options).contiguous());
+      kinds.push_back(PrepareKind<S>(kind_names[i], rows.back()));
+    }
+    for (const Obstacles<S>& kind : kinds) {
+      for (int64_t k = 0; k < kind.count; ++k) {
+        all.push_back({kind.distance, kind.rows + k * kind.columns, kind.bounds.data() + 4 * k});
+      }
+    }
+  }
+};
+
+/// An arm's kinematics in dtype S, from its tables: the frames of its links and the points fixed in them
+/// (Arm.link_frames and Arm.fixed_points). The tables are read as float64 (the Arm's buffers are; no copy
+/// then) and each number rounded to S, as the script's .to(q.dtype) does.
+template <class S>
+class ArmKinematics {
+ public:
+  ArmKinematics(const ArmTables& arm, int64_t J, int64_t S_) : L(arm.fixed.size(0)), J(J), S_(S_), C(S_ + 2 * J) {
+    const auto as_double = torch::TensorOptions().dtype(torch::kFloat64);
+    const torch::Tensor fixed = arm.fixed.to(as_double).contiguous();
+    const torch::Tensor fixed_cross = arm.fixed_cross.to(as_double).contiguous();
+    const torch::Tensor fixed_cross_sq = arm.fixed_cross_sq.to(as_double).contiguous();
+    const torch::Tensor link_turns = arm.link_turns.to(as_double).contiguous();
+    const torch::Tensor link_joint = arm.link_joint.to(torch::kInt64).contiguous();
+    const torch::Tensor frame_points = arm.frame_points.to(as_double).contiguous();
+    const torch::Tensor ancestors = arm.ancestors.to(as_double).contiguous();
+    // The links' three matrices, top rows side by side (L, 3, 12); a welded link (turns 0) is its fixed pose.
+    link_tables.resize(static_cast<size_t>(36 * L));
+    turns.resize(static_cast<size_t>(L));
+    parents = arm.parents;
+    turned_by.assign(link_joint.data_ptr<int64_t>(), link_joint.data_ptr<int64_t>() + L);
+    for (int64_t l = 0; l < L; ++l) {
+      const double* tables[3] = {fixed.data_ptr<double>() + 16 * l, fixed_cross.data_ptr<double>() + 16 * l,
+                                 fixed_cross_sq.data_ptr<double>() + 16 * l};
+      for (int t = 0; t < 3; ++t) {
+        for (int e = 0; e < 16; ++e) {
+          const double expected = e < 12 ? tables[t][e] : (t == 0 && e == 15 ? 1.0 : 0.0);
+          if (tables[t][e] != expected) {
+            throw std::runtime_error("arm_collision: link " + std::to_string(l) +
+                                     ": expected rigid transforms (bottom rows 0 0 0 1, and 0 0 0 0 in "
+                                     "fixed_cross and fixed_cross_sq)");
+          }
+          if (e < 12) link_tables[36 * l + 12 * t + e] = static_cast<S>(tables[t][e]);
+        }
+      }
+      turns[l] = static_cast<S>(link_turns.data_ptr<double>()[l]);
+    }
+    // Each frame point lies in one link's block of frame_points (the rows of every other link are zero): its
+    // link and its four homogeneous coordinates.
+    column_link.assign(static_cast<size_t>(C), -1);
+    column_point.assign(static_cast<size_t>(4 * C), S(0));
+    const double* fp = frame_points.data_ptr<double>();
+    for (int64_t c = 0; c < C; ++c) {
+      for (int64_t l = 0; l < L && column_link[c] < 0; ++l) {
+        for (int r = 0; r < 4; ++r) {
+          if (fp[(4 * l + r) * C + c] != 0.0) column_link[c] = l;
+        }
+      }
+      if (column_link[c] < 0) continue;  // the zero vector
+      for (int r = 0; r < 4; ++r) column_point[4 * c + r] = static_cast<S>(fp[(4 * column_link[c] + r) * C + c]);
+    }
+    moves.resize(static_cast<size_t>(J * S_));
+    for (int64_t i = 0; i < J * S_; ++i) moves[i] = static_cast<S>(ancestors.data_ptr<double>()[i]);
+  }
+
+  /// The link frames (L, 3, 4) and the frame points in the world (C, 3) of joint angles `angles` (J).
+  void Place(const S* angles, S* frames, S* points) const {
+    std::array<S, 12> local{};
+    for (int64_t l = 0; l < L; ++l) {
+      // F + sin F[a]x + (1 - cos) F[a]x^2.
+      const S* table = link_tables.data() + 36 * l;
+      if (turns[l] == S(0)) {
+        std::copy(table, table + 12, local.begin());
+      } else {
+        const S angle = angles[turned_by[l]] * turns[l];
+        const S sine = std::sin(angle), versine = S(1) - std::cos(angle);
+        for (int e = 0; e < 12; ++e) local[e] = table[e] + sine * table[12 + e] + versine * table[24 + e];
+      }
+      const int64_t parent = parents[static_cast<size_t>(l)];
+      if (parent < 0) {
+        std::copy(local.begin(), local.end(), frames + 12 * l);
+      } else {
+        Multiply(frames + 12 * parent, local.data(), frames + 12 * l);
+      }
+    }
+    for (int64_t c = 0; c < C; ++c) {
+      const int64_t l = column_link[c];
+      S* p = points + kW * c;
+      if (l < 0) {
+        p[0] = p[1] = p[2] = 0;
+      } else {
+        Transform(frames + 12 * l, column_point.data() + 4 * c, p);
+      }
+    }
+  }
+
+  const int64_t L, J, S_, C;
+  std::vector<S> link_tables, turns, column_point, moves;  // moves: the ancestors (J, S)
+  std::vector<int64_t> turned_by, parents, column_link;
+};
+
+template <class S>
+void RunHinge(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& reach_in,
+              const std::vector<std::string>& kinds, const std::vector<torch::Tensor>& rows_in, torch::Tensor& value,
+              torch::Tensor* gradient) {
+  const torch::Tensor reach = reach_in.to(q.options()).contiguous();
+  const ArmKinematics<S> kinematics(arm, q.size(1), reach.size(0));
+  const int64_t M = q.size(0), J = kinematics.J, L = kinematics.L, S_ = kinematics.S_, C = kinematics.C;
   const S* reaches = reach.data_ptr<S>();
 
-  // The links' three matrices, top rows side by side (L, 3, 12); a welded link (turns 0) is its fixed pose.
-  std::vector<S> link_tables(static_cast<size_t>(36 * L)), turns(static_cast<size_t>(L));
-  for (int64_t l = 0; l < L; ++l) {
-    const double* tables[3] = {fixed.data_ptr<double>() + 16 * l, fixed_cross.data_ptr<double>() + 16 * l,
-                               fixed_cross_sq.data_ptr<double>() + 16 * l};
-    for (int t = 0; t < 3; ++t) {
-      for (int e = 0; e < 16; ++e) {
-        const double expected = e < 12 ? tables[t][e] : (t == 0 && e == 15 ? 1.0 : 0.0);
-        if (tables[t][e] != expected) {
-          throw std::runtime_error("arm_collision: link " + std::to_string(l) +
-                                   ": expected rigid transforms (bottom rows 0 0 0 1, and 0 0 0 0 in fixed_cross "
-                                   "and fixed_cross_sq)");
-        }
-        if (e < 12) link_tables[36 * l + 12 * t + e] = static_cast<S>(tables[t][e]);
-      }
-    }
-    turns[l] = static_cast<S>(link_turns.data_ptr<double>()[l]);
-  }
-  // Each frame point lies in one link's block of frame_points (the rows of every other link are zero): its
-  // link and its four homogeneous coordinates.
-  std::vector<int64_t> column_link(static_cast<size_t>(C), -1);
-  std::vector<S> column_point(static_cast<size_t>(4 * C), S(0));
-  const double* fp = frame_points.data_ptr<double>();
-  for (int64_t c = 0; c < C; ++c) {
-    for (int64_t l = 0; l < L && column_link[c] < 0; ++l) {
-      for (int r = 0; r < 4; ++r) {
-        if (fp[(4 * l + r) * C + c] != 0.0) column_link[c] = l;
-      }
-    }
-    if (column_link[c] < 0) continue;  // the zero vector
-    for (int r = 0; r < 4; ++r) column_point[4 * c + r] = static_cast<S>(fp[(4 * column_link[c] + r) * C + c]);
-  }
-  std::vector<S> moves(static_cast<size_t>(J * S_));
-  for (int64_t i = 0; i < J * S_; ++i) moves[i] = static_cast<S>(ancestors.data_ptr<double>()[i]);
-
   // The spheres link by link, each link's in a ball (in its frame: centre, and radius with the spheres' reach)
-  // that an obstacle's bounding ball must meet for any of them to touch it.
+  // that an obstacle's bounding ball must meet for any of them to touch it. Spheres on no link (a zero column)
+  // sit at the origin, checked on their own.
   std::vector<std::vector<int64_t>> link_spheres(static_cast<size_t>(L));
+  std::vector<int64_t> loose;
   for (int64_t s = 0; s < S_; ++s) {
-    if (column_link[s] >= 0) link_spheres[column_link[s]].push_back(s);
+    if (kinematics.column_link[s] >= 0) {
+      link_spheres[kinematics.column_link[s]].push_back(s);
+    } else {
+      loose.push_back(s);
+    }
   }
   std::vector<S> link_balls(static_cast<size_t>(5 * L), S(0));  // homogeneous centre (4), radius
   for (int64_t l = 0; l < L; ++l) {
     const auto& members = link_spheres[l];
     if (members.empty()) continue;
+    const S* local = kinematics.column_point.data();
     double centre[3] = {0, 0, 0};
     for (int64_t s : members) {
-      for (int i = 0; i < kW; ++i) centre[i] += column_point[4 * s + i] / static_cast<double>(members.size());
+      for (int i = 0; i < kW; ++i) centre[i] += local[4 * s + i] / static_cast<double>(members.size());
     }
     double radius = 0;
     for (int64_t s : members) {
       double squares = 0;
-      for (int i = 0; i < kW; ++i) squares += (column_point[4 * s + i] - centre[i]) * (column_point[4 * s + i] - centre[i]);
+      for (int i = 0; i < kW; ++i) squares += (local[4 * s + i] - centre[i]) * (local[4 * s + i] - centre[i]);
       radius = std::max(radius, std::sqrt(squares) + static_cast<double>(reaches[s]));
     }
     for (int i = 0; i < kW; ++i) link_balls[5 * l + i] = static_cast<S>(centre[i]);
     link_balls[5 * l + 3] = S(1);
     link_balls[5 * l + 4] = static_cast<S>(radius + 1e-6 * (1.0 + radius));  // its own rounding covered
   }
-  // Spheres on no link (a zero column) sit at the origin, checked on their own.
-  std::vector<int64_t> loose;
-  for (int64_t s = 0; s < S_; ++s) {
-    if (column_link[s] < 0) loose.push_back(s);
-  }
-
-  std::vector<torch::Tensor> rows;  // kept alive: the obstacles point into them
-  std::vector<Obstacles<S>> kinds_rows;
-  for (size_t i = 0; i < kinds.size(); ++i) {
-    rows.push_back(rows_in[i].to(options).contiguous());
-    kinds_rows.push_back(PrepareKind<S>(kinds[i], rows.back()));
-  }
-  struct Obstacle {
-    S (*distance)(const S*, const S*, S*);
-    const S* row;
-    const S* bound;  // centre (3), radius
-  };
-  std::vector<Obstacle> all;  // in the kinds' order, then the rows'
-  for (const Obstacles<S>& kind : kinds_rows) {
-    for (int64_t k = 0; k < kind.count; ++k) {
-      all.push_back({kind.distance, kind.rows + k * kind.columns, kind.bounds.data() + 4 * k});
-    }
-  }
+  const SceneObstacles<S> scene(kinds, rows_in, q.options());
 
   const S* qs = q.data_ptr<S>();
-  const int64_t* turned_by = link_joint.data_ptr<int64_t>();
   S* out_value = value.data_ptr<S>();
   S* out_gradient = gradient == nullptr ? nullptr : gradient->data_ptr<S>();
   const S slack = static_cast<S>(kSkipSlack);
@@ -192,45 +252,17 @@ void Run(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& reac
     std::vector<S> frames(static_cast<size_t>(12 * L)), points(static_cast<size_t>(kW * C)),
         pushes(static_cast<size_t>(kW * S_));
     std::vector<char> pushed(static_cast<size_t>(S_));
-    std::vector<const Obstacle*> near;
-    near.reserve(all.size());
-    std::array<S, 12> local{};
+    std::vector<const Obstacle<S>*> near;
+    near.reserve(scene.all.size());
     for (int64_t m = begin; m < end; ++m) {
-      const S* angles = qs + m * J;
-      // Link frames from the root outwards (Arm.link_frames): F + sin F[a]x + (1 - cos) F[a]x^2.
-      for (int64_t l = 0; l < L; ++l) {
-        const S* table = link_tables.data() + 36 * l;
-        if (turns[l] == S(0)) {
-          std::copy(table, table + 12, local.begin());
-        } else {
-          const S angle = angles[turned_by[l]] * turns[l];
-          const S sine = std::sin(angle), versine = S(1) - std::cos(angle);
-          for (int e = 0; e < 12; ++e) local[e] = table[e] + sine * table[12 + e] + versine * table[24 + e];
-        }
-        const int64_t parent = arm.parents[static_cast<size_t>(l)];
-        if (parent < 0) {
-          std::copy(local.begin(), local.end(), frames.begin() + 12 * l);
-        } else {
-          Multiply(frames.data() + 12 * parent, local.data(), frames.data() + 12 * l);
-        }
-      }
-      // The frame points in the world (Arm.fixed_points).
-      for (int64_t c = 0; c < C; ++c) {
-        const int64_t l = column_link[c];
-        S* p = points.data() + kW * c;
-        if (l < 0) {
-          p[0] = p[1] = p[2] = 0;
-        } else {
-          Transform(frames.data() + 12 * l, column_point.data() + 4 * c, p);
-        }
-      }
+      kinematics.Place(qs + m * J, frames.data(), points.data());
       // The hinge of every sphere against every obstacle, and the sum of the active distances' gradients.
       S total = 0;
-      auto hinge = [&](int64_t s, const std::vector<const Obstacle*>& candidates) {
+      auto hinge = [&](int64_t s, const std::vector<const Obstacle<S>*>& candidates) {
         const S* centre = points.data() + kW * s;
         S* push = pushes.data() + kW * s;
         S penetration = 0;
-        for (const Obstacle* obstacle : candidates) {
+        for (const Obstacle<S>* obstacle : candidates) {
           const S beyond = reaches[s] + slack + obstacle->bound[3];
           if (SquaredDistance(centre, obstacle->bound) >= beyond * beyond) continue;
           const S depth = reaches[s] - obstacle->distance(centre, obstacle->row, nullptr);
@@ -252,7 +284,7 @@ void Run(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& reac
         S ball[kW];
         Transform(frames.data() + 12 * l, link_balls.data() + 5 * l, ball);
         near.clear();
-        for (const Obstacle& obstacle : all) {
+        for (const Obstacle<S>& obstacle : scene.all) {
           const S beyond = link_balls[5 * l + 4] + slack + obstacle.bound[3];
           if (SquaredDistance(ball, obstacle.bound) < beyond * beyond) near.push_back(&obstacle);
         }
@@ -261,7 +293,7 @@ void Run(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& reac
       }
       if (!loose.empty()) {
         near.clear();
-        for (const Obstacle& obstacle : all) near.push_back(&obstacle);
+        for (const Obstacle<S>& obstacle : scene.all) near.push_back(&obstacle);
         for (int64_t s : loose) hinge(s, near);
       }
       out_value[m] = total;
@@ -272,7 +304,7 @@ void Run(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& reac
       for (int64_t j = 0; j < J; ++j) {
         S moment[kW] = {0, 0, 0}, force[kW] = {0, 0, 0};
         for (int64_t s = 0; s < S_; ++s) {
-          const S weight = moves[j * S_ + s];
+          const S weight = kinematics.moves[j * S_ + s];
           if (!pushed[s] || weight == S(0)) continue;
           const S* c = points.data() + kW * s;
           const S* g = pushes.data() + kW * s;
@@ -292,30 +324,77 @@ void Run(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& reac
   });
 }
 
+template <class S>
+void RunNearest(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& radii_in,
+                const std::vector<std::string>& kinds, const std::vector<torch::Tensor>& rows_in,
+                torch::Tensor& clearance, torch::Tensor& index) {
+  const torch::Tensor radii = radii_in.to(q.options()).contiguous();
+  const ArmKinematics<S> kinematics(arm, q.size(1), radii.size(0));
+  const int64_t M = q.size(0), J = kinematics.J, L = kinematics.L, S_ = kinematics.S_, C = kinematics.C;
+  const SceneObstacles<S> scene(kinds, rows_in, q.options());
+  const S* qs = q.data_ptr<S>();
+  const S* radius = radii.data_ptr<S>();
+  S* out_clearance = clearance.data_ptr<S>();
+  int64_t* out_index = index.data_ptr<int64_t>();
+  const int64_t K = static_cast<int64_t>(scene.all.size());
+  // An obstacle whose bounding ball is farther than the nearest distance so far by more than this cannot be
+  // nearer, nor tie with it (a distance rounds by far less).
+  const S slack = std::is_same<S, float>::value ? S(1e-4) : S(1e-9);
+
+  at::parallel_for(0, M, 4, [&](int64_t begin, int64_t end) {
+    std::vector<S> frames(static_cast<size_t>(12 * L)), points(static_cast<size_t>(kW * C));
+    for (int64_t m = begin; m < end; ++m) {
+      kinematics.Place(qs + m * J, frames.data(), points.data());
+      for (int64_t s = 0; s < S_; ++s) {
+        const S* centre = points.data() + kW * s;
+        S nearest = std::numeric_limits<S>::infinity();
+        int64_t which = -1;
+        for (int64_t k = 0; k < K; ++k) {
+          const Obstacle<S>& obstacle = scene.all[k];
+          if (which >= 0) {
+            // Skip when |c - o| - R > nearest + slack; both sides compared squared when the left is positive.
+            const S beyond = nearest + slack + obstacle.bound[3];
+            if (beyond > S(0) && SquaredDistance(centre, obstacle.bound) > beyond * beyond) continue;
+          }
+          const S distance = obstacle.distance(centre, obstacle.row, nullptr);
+          if (std::isnan(distance)) {  // torch.min's: a NaN is the minimum
+            nearest = distance;
+            which = k;
+            break;
+          }
+          if (which < 0 || distance < nearest) {  // ties: the first, as torch.min
+            nearest = distance;
+            which = k;
+          }
+        }
+        out_clearance[m * S_ + s] = K == 0 ? nearest : nearest - radius[s];
+        out_index[m * S_ + s] = which;
+      }
+    }
+  });
+}
+
 void Check(bool ok, const std::string& what) {
   if (!ok) throw std::runtime_error("arm_collision: " + what);
 }
 
-}  // namespace
-
-std::tuple<torch::Tensor, torch::Tensor> ArmCollision(const torch::Tensor& q_in, const ArmTables& arm,
-                                                      const torch::Tensor& reach,
-                                                      const std::vector<std::string>& kinds,
-                                                      const std::vector<torch::Tensor>& rows, bool with_gradient) {
-  Check(q_in.dim() == 2, "expected q (M, J)");
-  const auto dtype = q_in.scalar_type();
+/// The checks both entry points make of q (M, J), the tables and S spheres (`per_sphere`: reach or radii).
+void CheckArm(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& per_sphere, const char* name,
+              const std::vector<std::string>& kinds, const std::vector<torch::Tensor>& rows) {
+  Check(q.dim() == 2, "expected q (M, J)");
+  const auto dtype = q.scalar_type();
   Check(dtype == torch::kFloat32 || dtype == torch::kFloat64, "expected float32 or float64 q");
-  Check(q_in.device().is_cpu(), "expected q on the CPU");
-  Check(!q_in.requires_grad() && !reach.requires_grad(), "no autograd (guidance/collision.py's script has it)");
-  const int64_t M = q_in.size(0), J = q_in.size(1);
+  Check(q.device().is_cpu(), "expected q on the CPU");
+  Check(!q.requires_grad() && !per_sphere.requires_grad(), "no autograd (the scripts have it)");
+  const int64_t J = q.size(1);
   Check(arm.fixed.dim() == 3 && arm.fixed.size(1) == 4 && arm.fixed.size(2) == 4, "expected fixed (L, 4, 4)");
   const int64_t L = arm.fixed.size(0);
   Check(arm.fixed_cross.sizes() == arm.fixed.sizes() && arm.fixed_cross_sq.sizes() == arm.fixed.sizes(),
         "expected fixed_cross and fixed_cross_sq (L, 4, 4) as fixed");
   Check(arm.link_joint.numel() == L && arm.link_turns.numel() == L && static_cast<int64_t>(arm.parents.size()) == L,
         "expected link_joint, link_turns and parents of one entry per link (" + std::to_string(L) + ")");
-  Check(reach.dim() == 1, "expected reach (S,)");
-  const int64_t S = reach.size(0);
+  Check(per_sphere.dim() == 1, std::string("expected ") + name + " (S,)");
+  const int64_t S = per_sphere.size(0);
   Check(arm.ancestors.dim() == 2 && arm.ancestors.size(0) == J && arm.ancestors.size(1) == S,
         "expected ancestors (J, S) = (" + std::to_string(J) + ", " + std::to_string(S) + ")");
   Check(arm.frame_points.dim() == 2 && arm.frame_points.size(0) == 4 * L && arm.frame_points.size(1) == S + 2 * J,
@@ -329,17 +408,42 @@ std::tuple<torch::Tensor, torch::Tensor> ArmCollision(const torch::Tensor& q_in,
     Check(parent < l, "parents: expected every link after its parent, link " + std::to_string(l));
   }
   Check(kinds.size() == rows.size(), "expected one rows tensor per kind");
-  for (const torch::Tensor& r : rows) Check(!r.requires_grad(), "no autograd (guidance/collision.py's script has it)");
+  for (const torch::Tensor& r : rows) Check(!r.requires_grad(), "no autograd (the scripts have it)");
+}
 
+}  // namespace
+
+std::tuple<torch::Tensor, torch::Tensor> ArmCollision(const torch::Tensor& q_in, const ArmTables& arm,
+                                                      const torch::Tensor& reach,
+                                                      const std::vector<std::string>& kinds,
+                                                      const std::vector<torch::Tensor>& rows, bool with_gradient) {
+  CheckArm(q_in, arm, reach, "reach", kinds, rows);
   const torch::Tensor q = q_in.contiguous();
-  torch::Tensor value = torch::empty({M}, q.options());
-  torch::Tensor gradient = with_gradient ? torch::empty({M, J}, q.options()) : torch::empty({0}, q.options());
-  if (dtype == torch::kFloat32) {
-    Run<float>(q, arm, reach, kinds, rows, value, with_gradient ? &gradient : nullptr);
+  torch::Tensor value = torch::empty({q.size(0)}, q.options());
+  torch::Tensor gradient = with_gradient ? torch::empty({q.size(0), q.size(1)}, q.options()) : torch::empty({0}, q.options());
+  if (q.scalar_type() == torch::kFloat32) {
+    RunHinge<float>(q, arm, reach, kinds, rows, value, with_gradient ? &gradient : nullptr);
   } else {
-    Run<double>(q, arm, reach, kinds, rows, value, with_gradient ? &gradient : nullptr);
+    RunHinge<double>(q, arm, reach, kinds, rows, value, with_gradient ? &gradient : nullptr);
   }
   return {value, gradient};
+}
+
+std::tuple<torch::Tensor, torch::Tensor> ArmNearestObstacles(const torch::Tensor& q_in, const ArmTables& arm,
+                                                             const torch::Tensor& radii,
+                                                             const std::vector<std::string>& kinds,
+                                                             const std::vector<torch::Tensor>& rows) {
+  CheckArm(q_in, arm, radii, "radii", kinds, rows);
+  const torch::Tensor q = q_in.contiguous();
+  const int64_t M = q.size(0), S = radii.size(0);
+  torch::Tensor clearance = torch::empty({M, S}, q.options());
+  torch::Tensor index = torch::empty({M, S}, q.options().dtype(torch::kInt64));
+  if (q.scalar_type() == torch::kFloat32) {
+    RunNearest<float>(q, arm, radii, kinds, rows, clearance, index);
+  } else {
+    RunNearest<double>(q, arm, radii, kinds, rows, clearance, index);
+  }
+  return {clearance, index};
 }
 
 }  // namespace flowplan::kernels

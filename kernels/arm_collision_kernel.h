@@ -1,5 +1,8 @@
 #pragma once
 
+// An arm's collision against a scene's obstacles as native loops: the hinge
+// of guidance, and the nearest obstacles of the plan checker and RRT-Connect.
+//
 // The whole-arm collision hinge of guidance (guidance/collision.py) for an
 // arm of hinge joints (kinematics/arm.py), as one native loop over a plan's
 // configurations: the link frames, the collision spheres' centres, every
@@ -51,5 +54,20 @@ std::tuple<torch::Tensor, torch::Tensor> ArmCollision(const torch::Tensor& q, co
                                                       const torch::Tensor& reach,
                                                       const std::vector<std::string>& kinds,
                                                       const std::vector<torch::Tensor>& rows, bool with_gradient);
+
+/// For each collision sphere of configurations q (M, J) with radii (S,)
+/// among the obstacles of `kinds` and `rows` (as ArmCollision's): the signed
+/// distance of its surface to the nearest obstacle (M, S) (negative: they
+/// overlap; +inf without obstacles) and that obstacle's index (M, S) int64
+/// in the scene's numbering (the kinds' order, then the rows'; the first of
+/// a tie; -1 without obstacles), what kinematics/kinematics.py's
+/// sphere_nearest_obstacle computes from Arm.sphere_centres: the plan
+/// checker's and RRT-Connect's clearance (kinematics::Robot::NearestObstacles).
+/// An obstacle whose bounding ball is farther than the nearest distance so
+/// far is skipped (it cannot be nearer). Threads and errors as ArmCollision.
+std::tuple<torch::Tensor, torch::Tensor> ArmNearestObstacles(const torch::Tensor& q, const ArmTables& arm,
+                                                             const torch::Tensor& radii,
+                                                             const std::vector<std::string>& kinds,
+                                                             const std::vector<torch::Tensor>& rows);
 
 }  // namespace flowplan::kernels

@@ -54,6 +54,14 @@ const std::vector<std::string>& NativeShapeKinds() {
   return kinds;
 }
 
+int64_t PreparedShapeColumns(const std::string& kind, int W) {
+  if (kind == "spheres") return W == 3 ? Sphere<float, 3>::kColumns : Sphere<float, 2>::kColumns;
+  if (kind == "boxes") return W == 3 ? Box<float, 3>::kColumns : Box<float, 2>::kColumns;
+  if (kind == "cylinders") return W == 3 ? Cylinder<float, 3>::kColumns : Cylinder<float, 2>::kColumns;
+  if (kind == "capsules") return W == 3 ? Capsule<float, 3>::kColumns : Capsule<float, 2>::kColumns;
+  return -1;
+}
+
 std::tuple<torch::Tensor, torch::Tensor> ShapeDistance(const std::string& kind, const torch::Tensor& points_in,
                                                        const torch::Tensor& params_in, bool with_gradient) {
   if (points_in.dim() != 2 || (points_in.size(1) != 2 && points_in.size(1) != 3)) {

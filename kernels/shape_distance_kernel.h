@@ -23,6 +23,10 @@ namespace flowplan::kernels {
 /// The shape kinds ShapeDistance computes (geometry/scene.py's names).
 const std::vector<std::string>& NativeShapeKinds();
 
+/// The width of a kind's prepared rows in W dimensions (what ShapeDistance
+/// takes), or -1 for a kind it does not know.
+int64_t PreparedShapeColumns(const std::string& kind, int W);
+
 /// Signed distance (negative inside) from points (M, W) to the K shapes of
 /// one kind, W = 2 or 3: (M, K); and, if `with_gradient`, its gradient with
 /// respect to the points (M, K, W), else an empty tensor. `params` are the

@@ -1,10 +1,13 @@
 #include "kinematics/robot.h"
 
+#include <algorithm>
+
 #include <cmath>
 
 #include "core/error.h"
 #include "core/format.h"
 #include "jit/library.h"
+#include "kernels/shape_distance_kernel.h"
 
 namespace flowplan::kinematics {
 namespace {
@@ -138,6 +141,12 @@ torch::jit::Module BuildPoint(const RobotDescription& d) {
 Robot::Robot(const RobotDescription& description, const std::string& where) : description_(description) {
   description_.Validate(where);
   module_ = description_.kind == RobotKind::kPoint ? BuildPoint(description_) : BuildArm(description_);
+  if (is_arm()) {
+    auto buffer = [&](const char* name) { return module_.attr(name).toTensor(); };
+    arm_tables_ = {buffer("fixed"),         buffer("fixed_cross"), buffer("fixed_cross_sq"),
+                   buffer("link_joint"),    buffer("link_turns"),  module_.attr("parents").toIntVector(),
+                   buffer("frame_points"),  buffer("ancestors")};
+  }
 }
 
 torch::Tensor Robot::SphereRadii() const { return module_.attr("sphere_radii").toTensor(); }
@@ -155,6 +164,24 @@ torch::Tensor Robot::Clearance(const torch::Tensor& q, const geometry::SceneRows
 }
 
 SphereClearance Robot::NearestObstacles(const torch::Tensor& q, const geometry::SceneRows& scene) const {
+  const auto& native = kernels::NativeShapeKinds();
+  bool all_native = is_arm() && q.dim() == 2 && q.size(1) == num_joints();
+  bool prepared = true;
+  for (const auto& entry : scene) {
+    all_native = all_native && std::find(native.begin(), native.end(), entry.key()) != native.end();
+    prepared = prepared && all_native && entry.value().size(1) == kernels::PreparedShapeColumns(entry.key(), 3);
+  }
+  if (all_native) {
+    const geometry::SceneRows rows = prepared ? scene : geometry::PreparedRows(scene, 3);
+    std::vector<std::string> kinds;
+    std::vector<torch::Tensor> tensors;
+    for (const auto& entry : rows) {
+      kinds.push_back(entry.key());
+      tensors.push_back(entry.value());
+    }
+    auto [clearance, obstacle] = kernels::ArmNearestObstacles(q.to(torch::kFloat64), arm_tables_, SphereRadii(), kinds, tensors);
+    return {clearance, obstacle};
+  }
   const torch::Tensor centres = SphereCentres(q.to(torch::kFloat64));
   const auto out = jit::CallFunction("sphere_nearest_obstacle", {centres, SphereRadii(), scene}).toTuple();
   return {out->elements()[0].toTensor(), out->elements()[1].toTensor()};

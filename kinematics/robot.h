@@ -18,6 +18,7 @@
 #include <string>
 
 #include "geometry/scene_rows.h"
+#include "kernels/arm_collision_kernel.h"
 #include "kinematics/robot_description.h"
 
 namespace flowplan::kinematics {
@@ -82,6 +83,9 @@ class Robot {
   torch::Tensor Clearance(const torch::Tensor& q, const geometry::SceneRows& scene) const;
 
   /// Per collision sphere of q (M, J): its clearance from the nearest obstacle of `scene`, and which that is.
+  /// float64. For an arm among shapes the native kernels know, one native call
+  /// (kernels::ArmNearestObstacles); else the scripts. `scene` may be prepared
+  /// (geometry::PreparedRows), which spares each call that work.
   SphereClearance NearestObstacles(const torch::Tensor& q, const geometry::SceneRows& scene) const;
 
   /// (J, S) float64: a bound, valid at every configuration, on how far collision
@@ -104,6 +108,7 @@ class Robot {
  private:
   RobotDescription description_;
   torch::jit::Module module_;
+  kernels::ArmTables arm_tables_;  // an arm's: the module's buffers, for the native kernels
 };
 
 /// The kinematics of `description` (an arm or a point).

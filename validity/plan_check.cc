@@ -164,7 +164,8 @@ std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const to
     for (auto& v : verdicts) v.clearance = std::numeric_limits<double>::infinity();
     return verdicts;
   }
-  const kinematics::SphereClearance at_states = robot_->NearestObstacles(q.view({N * T, J}), scene);
+  const geometry::SceneRows prepared = geometry::PreparedRows(scene, static_cast<int>(robot_->workspace_dim()));
+  const kinematics::SphereClearance at_states = robot_->NearestObstacles(q.view({N * T, J}), prepared);
   const torch::Tensor clearance = at_states.clearance.view({N, T, S}), obstacle = at_states.obstacle.view({N, T, S});
   const auto cl = clearance.accessor<double, 3>();
   const auto ob = obstacle.accessor<int64_t, 3>();
@@ -210,7 +211,7 @@ std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const to
     da = da.index({open});
     db = db.index({open});
     const torch::Tensor qm = 0.5 * (qa + qb);
-    const kinematics::SphereClearance at_middle = robot_->NearestObstacles(qm, scene);
+    const kinematics::SphereClearance at_middle = robot_->NearestObstacles(qm, prepared);
     const torch::Tensor dm = at_middle.clearance;                          // (P, S)
     const auto [smallest, sphere] = dm.min(1);                             // (P,)
     const auto pp = piece_plan.accessor<int64_t, 1>(), ps = piece_segment.accessor<int64_t, 1>();

@@ -92,6 +92,59 @@ TEST_F(ForwardKinematicsTest, MatchesMujocoInFloat64) {
   for (int64_t s = 0; s < fk_.num_spheres(); ++s) EXPECT_EQ(radii[s].item<double>(), spheres[s].radius);
 }
 
+TEST_F(ForwardKinematicsTest, NativeNearestObstaclesMatchTheScriptsAndAHandComputation) {
+  // NearestObstacles runs the native kernel for an arm among known shapes; the script
+  // (kinematics.py's sphere_nearest_obstacle on the MuJoCo-checked sphere centres) is the reference.
+  const torch::Tensor q = RandomQ(40, 7);
+  const torch::Tensor centres = fk_.SphereCentres(q);  // (40, S, 3)
+  torch::manual_seed(8);
+  auto near_arm = [&](int64_t K, int64_t extra, double spread) {
+    std::vector<torch::Tensor> rows;
+    for (int64_t k = 0; k < K; ++k) {
+      const torch::Tensor c = centres[torch::randint(40, {1}).item<int64_t>()][torch::randint(fk_.num_spheres(), {1}).item<int64_t>()];
+      rows.push_back(torch::cat({c + (torch::rand({3}, torch::kFloat64) - 0.5) * spread,
+                                 torch::rand({extra}, torch::kFloat64) * 0.15 + 0.02}));
+    }
+    return torch::stack(rows);
+  };
+  geometry::SceneRows scene;
+  scene.insert("spheres", near_arm(6, 1, 0.4));
+  torch::Tensor boxes = near_arm(5, 7, 0.4);
+  boxes.slice(1, 6, 10).normal_();  // random orientations
+  scene.insert("boxes", boxes);
+  torch::Tensor cylinders = near_arm(4, 6, 0.4);
+  cylinders.slice(1, 5, 9).normal_();
+  scene.insert("cylinders", cylinders);
+  torch::Tensor capsules = near_arm(3, 4, 0.4);
+  capsules.slice(1, 3, 6) = capsules.slice(1, 0, 3) + (torch::rand({3, 3}, torch::kFloat64) - 0.5) * 0.3;
+  scene.insert("capsules", capsules);
+
+  const SphereClearance native = fk_.NearestObstacles(q, scene);
+  const auto script = jit::CallFunction("sphere_nearest_obstacle", {centres, fk_.SphereRadii(), scene}).toTuple();
+  const torch::Tensor reference = script->elements()[0].toTensor();
+  ASSERT_EQ(native.clearance.sizes(), reference.sizes());
+  EXPECT_EQ(native.clearance.scalar_type(), torch::kFloat64);
+  EXPECT_LT((native.clearance - reference).abs().max().item<double>(), 1e-12);
+  EXPECT_TRUE(torch::equal(native.obstacle, script->elements()[1].toTensor()));
+  EXPECT_GT((reference < 0).sum().item<int64_t>(), 10) << "the test needs spheres inside obstacles";
+  EXPECT_GT((reference > 0.1).sum().item<int64_t>(), 100) << "and spheres far from every obstacle";
+  // Rows already prepared give the same bits.
+  const SphereClearance again = fk_.NearestObstacles(q, geometry::PreparedRows(scene, 3));
+  EXPECT_TRUE(torch::equal(again.clearance, native.clearance));
+  // Spheres alone, by hand: |c - o| - r_o - r_s, the smallest over the obstacles.
+  geometry::SceneRows balls;
+  balls.insert("spheres", scene.at("spheres"));
+  const SphereClearance among_balls = fk_.NearestObstacles(q, balls);
+  const torch::Tensor o = scene.at("spheres");
+  const torch::Tensor by_hand = std::get<0>(
+      ((centres.unsqueeze(2) - o.slice(1, 0, 3).view({1, 1, -1, 3})).norm(2, -1) - o.select(1, 3).view({1, 1, -1})).min(2));
+  EXPECT_LT((among_balls.clearance - (by_hand - fk_.SphereRadii().view({1, -1}))).abs().max().item<double>(), 1e-12);
+  // No obstacles: +inf and -1.
+  const SphereClearance none = fk_.NearestObstacles(q, geometry::SceneRows());
+  EXPECT_TRUE(torch::all(torch::isinf(none.clearance)).item<bool>());
+  EXPECT_TRUE(torch::all(none.obstacle == -1).item<bool>());
+}
+
 TEST_F(ForwardKinematicsTest, KnownPosesThroughTorch) {
   const torch::Tensor ready =
       torch::tensor({0.0, -M_PI / 4, 0.0, -3 * M_PI / 4, 0.0, M_PI / 2, M_PI / 4}, torch::kFloat64).view({1, 7});
