@@ -2,11 +2,11 @@
 
 #include <ATen/Parallel.h>
 
-#include <array>
 #include <limits>
 #include <stdexcept>
 #include <type_traits>
 
+#include "kernels/mish_math.h"  // FLOWPLAN_VECTOR_CLONES
 #include "kernels/shape_distance_math.h"
 
 namespace flowplan::kernels {
@@ -14,18 +14,141 @@ namespace {
 
 constexpr int kW = 3;  // an arm's workspace
 
-/// How far beyond a sphere's reach an obstacle's bounding ball must lie to be skipped, m: far more than the
-/// rounding of a distance, so that no skipped pair is one the script would count.
-constexpr double kSkipSlack = 1e-4;
+/// The hinge pass of n points, given as coordinates x, y, z, against one shape's prepared row: each point's
+/// depth e_i = reach_i - d(p_i) written to `depth` and max(e_i, 0) added to `penetration`; returns how many
+/// are positive. One loop, no branches, that the compiler vectorises (built for AVX-512, AVX2 and plain
+/// x86-64: FLOWPLAN_VECTOR_CLONES); a point's numbers do not depend on its neighbours.
+template <class S>
+using HingePass = int64_t (*)(const S* x, const S* y, const S* z, const S* reach, const S* row, S* depth,
+                              S* penetration, int64_t n);
 
-/// One kind's obstacles: its distance, its rows, and each one's bounding ball (centre, radius).
+template <template <class, int> class Shape, class S>
+inline __attribute__((always_inline)) int64_t HingeLoop(const S* __restrict x, const S* __restrict y,
+                                                        const S* __restrict z, const S* __restrict reach,
+                                                        const S* __restrict row, S* __restrict depth,
+                                                        S* __restrict penetration, int64_t n) {
+  int64_t active = 0;
+  for (int64_t i = 0; i < n; ++i) {
+    const S p[kW] = {x[i], y[i], z[i]};
+    const S e = reach[i] - Shape<S, kW>::Distance(p, row, nullptr);
+    depth[i] = e;
+    penetration[i] += e > S(0) ? e : S(0);
+    active += e > S(0) ? 1 : 0;
+  }
+  return active;
+}
+
+// One clone set per shape and dtype (target_clones takes no templates).
+FLOWPLAN_VECTOR_CLONES int64_t SphereHingeFloat(const float* __restrict x, const float* __restrict y, const float* __restrict z,
+    const float* __restrict r, const float* __restrict row, float* __restrict e, float* __restrict pen, int64_t n) {
+  return HingeLoop<shapes::Sphere, float>(x, y, z, r, row, e, pen, n);
+}
+FLOWPLAN_VECTOR_CLONES int64_t BoxHingeFloat(const float* __restrict x, const float* __restrict y, const float* __restrict z,
+    const float* __restrict r, const float* __restrict row, float* __restrict e, float* __restrict pen, int64_t n) {
+  return HingeLoop<shapes::Box, float>(x, y, z, r, row, e, pen, n);
+}
+FLOWPLAN_VECTOR_CLONES int64_t CylinderHingeFloat(const float* __restrict x, const float* __restrict y, const float* __restrict z,
+    const float* __restrict r, const float* __restrict row, float* __restrict e, float* __restrict pen, int64_t n) {
+  return HingeLoop<shapes::Cylinder, float>(x, y, z, r, row, e, pen, n);
+}
+FLOWPLAN_VECTOR_CLONES int64_t CapsuleHingeFloat(const float* __restrict x, const float* __restrict y, const float* __restrict z,
+    const float* __restrict r, const float* __restrict row, float* __restrict e, float* __restrict pen, int64_t n) {
+  return HingeLoop<shapes::Capsule, float>(x, y, z, r, row, e, pen, n);
+}
+FLOWPLAN_VECTOR_CLONES int64_t SphereHingeDouble(const double* __restrict x, const double* __restrict y, const double* __restrict z,
+    const double* __restrict r, const double* __restrict row, double* __restrict e, double* __restrict pen, int64_t n) {
+  return HingeLoop<shapes::Sphere, double>(x, y, z, r, row, e, pen, n);
+}
+FLOWPLAN_VECTOR_CLONES int64_t BoxHingeDouble(const double* __restrict x, const double* __restrict y, const double* __restrict z,
+    const double* __restrict r, const double* __restrict row, double* __restrict e, double* __restrict pen, int64_t n) {
+  return HingeLoop<shapes::Box, double>(x, y, z, r, row, e, pen, n);
+}
+FLOWPLAN_VECTOR_CLONES int64_t CylinderHingeDouble(const double* __restrict x, const double* __restrict y, const double* __restrict z,
+    const double* __restrict r, const double* __restrict row, double* __restrict e, double* __restrict pen, int64_t n) {
+  return HingeLoop<shapes::Cylinder, double>(x, y, z, r, row, e, pen, n);
+}
+FLOWPLAN_VECTOR_CLONES int64_t CapsuleHingeDouble(const double* __restrict x, const double* __restrict y, const double* __restrict z,
+    const double* __restrict r, const double* __restrict row, double* __restrict e, double* __restrict pen, int64_t n) {
+  return HingeLoop<shapes::Capsule, double>(x, y, z, r, row, e, pen, n);
+}
+
+/// The nearest-obstacle pass of n points (x, y, z) against obstacle `index`'s prepared row: where its
+/// distance is below `nearest` (or is NaN, torch.min's minimum), it becomes `nearest` and `index` `which`.
+/// Vectorised as the hinge pass.
+template <class S>
+using NearestPass = void (*)(const S* x, const S* y, const S* z, const S* row, int64_t index, S* nearest,
+                             int64_t* which, int64_t n);
+
+template <template <class, int> class Shape, class S>
+inline __attribute__((always_inline)) void NearestLoop(const S* __restrict x, const S* __restrict y,
+                                                       const S* __restrict z, const S* __restrict row, int64_t index,
+                                                       S* __restrict nearest, int64_t* __restrict which, int64_t n) {
+  for (int64_t i = 0; i < n; ++i) {
+    const S p[kW] = {x[i], y[i], z[i]};
+    const S d = Shape<S, kW>::Distance(p, row, nullptr);
+    const bool take = d < nearest[i] || d != d;
+    nearest[i] = take ? d : nearest[i];
+    which[i] = take ? index : which[i];
+  }
+}
+
+#define FLOWPLAN_NEAREST_PASS(name, Shape, T)                                                                 \
+  FLOWPLAN_VECTOR_CLONES void name(const T* __restrict x, const T* __restrict y, const T* __restrict z,       \
+                                   const T* __restrict row, int64_t index, T* __restrict nearest,               \
+                                   int64_t* __restrict which, int64_t n) {                                      \
+    NearestLoop<shapes::Shape, T>(x, y, z, row, index, nearest, which, n);                                     \
+  }
+FLOWPLAN_NEAREST_PASS(SphereNearestFloat, Sphere, float)
+FLOWPLAN_NEAREST_PASS(BoxNearestFloat, Box, float)
+FLOWPLAN_NEAREST_PASS(CylinderNearestFloat, Cylinder, float)
+FLOWPLAN_NEAREST_PASS(CapsuleNearestFloat, Capsule, float)
+FLOWPLAN_NEAREST_PASS(SphereNearestDouble, Sphere, double)
+FLOWPLAN_NEAREST_PASS(BoxNearestDouble, Box, double)
+FLOWPLAN_NEAREST_PASS(CylinderNearestDouble, Cylinder, double)
+FLOWPLAN_NEAREST_PASS(CapsuleNearestDouble, Capsule, double)
+#undef FLOWPLAN_NEAREST_PASS
+
+template <template <class, int> class Shape>
+NearestPass<float> NearestOf(float) {
+  if constexpr (std::is_same<Shape<float, kW>, shapes::Sphere<float, kW>>::value) return &SphereNearestFloat;
+  if constexpr (std::is_same<Shape<float, kW>, shapes::Box<float, kW>>::value) return &BoxNearestFloat;
+  if constexpr (std::is_same<Shape<float, kW>, shapes::Cylinder<float, kW>>::value) return &CylinderNearestFloat;
+  return &CapsuleNearestFloat;
+}
+
+template <template <class, int> class Shape>
+NearestPass<double> NearestOf(double) {
+  if constexpr (std::is_same<Shape<double, kW>, shapes::Sphere<double, kW>>::value) return &SphereNearestDouble;
+  if constexpr (std::is_same<Shape<double, kW>, shapes::Box<double, kW>>::value) return &BoxNearestDouble;
+  if constexpr (std::is_same<Shape<double, kW>, shapes::Cylinder<double, kW>>::value) return &CylinderNearestDouble;
+  return &CapsuleNearestDouble;
+}
+
+template <template <class, int> class Shape>
+HingePass<float> HingeOf(float) {
+  if constexpr (std::is_same<Shape<float, kW>, shapes::Sphere<float, kW>>::value) return &SphereHingeFloat;
+  if constexpr (std::is_same<Shape<float, kW>, shapes::Box<float, kW>>::value) return &BoxHingeFloat;
+  if constexpr (std::is_same<Shape<float, kW>, shapes::Cylinder<float, kW>>::value) return &CylinderHingeFloat;
+  return &CapsuleHingeFloat;
+}
+
+template <template <class, int> class Shape>
+HingePass<double> HingeOf(double) {
+  if constexpr (std::is_same<Shape<double, kW>, shapes::Sphere<double, kW>>::value) return &SphereHingeDouble;
+  if constexpr (std::is_same<Shape<double, kW>, shapes::Box<double, kW>>::value) return &BoxHingeDouble;
+  if constexpr (std::is_same<Shape<double, kW>, shapes::Cylinder<double, kW>>::value) return &CylinderHingeDouble;
+  return &CapsuleHingeDouble;
+}
+
+/// One kind's obstacles: its distance (for a gradient), its vectorised passes, its rows.
 template <class S>
 struct Obstacles {
   S (*distance)(const S*, const S*, S*);
+  HingePass<S> hinge;
+  NearestPass<S> nearest;
   const S* rows;
   int64_t columns;
   int64_t count;
-  std::vector<S> bounds;  // (count, 4)
 };
 
 template <template <class, int> class Shape, class S>
@@ -38,13 +161,8 @@ Obstacles<S> Prepare(const std::string& kind, const torch::Tensor& rows) {
                                                                std::to_string(rows.size(1)) + ")"
                                                          : std::to_string(rows.dim()) + " dimensions"));
   }
-  Obstacles<S> obstacles{&Kernel::Distance, rows.data_ptr<S>(), Kernel::kColumns, rows.size(0), {}};
-  obstacles.bounds.resize(static_cast<size_t>(4 * obstacles.count));
-  for (int64_t k = 0; k < obstacles.count; ++k) {
-    S* bound = obstacles.bounds.data() + 4 * k;
-    bound[3] = Kernel::Bound(obstacles.rows + k * Kernel::kColumns, bound);
-  }
-  return obstacles;
+  return {&Kernel::Distance, HingeOf<Shape>(S()), NearestOf<Shape>(S()), rows.data_ptr<S>(), Kernel::kColumns,
+          rows.size(0)};
 }
 
 template <class S>
@@ -56,38 +174,13 @@ Obstacles<S> PrepareKind(const std::string& kind, const torch::Tensor& rows) {
   throw std::runtime_error("arm_collision: unknown shape kind " + kind);
 }
 
-/// c = a b for rigid transforms as their top three rows (3 x 4, row-major; the bottom row 0 0 0 1).
-template <class S>
-void Multiply(const S* a, const S* b, S* c) {
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 4; ++j) {
-      S total = a[i * 4] * b[j] + a[i * 4 + 1] * b[4 + j] + a[i * 4 + 2] * b[8 + j];
-      if (j == 3) total += a[i * 4 + 3];
-      c[i * 4 + j] = total;
-    }
-  }
-}
-
-/// p = F x for a transform's top rows F (3 x 4) and a homogeneous x (4).
-template <class S>
-void Transform(const S* frame, const S* x, S* p) {
-  for (int i = 0; i < kW; ++i) {
-    p[i] = frame[i * 4] * x[0] + frame[i * 4 + 1] * x[1] + frame[i * 4 + 2] * x[2] + frame[i * 4 + 3] * x[3];
-  }
-}
-
-template <class S>
-S SquaredDistance(const S* a, const S* b) {
-  const S dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
-  return dx * dx + dy * dy + dz * dz;
-}
-
-/// An obstacle of any kind: its distance, its prepared row, its bounding ball (centre (3), radius).
+/// An obstacle of any kind: its distance, its passes, its prepared row.
 template <class S>
 struct Obstacle {
   S (*distance)(const S*, const S*, S*);
+  HingePass<S> hinge;
+  NearestPass<S> nearest;
   const S* row;
-  const S* bound;
 };
 
 /// A scene's obstacles in the kinds' order, then the rows' (the scene's numbering), in dtype S.
@@ -105,15 +198,15 @@ struct SceneObstacles {
     }
     for (const Obstacles<S>& kind : kinds) {
       for (int64_t k = 0; k < kind.count; ++k) {
-        all.push_back({kind.distance, kind.rows + k * kind.columns, kind.bounds.data() + 4 * k});
+        all.push_back({kind.distance, kind.hinge, kind.nearest, kind.rows + k * kind.columns});
       }
     }
   }
 };
 
-/// An arm's kinematics in dtype S, from its tables: the frames of its links and the points fixed in them
-/// (Arm.link_frames and Arm.fixed_points). The tables are read as float64 (the Arm's buffers are; no copy
-/// then) and each number rounded to S, as the script's .to(q.dtype) does.
+/// An arm's kinematic tables in dtype S, as the placement of a chunk of configurations (PlaceChunkLoop)
+/// reads them (Arm.link_frames and Arm.fixed_points). The tables are read as float64 (the Arm's buffers are;
+/// no copy then) and each number rounded to S, as the script's .to(q.dtype) does.
 template <class S>
 class ArmKinematics {
  public:
@@ -165,41 +258,89 @@ class ArmKinematics {
     for (int64_t i = 0; i < J * S_; ++i) moves[i] = static_cast<S>(ancestors.data_ptr<double>()[i]);
   }
 
-  /// The link frames (L, 3, 4) and the frame points in the world (C, 3) of joint angles `angles` (J).
-  void Place(const S* angles, S* frames, S* points) const {
-    std::array<S, 12> local{};
-    for (int64_t l = 0; l < L; ++l) {
-      // F + sin F[a]x + (1 - cos) F[a]x^2.
-      const S* table = link_tables.data() + 36 * l;
-      if (turns[l] == S(0)) {
-        std::copy(table, table + 12, local.begin());
-      } else {
-        const S angle = angles[turned_by[l]] * turns[l];
-        const S sine = std::sin(angle), versine = S(1) - std::cos(angle);
-        for (int e = 0; e < 12; ++e) local[e] = table[e] + sine * table[12 + e] + versine * table[24 + e];
-      }
-      const int64_t parent = parents[static_cast<size_t>(l)];
-      if (parent < 0) {
-        std::copy(local.begin(), local.end(), frames + 12 * l);
-      } else {
-        Multiply(frames + 12 * parent, local.data(), frames + 12 * l);
-      }
-    }
-    for (int64_t c = 0; c < C; ++c) {
-      const int64_t l = column_link[c];
-      S* p = points + kW * c;
-      if (l < 0) {
-        p[0] = p[1] = p[2] = 0;
-      } else {
-        Transform(frames + 12 * l, column_point.data() + 4 * c, p);
-      }
-    }
-  }
-
   const int64_t L, J, S_, C;
   std::vector<S> link_tables, turns, column_point, moves;  // moves: the ancestors (J, S)
   std::vector<int64_t> turned_by, parents, column_link;
 };
+
+/// The link frames (L, 12, count) and the frame points in the world (C, 3, count) of `count` configurations
+/// q (count, J), configurations side by side (the last index) so that every step is a loop over them that the
+/// compiler vectorises: F + sin F[a]x + (1 - cos) F[a]x^2 for each link, its parent's frame times that, and
+/// the points as the frames times their homogeneous coordinates. `sines` (2 count) is scratch. Each configuration's numbers come from its own angles alone.
+template <class S>
+inline __attribute__((always_inline)) void PlaceChunkLoop(const ArmKinematics<S>& arm, const S* __restrict q,
+                                                          int64_t count, S* __restrict frames,
+                                                          S* __restrict points, S* __restrict sines) {
+  const int64_t J = arm.J;
+  S* __restrict versines = sines + count;
+  for (int64_t l = 0; l < arm.L; ++l) {
+    const S* table = arm.link_tables.data() + 36 * l;
+    S* __restrict F = frames + 12 * count * l;
+    const int64_t parent = arm.parents[static_cast<size_t>(l)];
+    const bool turned = arm.turns[l] != S(0);
+    if (turned) {
+      const S turn = arm.turns[l];
+      const int64_t joint = arm.turned_by[l];
+      for (int64_t m = 0; m < count; ++m) {  // not vectorised (the library's sin and cos)
+        const S angle = q[m * J + joint] * turn;
+        sines[m] = std::sin(angle);
+        versines[m] = S(1) - std::cos(angle);
+      }
+    }
+    // The link's pose in its parent, into F, then (with a parent) the product with the parent's, in place
+    // column by column of the result: column j of P L needs column j of L alone.
+    for (int e = 0; e < 12; ++e) {
+      for (int64_t m = 0; m < count; ++m) {
+        F[e * count + m] = turned ? table[e] + sines[m] * table[12 + e] + versines[m] * table[24 + e] : table[e];
+      }
+    }
+    if (parent < 0) continue;
+    const S* __restrict P = frames + 12 * count * parent;
+    for (int j = 0; j < 4; ++j) {
+      for (int64_t m = 0; m < count; ++m) {
+        const S l0 = F[j * count + m], l1 = F[(4 + j) * count + m], l2 = F[(8 + j) * count + m];
+        for (int i = 0; i < 3; ++i) {
+          S total = P[(i * 4) * count + m] * l0 + P[(i * 4 + 1) * count + m] * l1 + P[(i * 4 + 2) * count + m] * l2;
+          if (j == 3) total += P[(i * 4 + 3) * count + m];
+          F[(i * 4 + j) * count + m] = total;
+        }
+      }
+    }
+  }
+  for (int64_t c = 0; c < arm.C; ++c) {
+    const int64_t l = arm.column_link[c];
+    const S* x = arm.column_point.data() + 4 * c;
+    for (int i = 0; i < kW; ++i) {
+      S* __restrict out = points + (kW * c + i) * count;
+      if (l < 0) {
+        for (int64_t m = 0; m < count; ++m) out[m] = S(0);
+        continue;
+      }
+      const S* __restrict F = frames + 12 * count * l;
+      for (int64_t m = 0; m < count; ++m) {
+        out[m] = F[(i * 4) * count + m] * x[0] + F[(i * 4 + 1) * count + m] * x[1] + F[(i * 4 + 2) * count + m] * x[2] +
+                 F[(i * 4 + 3) * count + m] * x[3];
+      }
+    }
+  }
+}
+
+FLOWPLAN_VECTOR_CLONES void PlaceChunkFloat(const ArmKinematics<float>& arm, const float* q, int64_t count,
+                                            float* frames, float* points, float* sines) {
+  PlaceChunkLoop<float>(arm, q, count, frames, points, sines);
+}
+FLOWPLAN_VECTOR_CLONES void PlaceChunkDouble(const ArmKinematics<double>& arm, const double* q, int64_t count,
+                                             double* frames, double* points, double* sines) {
+  PlaceChunkLoop<double>(arm, q, count, frames, points, sines);
+}
+inline void PlaceChunk(const ArmKinematics<float>& arm, const float* q, int64_t count, float* frames, float* points,
+                       float* sines) {
+  PlaceChunkFloat(arm, q, count, frames, points, sines);
+}
+inline void PlaceChunk(const ArmKinematics<double>& arm, const double* q, int64_t count, double* frames,
+                       double* points, double* sines) {
+  PlaceChunkDouble(arm, q, count, frames, points, sines);
+}
 
 template <class S>
 void RunHinge(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& reach_in,
@@ -209,116 +350,75 @@ void RunHinge(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor&
   const ArmKinematics<S> kinematics(arm, q.size(1), reach.size(0));
   const int64_t M = q.size(0), J = kinematics.J, L = kinematics.L, S_ = kinematics.S_, C = kinematics.C;
   const S* reaches = reach.data_ptr<S>();
-
-  // The spheres link by link, each link's in a ball (in its frame: centre, and radius with the spheres' reach)
-  // that an obstacle's bounding ball must meet for any of them to touch it. Spheres on no link (a zero column)
-  // sit at the origin, checked on their own.
-  std::vector<std::vector<int64_t>> link_spheres(static_cast<size_t>(L));
-  std::vector<int64_t> loose;
-  for (int64_t s = 0; s < S_; ++s) {
-    if (kinematics.column_link[s] >= 0) {
-      link_spheres[kinematics.column_link[s]].push_back(s);
-    } else {
-      loose.push_back(s);
-    }
-  }
-  std::vector<S> link_balls(static_cast<size_t>(5 * L), S(0));  // homogeneous centre (4), radius
-  for (int64_t l = 0; l < L; ++l) {
-    const auto& members = link_spheres[l];
-    if (members.empty()) continue;
-    const S* local = kinematics.column_point.data();
-    double centre[3] = {0, 0, 0};
-    for (int64_t s : members) {
-      for (int i = 0; i < kW; ++i) centre[i] += local[4 * s + i] / static_cast<double>(members.size());
-    }
-    double radius = 0;
-    for (int64_t s : members) {
-      double squares = 0;
-      for (int i = 0; i < kW; ++i) squares += (local[4 * s + i] - centre[i]) * (local[4 * s + i] - centre[i]);
-      radius = std::max(radius, std::sqrt(squares) + static_cast<double>(reaches[s]));
-    }
-    for (int i = 0; i < kW; ++i) link_balls[5 * l + i] = static_cast<S>(centre[i]);
-    link_balls[5 * l + 3] = S(1);
-    link_balls[5 * l + 4] = static_cast<S>(radius + 1e-6 * (1.0 + radius));  // its own rounding covered
-  }
   const SceneObstacles<S> scene(kinds, rows_in, q.options());
-
   const S* qs = q.data_ptr<S>();
   S* out_value = value.data_ptr<S>();
   S* out_gradient = gradient == nullptr ? nullptr : gradient->data_ptr<S>();
-  const S slack = static_cast<S>(kSkipSlack);
 
-  at::parallel_for(0, M, 4, [&](int64_t begin, int64_t end) {
-    std::vector<S> frames(static_cast<size_t>(12 * L)), points(static_cast<size_t>(kW * C)),
-        pushes(static_cast<size_t>(kW * S_));
-    std::vector<char> pushed(static_cast<size_t>(S_));
-    std::vector<const Obstacle<S>*> near;
-    near.reserve(scene.all.size());
-    for (int64_t m = begin; m < end; ++m) {
-      kinematics.Place(qs + m * J, frames.data(), points.data());
-      // The hinge of every sphere against every obstacle, and the sum of the active distances' gradients.
+  // Configurations in chunks: the chunk's sphere centres side by side (n = configurations x S), each obstacle's
+  // hinge over all of them in one vectorised pass, then the gradients of the few active pairs. Every number of
+  // configuration m comes from its own centres in a fixed order, whatever the chunk, so the result does not
+  // depend on the thread count.
+  at::parallel_for(0, M, 16, [&](int64_t begin, int64_t end) {
+    const int64_t count = end - begin, n = count * S_;
+    // Points (C, 3, count): sphere s's x, y, z at rows 3 s .. 3 s + 2, so the centres' x of every sphere and
+    // configuration are one array of n = S count (index s count + m), and so are y and z.
+    std::vector<S> frames(static_cast<size_t>(12 * L * count)), points(static_cast<size_t>(kW * C * count)),
+        sines(static_cast<size_t>(2 * count));
+    PlaceChunk(kinematics, qs + begin * J, count, frames.data(), points.data(), sines.data());
+    std::vector<S> x(n), y(n), z(n), chunk_reach(n), depth(n), penetration(n, S(0)), pushes(3 * n, S(0));
+    std::vector<char> pushed(n, 0);
+    for (int64_t s = 0; s < S_; ++s) {
+      for (int64_t m = 0; m < count; ++m) {
+        x[s * count + m] = points[(kW * s) * count + m];
+        y[s * count + m] = points[(kW * s + 1) * count + m];
+        z[s * count + m] = points[(kW * s + 2) * count + m];
+        chunk_reach[s * count + m] = reaches[s];
+      }
+    }
+    for (const Obstacle<S>& obstacle : scene.all) {
+      const int64_t active = obstacle.hinge(x.data(), y.data(), z.data(), chunk_reach.data(), obstacle.row,
+                                            depth.data(), penetration.data(), n);
+      if (active == 0 || out_gradient == nullptr) continue;
+      for (int64_t i = 0; i < n; ++i) {
+        if (!(depth[i] > S(0))) continue;
+        const S p[kW] = {x[i], y[i], z[i]};
+        S normal[kW];
+        obstacle.distance(p, obstacle.row, normal);
+        for (int k = 0; k < kW; ++k) pushes[3 * i + k] -= normal[k];
+        pushed[i] = 1;
+      }
+    }
+    auto point = [&](int64_t c, int64_t m, int i) { return points[(kW * c + i) * count + m]; };
+    for (int64_t m = 0; m < count; ++m) {
       S total = 0;
-      auto hinge = [&](int64_t s, const std::vector<const Obstacle<S>*>& candidates) {
-        const S* centre = points.data() + kW * s;
-        S* push = pushes.data() + kW * s;
-        S penetration = 0;
-        for (const Obstacle<S>* obstacle : candidates) {
-          const S beyond = reaches[s] + slack + obstacle->bound[3];
-          if (SquaredDistance(centre, obstacle->bound) >= beyond * beyond) continue;
-          const S depth = reaches[s] - obstacle->distance(centre, obstacle->row, nullptr);
-          if (!(depth > S(0))) continue;
-          penetration += depth;
-          if (out_gradient != nullptr) {
-            S normal[kW];
-            obstacle->distance(centre, obstacle->row, normal);
-            for (int i = 0; i < kW; ++i) push[i] -= normal[i];
-            pushed[s] = 1;
-          }
-        }
-        total += penetration;
-      };
-      std::fill(pushes.begin(), pushes.end(), S(0));
-      std::fill(pushed.begin(), pushed.end(), 0);
-      for (int64_t l = 0; l < L; ++l) {
-        if (link_spheres[l].empty()) continue;
-        S ball[kW];
-        Transform(frames.data() + 12 * l, link_balls.data() + 5 * l, ball);
-        near.clear();
-        for (const Obstacle<S>& obstacle : scene.all) {
-          const S beyond = link_balls[5 * l + 4] + slack + obstacle.bound[3];
-          if (SquaredDistance(ball, obstacle.bound) < beyond * beyond) near.push_back(&obstacle);
-        }
-        if (near.empty()) continue;
-        for (int64_t s : link_spheres[l]) hinge(s, near);
-      }
-      if (!loose.empty()) {
-        near.clear();
-        for (const Obstacle<S>& obstacle : scene.all) near.push_back(&obstacle);
-        for (int64_t s : loose) hinge(s, near);
-      }
-      out_value[m] = total;
+      for (int64_t s = 0; s < S_; ++s) total += penetration[s * count + m];
+      out_value[begin + m] = total;
       if (out_gradient == nullptr) continue;
+      if (total == S(0)) {  // no sphere within reach of any obstacle: no push
+        for (int64_t j = 0; j < J; ++j) out_gradient[(begin + m) * J + j] = S(0);
+        continue;
+      }
       // dC/dq_j = a_j . (sum_s A[j, s] c_s x g_s - p_j x sum_s A[j, s] g_s) (Arm.spheres_vjp).
-      const S* axes = points.data() + kW * S_;
-      const S* origins = points.data() + kW * (S_ + J);
       for (int64_t j = 0; j < J; ++j) {
         S moment[kW] = {0, 0, 0}, force[kW] = {0, 0, 0};
         for (int64_t s = 0; s < S_; ++s) {
           const S weight = kinematics.moves[j * S_ + s];
-          if (!pushed[s] || weight == S(0)) continue;
-          const S* c = points.data() + kW * s;
-          const S* g = pushes.data() + kW * s;
+          const int64_t i = s * count + m;
+          if (!pushed[i] || weight == S(0)) continue;
+          const S c[kW] = {x[i], y[i], z[i]};
+          const S* g = pushes.data() + 3 * i;
           moment[0] += weight * (c[1] * g[2] - c[2] * g[1]);
           moment[1] += weight * (c[2] * g[0] - c[0] * g[2]);
           moment[2] += weight * (c[0] * g[1] - c[1] * g[0]);
-          for (int i = 0; i < kW; ++i) force[i] += weight * g[i];
+          for (int k = 0; k < kW; ++k) force[k] += weight * g[k];
         }
-        const S* a = axes + kW * j;
-        const S* p = origins + kW * j;
+        const S a[kW] = {point(S_ + j, m, 0), point(S_ + j, m, 1), point(S_ + j, m, 2)};
+        const S p[kW] = {point(S_ + J + j, m, 0), point(S_ + J + j, m, 1), point(S_ + J + j, m, 2)};
         const S lever[kW] = {moment[0] - (p[1] * force[2] - p[2] * force[1]),
                              moment[1] - (p[2] * force[0] - p[0] * force[2]),
                              moment[2] - (p[0] * force[1] - p[1] * force[0])};
-        out_gradient[m * J + j] = a[0] * lever[0] + a[1] * lever[1] + a[2] * lever[2];
+        out_gradient[(begin + m) * J + j] = a[0] * lever[0] + a[1] * lever[1] + a[2] * lever[2];
       }
     }
   });
@@ -337,38 +437,31 @@ void RunNearest(const torch::Tensor& q, const ArmTables& arm, const torch::Tenso
   S* out_clearance = clearance.data_ptr<S>();
   int64_t* out_index = index.data_ptr<int64_t>();
   const int64_t K = static_cast<int64_t>(scene.all.size());
-  // An obstacle whose bounding ball is farther than the nearest distance so far by more than this cannot be
-  // nearer, nor tie with it (a distance rounds by far less).
-  const S slack = std::is_same<S, float>::value ? S(1e-4) : S(1e-9);
 
-  at::parallel_for(0, M, 4, [&](int64_t begin, int64_t end) {
-    std::vector<S> frames(static_cast<size_t>(12 * L)), points(static_cast<size_t>(kW * C));
-    for (int64_t m = begin; m < end; ++m) {
-      kinematics.Place(qs + m * J, frames.data(), points.data());
-      for (int64_t s = 0; s < S_; ++s) {
-        const S* centre = points.data() + kW * s;
-        S nearest = std::numeric_limits<S>::infinity();
-        int64_t which = -1;
-        for (int64_t k = 0; k < K; ++k) {
-          const Obstacle<S>& obstacle = scene.all[k];
-          if (which >= 0) {
-            // Skip when |c - o| - R > nearest + slack; both sides compared squared when the left is positive.
-            const S beyond = nearest + slack + obstacle.bound[3];
-            if (beyond > S(0) && SquaredDistance(centre, obstacle.bound) > beyond * beyond) continue;
-          }
-          const S distance = obstacle.distance(centre, obstacle.row, nullptr);
-          if (std::isnan(distance)) {  // torch.min's: a NaN is the minimum
-            nearest = distance;
-            which = k;
-            break;
-          }
-          if (which < 0 || distance < nearest) {  // ties: the first, as torch.min
-            nearest = distance;
-            which = k;
-          }
-        }
-        out_clearance[m * S_ + s] = K == 0 ? nearest : nearest - radius[s];
-        out_index[m * S_ + s] = which;
+  // As the hinge: a chunk's centres side by side, each obstacle one vectorised pass over them, in the scene's
+  // order (ties: the first).
+  at::parallel_for(0, M, 16, [&](int64_t begin, int64_t end) {
+    const int64_t count = end - begin, n = count * S_;
+    std::vector<S> frames(static_cast<size_t>(12 * L * count)), points(static_cast<size_t>(kW * C * count)),
+        sines(static_cast<size_t>(2 * count));
+    PlaceChunk(kinematics, qs + begin * J, count, frames.data(), points.data(), sines.data());
+    std::vector<S> x(n), y(n), z(n), nearest(n, std::numeric_limits<S>::infinity());
+    std::vector<int64_t> which(n, -1);
+    for (int64_t s = 0; s < S_; ++s) {
+      for (int64_t m = 0; m < count; ++m) {
+        x[s * count + m] = points[(kW * s) * count + m];
+        y[s * count + m] = points[(kW * s + 1) * count + m];
+        z[s * count + m] = points[(kW * s + 2) * count + m];
+      }
+    }
+    for (int64_t k = 0; k < K; ++k) {
+      scene.all[k].nearest(x.data(), y.data(), z.data(), scene.all[k].row, k, nearest.data(), which.data(), n);
+    }
+    for (int64_t s = 0; s < S_; ++s) {
+      for (int64_t m = 0; m < count; ++m) {
+        const int64_t i = s * count + m;
+        out_clearance[(begin + m) * S_ + s] = K == 0 ? nearest[i] : nearest[i] - radius[s];
+        out_index[(begin + m) * S_ + s] = which[i];
       }
     }
   });

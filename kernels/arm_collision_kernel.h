@@ -43,10 +43,10 @@ struct ArmTables {
 /// the obstacles of `kinds` (geometry/scene.py's names, each at most once)
 /// with their `rows` (K_i, columns) (boxes and cylinders prepared, as
 /// prepared_scene leaves them; converted to q's dtype); and, if
-/// `with_gradient`, dC/dq (M, J), else an empty tensor. An obstacle whose
-/// bounding ball lies beyond a sphere's reach by more than 1e-4 m adds
-/// nothing and is skipped, the exact result, which the script computes from
-/// its distance. Configurations run in parallel on LibTorch's intra-op
+/// `with_gradient`, dC/dq (M, J), else an empty tensor. Each obstacle's
+/// distances to a chunk of configurations' sphere centres are one vectorised
+/// loop; the gradients are taken at the active pairs alone. Configurations
+/// run in parallel on LibTorch's intra-op
 /// threads, each on its own, so the result does not depend on the thread
 /// count. No autograd. Throws std::runtime_error naming what is wrong (a
 /// shape, a dtype, a kind, rows of the wrong width).

@@ -13,9 +13,6 @@
 namespace flowplan::kernels::shapes {
 
 // Each shape below follows its script line by line (geometry/<shape>.py):
-// `Bound` gives a ball (its centre written to `centre`, W numbers; its radius
-// returned) that holds the shape, so that a point's signed distance is at
-// least its distance to that centre minus the radius (the shapes are convex);
 // `Distance` returns the signed distance of one point to one shape and, when
 // `gradient` is not null, writes the gradient (W numbers) there. Rows are read
 // in geometry/scene.py's layout; a rotated shape's rotation matrix R (local to
@@ -71,10 +68,6 @@ struct Sphere {
     }
     return length - row[W];
   }
-  static S Bound(const S* row, S* centre) {
-    for (int i = 0; i < W; ++i) centre[i] = row[i];
-    return row[W];
-  }
 };
 
 /// Prepared rows: centre (W), full side lengths (W), orientation (4 or 1), R (W W) (geometry/box.py).
@@ -107,14 +100,6 @@ struct Box {
       ToWorld<S, W>(R, direction, gradient);
     }
     return outside_length + std::min(largest, S(0));
-  }
-  static S Bound(const S* row, S* centre) {
-    S squares = 0;
-    for (int i = 0; i < W; ++i) {
-      centre[i] = row[i];
-      squares += row[W + i] * row[W + i];
-    }
-    return S(0.5) * std::sqrt(squares);
   }
 };
 
@@ -149,11 +134,6 @@ struct Cylinder {
     }
     return outside_length + std::min(std::max(side, cap), S(0));
   }
-  static S Bound(const S* row, S* centre) {
-    for (int i = 0; i < W; ++i) centre[i] = row[i];
-    const S half = S(0.5) * row[W + 1];
-    return std::sqrt(row[W] * row[W] + half * half);
-  }
 };
 
 /// Rows (2W + 1): a (W), b (W), radius: the points within radius of the segment a-b (geometry/capsule.py).
@@ -181,15 +161,6 @@ struct Capsule {
       for (int i = 0; i < W; ++i) gradient[i] = away[i] / safe;
     }
     return length - row[2 * W];
-  }
-  static S Bound(const S* row, S* centre) {
-    S squares = 0;
-    for (int i = 0; i < W; ++i) {
-      centre[i] = S(0.5) * (row[i] + row[W + i]);
-      const S half = S(0.5) * (row[W + i] - row[i]);
-      squares += half * half;
-    }
-    return std::sqrt(squares) + row[2 * W];
   }
 };
 
