@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "jit/library.h"
+#include "kernels/arm_collision_kernel.h"
 #include "kernels/shape_distance_kernel.h"
 
 namespace flowplan::guidance {
@@ -74,7 +75,7 @@ torch::jit::Module BuildTerm(const CostTerm& term, const CostContext& context) {
   return jit::ModuleBuilder("ArmCollisionCost")
       .Submodule("robot", context.robot.module())
       .Submodule("scripted", scripted)
-      .Attribute("native_kinds", NativeKinds())
+      .Attribute("native_kinds", c10::List<std::string>(kernels::ArmCollisionKinds()))
       .Attribute("weight_key", std::string(term.weight_key))
       .Methods("guidance/arm_collision.py")
       .Build();

@@ -15,8 +15,8 @@ namespace {
 constexpr int kW = 3;  // an arm's workspace
 
 /// The hinge pass of n points, given as coordinates x, y, z, against one shape's prepared row: each point's
-/// depth e_i = reach_i - d(p_i) written to `depth` and max(e_i, 0) added to `penetration`; returns how many
-/// are positive. One loop, no branches, that the compiler vectorises (built for AVX-512, AVX2 and plain
+/// depth e_i = reach_i - d(p_i) written to `depth` and relu(e_i) added to `penetration` (NaN stays NaN);
+/// returns how many are positive. One loop, no branches, that the compiler vectorises (built for AVX-512, AVX2 and plain
 /// x86-64: FLOWPLAN_VECTOR_CLONES); a point's numbers do not depend on its neighbours.
 template <class S>
 using HingePass = int64_t (*)(const S* x, const S* y, const S* z, const S* reach, const S* row, S* depth,
@@ -32,7 +32,7 @@ inline __attribute__((always_inline)) int64_t HingeLoop(const S* __restrict x, c
     const S p[kW] = {x[i], y[i], z[i]};
     const S e = reach[i] - Shape<S, kW>::Distance(p, row, nullptr);
     depth[i] = e;
-    penetration[i] += e > S(0) ? e : S(0);
+    penetration[i] += e > S(0) || e != e ? e : S(0);  // relu, and a NaN stays NaN as in the script
     active += e > S(0) ? 1 : 0;
   }
   return active;
@@ -86,7 +86,7 @@ inline __attribute__((always_inline)) void NearestLoop(const S* __restrict x, co
   for (int64_t i = 0; i < n; ++i) {
     const S p[kW] = {x[i], y[i], z[i]};
     const S d = Shape<S, kW>::Distance(p, row, nullptr);
-    const bool take = d < nearest[i] || d != d;
+    const bool take = d < nearest[i] || (d != d && nearest[i] == nearest[i]);  // the first NaN stays
     nearest[i] = take ? d : nearest[i];
     which[i] = take ? index : which[i];
   }
@@ -211,12 +211,12 @@ template <class S>
 class ArmKinematics {
  public:
   ArmKinematics(const ArmTables& arm, int64_t J, int64_t S_) : L(arm.fixed.size(0)), J(J), S_(S_), C(S_ + 2 * J) {
-    const auto as_double = torch::TensorOptions().dtype(torch::kFloat64);
+    const auto as_double = torch::TensorOptions().dtype(torch::kFloat64).device(torch::kCPU);
     const torch::Tensor fixed = arm.fixed.to(as_double).contiguous();
     const torch::Tensor fixed_cross = arm.fixed_cross.to(as_double).contiguous();
     const torch::Tensor fixed_cross_sq = arm.fixed_cross_sq.to(as_double).contiguous();
     const torch::Tensor link_turns = arm.link_turns.to(as_double).contiguous();
-    const torch::Tensor link_joint = arm.link_joint.to(torch::kInt64).contiguous();
+    const torch::Tensor link_joint = arm.link_joint.to(torch::kCPU, torch::kInt64).contiguous();
     const torch::Tensor frame_points = arm.frame_points.to(as_double).contiguous();
     const torch::Tensor ancestors = arm.ancestors.to(as_double).contiguous();
     // The links' three matrices, top rows side by side (L, 3, 12); a welded link (turns 0) is its fixed pose.
@@ -492,7 +492,7 @@ void CheckArm(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor&
         "expected ancestors (J, S) = (" + std::to_string(J) + ", " + std::to_string(S) + ")");
   Check(arm.frame_points.dim() == 2 && arm.frame_points.size(0) == 4 * L && arm.frame_points.size(1) == S + 2 * J,
         "expected frame_points (4 L, S + 2 J) = (" + std::to_string(4 * L) + ", " + std::to_string(S + 2 * J) + ")");
-  const torch::Tensor link_joint = arm.link_joint.to(torch::kInt64).contiguous();
+  const torch::Tensor link_joint = arm.link_joint.to(torch::kCPU, torch::kInt64).contiguous();
   for (int64_t l = 0; l < L; ++l) {
     const int64_t joint = link_joint.data_ptr<int64_t>()[l];
     Check(joint >= 0 && joint < J, "link_joint: expected joints in [0, " + std::to_string(J) + "), link " +
@@ -505,6 +505,11 @@ void CheckArm(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor&
 }
 
 }  // namespace
+
+const std::vector<std::string>& ArmCollisionKinds() {
+  static const std::vector<std::string> kinds = {"spheres", "boxes", "cylinders", "capsules"};  // PrepareKind's
+  return kinds;
+}
 
 std::tuple<torch::Tensor, torch::Tensor> ArmCollision(const torch::Tensor& q_in, const ArmTables& arm,
                                                       const torch::Tensor& reach,

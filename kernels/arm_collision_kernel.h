@@ -15,7 +15,7 @@
 // native collision cost"). Registered as the TorchScript operator
 // `flowplan::arm_collision` (kernels/arm_collision_op.cc); the cost class of
 // guidance/arm_collision.py calls it. Tested against the scripts
-// (tests/kernels/arm_collision_kernel_test.cc).
+// (tests/guidance/arm_collision_test.cc, tests/kinematics/robot_test.cc).
 
 #include <torch/torch.h>
 
@@ -38,6 +38,10 @@ struct ArmTables {
   torch::Tensor ancestors;       // (J, S) 1 where joint j moves sphere s
 };
 
+/// The shape kinds both functions below know (geometry/scene.py's names);
+/// callers send scenes with any other kind to the scripts.
+const std::vector<std::string>& ArmCollisionKinds();
+
 /// The hinge C (M,) of configurations q (M, J) (float32 or float64, CPU) with
 /// the spheres' reach (S,) (the guidance margin plus each radius) against
 /// the obstacles of `kinds` (geometry/scene.py's names, each at most once)
@@ -45,10 +49,11 @@ struct ArmTables {
 /// prepared_scene leaves them; converted to q's dtype); and, if
 /// `with_gradient`, dC/dq (M, J), else an empty tensor. Each obstacle's
 /// distances to a chunk of configurations' sphere centres are one vectorised
-/// loop; the gradients are taken at the active pairs alone. Configurations
-/// run in parallel on LibTorch's intra-op
-/// threads, each on its own, so the result does not depend on the thread
-/// count. No autograd. Throws std::runtime_error naming what is wrong (a
+/// loop; the gradients are taken at the active pairs alone; a NaN
+/// configuration's C is NaN, as the script's. Chunks of configurations run in
+/// parallel on LibTorch's intra-op threads, and each configuration's numbers
+/// depend on it alone, so the result does not depend on the thread count. No
+/// autograd. Throws std::runtime_error naming what is wrong (a
 /// shape, a dtype, a kind, rows of the wrong width).
 std::tuple<torch::Tensor, torch::Tensor> ArmCollision(const torch::Tensor& q, const ArmTables& arm,
                                                       const torch::Tensor& reach,
@@ -63,8 +68,8 @@ std::tuple<torch::Tensor, torch::Tensor> ArmCollision(const torch::Tensor& q, co
 /// a tie; -1 without obstacles), what kinematics/kinematics.py's
 /// sphere_nearest_obstacle computes from Arm.sphere_centres: the plan
 /// checker's and RRT-Connect's clearance (kinematics::Robot::NearestObstacles).
-/// An obstacle whose bounding ball is farther than the nearest distance so
-/// far is skipped (it cannot be nearer). Threads and errors as ArmCollision.
+/// A NaN distance is the nearest (the first, as torch.min). Threads and
+/// errors as ArmCollision.
 std::tuple<torch::Tensor, torch::Tensor> ArmNearestObstacles(const torch::Tensor& q, const ArmTables& arm,
                                                              const torch::Tensor& radii,
                                                              const std::vector<std::string>& kinds,

@@ -164,8 +164,8 @@ torch::Tensor Robot::Clearance(const torch::Tensor& q, const geometry::SceneRows
 }
 
 SphereClearance Robot::NearestObstacles(const torch::Tensor& q, const geometry::SceneRows& scene) const {
-  const auto& native = kernels::NativeShapeKinds();
-  bool all_native = is_arm() && q.dim() == 2 && q.size(1) == num_joints();
+  const auto& native = kernels::ArmCollisionKinds();
+  bool all_native = is_arm() && q.dim() == 2 && q.size(1) == num_joints() && q.device().is_cpu() && !q.requires_grad();
   bool prepared = true;
   for (const auto& entry : scene) {
     all_native = all_native && std::find(native.begin(), native.end(), entry.key()) != native.end();

@@ -83,8 +83,8 @@ class Robot {
   torch::Tensor Clearance(const torch::Tensor& q, const geometry::SceneRows& scene) const;
 
   /// Per collision sphere of q (M, J): its clearance from the nearest obstacle of `scene`, and which that is.
-  /// float64. For an arm among shapes the native kernels know, one native call
-  /// (kernels::ArmNearestObstacles); else the scripts. `scene` may be prepared
+  /// float64. For an arm among shapes the native kernels know, q on the CPU and
+  /// needing no gradient, one native call (kernels::ArmNearestObstacles); else the scripts. `scene` may be prepared
   /// (geometry::PreparedRows), which spares each call that work.
   SphereClearance NearestObstacles(const torch::Tensor& q, const geometry::SceneRows& scene) const;
 

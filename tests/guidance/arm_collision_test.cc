@@ -3,7 +3,7 @@
 // script it stands for (guidance/collision.py over LibTorch's operators,
 // itself held to central differences and autograd in cost_test.cc): the
 // Franka among every kind of shape in float64 and float32, pairs just inside
-// a sphere's reach and obstacles whose bounding balls just meet it, the same
+// and just beyond a sphere's reach, the same
 // bits for any thread count, what the operator does not take going to the
 // script, and bad input as one clear error.
 
