@@ -38,40 +38,6 @@ inline __attribute__((always_inline)) int64_t HingeLoop(const S* __restrict x, c
   return active;
 }
 
-// One clone set per shape and dtype (target_clones takes no templates).
-FLOWPLAN_VECTOR_CLONES int64_t SphereHingeFloat(const float* __restrict x, const float* __restrict y, const float* __restrict z,
-    const float* __restrict r, const float* __restrict row, float* __restrict e, float* __restrict pen, int64_t n) {
-  return HingeLoop<shapes::Sphere, float>(x, y, z, r, row, e, pen, n);
-}
-FLOWPLAN_VECTOR_CLONES int64_t BoxHingeFloat(const float* __restrict x, const float* __restrict y, const float* __restrict z,
-    const float* __restrict r, const float* __restrict row, float* __restrict e, float* __restrict pen, int64_t n) {
-  return HingeLoop<shapes::Box, float>(x, y, z, r, row, e, pen, n);
-}
-FLOWPLAN_VECTOR_CLONES int64_t CylinderHingeFloat(const float* __restrict x, const float* __restrict y, const float* __restrict z,
-    const float* __restrict r, const float* __restrict row, float* __restrict e, float* __restrict pen, int64_t n) {
-  return HingeLoop<shapes::Cylinder, float>(x, y, z, r, row, e, pen, n);
-}
-FLOWPLAN_VECTOR_CLONES int64_t CapsuleHingeFloat(const float* __restrict x, const float* __restrict y, const float* __restrict z,
-    const float* __restrict r, const float* __restrict row, float* __restrict e, float* __restrict pen, int64_t n) {
-  return HingeLoop<shapes::Capsule, float>(x, y, z, r, row, e, pen, n);
-}
-FLOWPLAN_VECTOR_CLONES int64_t SphereHingeDouble(const double* __restrict x, const double* __restrict y, const double* __restrict z,
-    const double* __restrict r, const double* __restrict row, double* __restrict e, double* __restrict pen, int64_t n) {
-  return HingeLoop<shapes::Sphere, double>(x, y, z, r, row, e, pen, n);
-}
-FLOWPLAN_VECTOR_CLONES int64_t BoxHingeDouble(const double* __restrict x, const double* __restrict y, const double* __restrict z,
-    const double* __restrict r, const double* __restrict row, double* __restrict e, double* __restrict pen, int64_t n) {
-  return HingeLoop<shapes::Box, double>(x, y, z, r, row, e, pen, n);
-}
-FLOWPLAN_VECTOR_CLONES int64_t CylinderHingeDouble(const double* __restrict x, const double* __restrict y, const double* __restrict z,
-    const double* __restrict r, const double* __restrict row, double* __restrict e, double* __restrict pen, int64_t n) {
-  return HingeLoop<shapes::Cylinder, double>(x, y, z, r, row, e, pen, n);
-}
-FLOWPLAN_VECTOR_CLONES int64_t CapsuleHingeDouble(const double* __restrict x, const double* __restrict y, const double* __restrict z,
-    const double* __restrict r, const double* __restrict row, double* __restrict e, double* __restrict pen, int64_t n) {
-  return HingeLoop<shapes::Capsule, double>(x, y, z, r, row, e, pen, n);
-}
-
 /// The nearest-obstacle pass of n points (x, y, z) against obstacle `index`'s prepared row: where its
 /// distance is below `nearest` (or is NaN, torch.min's minimum), it becomes `nearest` and `index` `which`.
 /// Vectorised as the hinge pass.
@@ -92,53 +58,37 @@ inline __attribute__((always_inline)) void NearestLoop(const S* __restrict x, co
   }
 }
 
-#define FLOWPLAN_NEAREST_PASS(name, Shape, T)                                                                 \
-  FLOWPLAN_VECTOR_CLONES void name(const T* __restrict x, const T* __restrict y, const T* __restrict z,       \
-                                   const T* __restrict row, int64_t index, T* __restrict nearest,               \
-                                   int64_t* __restrict which, int64_t n) {                                      \
-    NearestLoop<shapes::Shape, T>(x, y, z, row, index, nearest, which, n);                                     \
-  }
-FLOWPLAN_NEAREST_PASS(SphereNearestFloat, Sphere, float)
-FLOWPLAN_NEAREST_PASS(BoxNearestFloat, Box, float)
-FLOWPLAN_NEAREST_PASS(CylinderNearestFloat, Cylinder, float)
-FLOWPLAN_NEAREST_PASS(CapsuleNearestFloat, Capsule, float)
-FLOWPLAN_NEAREST_PASS(SphereNearestDouble, Sphere, double)
-FLOWPLAN_NEAREST_PASS(BoxNearestDouble, Box, double)
-FLOWPLAN_NEAREST_PASS(CylinderNearestDouble, Cylinder, double)
-FLOWPLAN_NEAREST_PASS(CapsuleNearestDouble, Capsule, double)
-#undef FLOWPLAN_NEAREST_PASS
+/// Each shape's passes, per dtype: Passes<Shape, S>::Hinge() and Nearest().
+template <template <class, int> class Shape, class S>
+struct Passes;
 
-template <template <class, int> class Shape>
-NearestPass<float> NearestOf(float) {
-  if constexpr (std::is_same<Shape<float, kW>, shapes::Sphere<float, kW>>::value) return &SphereNearestFloat;
-  if constexpr (std::is_same<Shape<float, kW>, shapes::Box<float, kW>>::value) return &BoxNearestFloat;
-  if constexpr (std::is_same<Shape<float, kW>, shapes::Cylinder<float, kW>>::value) return &CylinderNearestFloat;
-  return &CapsuleNearestFloat;
-}
-
-template <template <class, int> class Shape>
-NearestPass<double> NearestOf(double) {
-  if constexpr (std::is_same<Shape<double, kW>, shapes::Sphere<double, kW>>::value) return &SphereNearestDouble;
-  if constexpr (std::is_same<Shape<double, kW>, shapes::Box<double, kW>>::value) return &BoxNearestDouble;
-  if constexpr (std::is_same<Shape<double, kW>, shapes::Cylinder<double, kW>>::value) return &CylinderNearestDouble;
-  return &CapsuleNearestDouble;
-}
-
-template <template <class, int> class Shape>
-HingePass<float> HingeOf(float) {
-  if constexpr (std::is_same<Shape<float, kW>, shapes::Sphere<float, kW>>::value) return &SphereHingeFloat;
-  if constexpr (std::is_same<Shape<float, kW>, shapes::Box<float, kW>>::value) return &BoxHingeFloat;
-  if constexpr (std::is_same<Shape<float, kW>, shapes::Cylinder<float, kW>>::value) return &CylinderHingeFloat;
-  return &CapsuleHingeFloat;
-}
-
-template <template <class, int> class Shape>
-HingePass<double> HingeOf(double) {
-  if constexpr (std::is_same<Shape<double, kW>, shapes::Sphere<double, kW>>::value) return &SphereHingeDouble;
-  if constexpr (std::is_same<Shape<double, kW>, shapes::Box<double, kW>>::value) return &BoxHingeDouble;
-  if constexpr (std::is_same<Shape<double, kW>, shapes::Cylinder<double, kW>>::value) return &CylinderHingeDouble;
-  return &CapsuleHingeDouble;
-}
+// One clone set per shape and dtype (target_clones takes no templates), and its entry in Passes.
+#define FLOWPLAN_ARM_PASSES(Shape, T)                                                                          \
+  FLOWPLAN_VECTOR_CLONES int64_t Shape##Hinge_##T(const T* __restrict x, const T* __restrict y,                 \
+                                                  const T* __restrict z, const T* __restrict reach,             \
+                                                  const T* __restrict row, T* __restrict depth,                 \
+                                                  T* __restrict penetration, int64_t n) {                       \
+    return HingeLoop<shapes::Shape, T>(x, y, z, reach, row, depth, penetration, n);                             \
+  }                                                                                                             \
+  FLOWPLAN_VECTOR_CLONES void Shape##Nearest_##T(const T* __restrict x, const T* __restrict y,                  \
+                                                 const T* __restrict z, const T* __restrict row, int64_t index, \
+                                                 T* __restrict nearest, int64_t* __restrict which, int64_t n) { \
+    NearestLoop<shapes::Shape, T>(x, y, z, row, index, nearest, which, n);                                      \
+  }                                                                                                             \
+  template <>                                                                                                   \
+  struct Passes<shapes::Shape, T> {                                                                             \
+    static HingePass<T> Hinge() { return &Shape##Hinge_##T; }                                                   \
+    static NearestPass<T> Nearest() { return &Shape##Nearest_##T; }                                             \
+  };
+FLOWPLAN_ARM_PASSES(Sphere, float)
+FLOWPLAN_ARM_PASSES(Box, float)
+FLOWPLAN_ARM_PASSES(Cylinder, float)
+FLOWPLAN_ARM_PASSES(Capsule, float)
+FLOWPLAN_ARM_PASSES(Sphere, double)
+FLOWPLAN_ARM_PASSES(Box, double)
+FLOWPLAN_ARM_PASSES(Cylinder, double)
+FLOWPLAN_ARM_PASSES(Capsule, double)
+#undef FLOWPLAN_ARM_PASSES
 
 /// One kind's obstacles: its distance (for a gradient), its vectorised passes, its rows.
 template <class S>
@@ -161,7 +111,7 @@ Obstacles<S> Prepare(const std::string& kind, const torch::Tensor& rows) {
                                                                std::to_string(rows.size(1)) + ")"
                                                          : std::to_string(rows.dim()) + " dimensions"));
   }
-  return {&Kernel::Distance, HingeOf<Shape>(S()), NearestOf<Shape>(S()), rows.data_ptr<S>(), Kernel::kColumns,
+  return {&Kernel::Distance, Passes<Shape, S>::Hinge(), Passes<Shape, S>::Nearest(), rows.data_ptr<S>(), Kernel::kColumns,
           rows.size(0)};
 }
 
@@ -342,13 +292,34 @@ inline void PlaceChunk(const ArmKinematics<double>& arm, const double* q, int64_
   PlaceChunkDouble(arm, q, count, frames, points, sines);
 }
 
+/// A chunk of `count` configurations placed (PlaceChunk): the frame points (C, 3, count), and the sphere
+/// centres' coordinates as three arrays of n = S count (index s count + m), what the passes take.
+template <class S>
+struct PlacedChunk {
+  std::vector<S> points, x, y, z;
+
+  PlacedChunk(const ArmKinematics<S>& arm, const S* q, int64_t count)
+      : points(static_cast<size_t>(kW * arm.C * count)),
+        x(static_cast<size_t>(arm.S_ * count)),
+        y(x.size()),
+        z(x.size()) {
+    std::vector<S> frames(static_cast<size_t>(12 * arm.L * count)), sines(static_cast<size_t>(2 * count));
+    PlaceChunk(arm, q, count, frames.data(), points.data(), sines.data());
+    for (int64_t s = 0; s < arm.S_; ++s) {
+      std::copy_n(points.begin() + (kW * s) * count, count, x.begin() + s * count);
+      std::copy_n(points.begin() + (kW * s + 1) * count, count, y.begin() + s * count);
+      std::copy_n(points.begin() + (kW * s + 2) * count, count, z.begin() + s * count);
+    }
+  }
+};
+
 template <class S>
 void RunHinge(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& reach_in,
               const std::vector<std::string>& kinds, const std::vector<torch::Tensor>& rows_in, torch::Tensor& value,
               torch::Tensor* gradient) {
   const torch::Tensor reach = reach_in.to(q.options()).contiguous();
   const ArmKinematics<S> kinematics(arm, q.size(1), reach.size(0));
-  const int64_t M = q.size(0), J = kinematics.J, L = kinematics.L, S_ = kinematics.S_, C = kinematics.C;
+  const int64_t M = q.size(0), J = kinematics.J, S_ = kinematics.S_;
   const S* reaches = reach.data_ptr<S>();
   const SceneObstacles<S> scene(kinds, rows_in, q.options());
   const S* qs = q.data_ptr<S>();
@@ -361,21 +332,11 @@ void RunHinge(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor&
   // depend on the thread count.
   at::parallel_for(0, M, 16, [&](int64_t begin, int64_t end) {
     const int64_t count = end - begin, n = count * S_;
-    // Points (C, 3, count): sphere s's x, y, z at rows 3 s .. 3 s + 2, so the centres' x of every sphere and
-    // configuration are one array of n = S count (index s count + m), and so are y and z.
-    std::vector<S> frames(static_cast<size_t>(12 * L * count)), points(static_cast<size_t>(kW * C * count)),
-        sines(static_cast<size_t>(2 * count));
-    PlaceChunk(kinematics, qs + begin * J, count, frames.data(), points.data(), sines.data());
-    std::vector<S> x(n), y(n), z(n), chunk_reach(n), depth(n), penetration(n, S(0)), pushes(3 * n, S(0));
+    const PlacedChunk<S> chunk(kinematics, qs + begin * J, count);
+    const std::vector<S>&points = chunk.points, &x = chunk.x, &y = chunk.y, &z = chunk.z;
+    std::vector<S> chunk_reach(n), depth(n), penetration(n, S(0)), pushes(3 * n, S(0));
     std::vector<char> pushed(n, 0);
-    for (int64_t s = 0; s < S_; ++s) {
-      for (int64_t m = 0; m < count; ++m) {
-        x[s * count + m] = points[(kW * s) * count + m];
-        y[s * count + m] = points[(kW * s + 1) * count + m];
-        z[s * count + m] = points[(kW * s + 2) * count + m];
-        chunk_reach[s * count + m] = reaches[s];
-      }
-    }
+    for (int64_t s = 0; s < S_; ++s) std::fill_n(chunk_reach.begin() + s * count, count, reaches[s]);
     for (const Obstacle<S>& obstacle : scene.all) {
       const int64_t active = obstacle.hinge(x.data(), y.data(), z.data(), chunk_reach.data(), obstacle.row,
                                             depth.data(), penetration.data(), n);
@@ -430,7 +391,7 @@ void RunNearest(const torch::Tensor& q, const ArmTables& arm, const torch::Tenso
                 torch::Tensor& clearance, torch::Tensor& index) {
   const torch::Tensor radii = radii_in.to(q.options()).contiguous();
   const ArmKinematics<S> kinematics(arm, q.size(1), radii.size(0));
-  const int64_t M = q.size(0), J = kinematics.J, L = kinematics.L, S_ = kinematics.S_, C = kinematics.C;
+  const int64_t M = q.size(0), J = kinematics.J, S_ = kinematics.S_;
   const SceneObstacles<S> scene(kinds, rows_in, q.options());
   const S* qs = q.data_ptr<S>();
   const S* radius = radii.data_ptr<S>();
@@ -442,18 +403,10 @@ void RunNearest(const torch::Tensor& q, const ArmTables& arm, const torch::Tenso
   // order (ties: the first).
   at::parallel_for(0, M, 16, [&](int64_t begin, int64_t end) {
     const int64_t count = end - begin, n = count * S_;
-    std::vector<S> frames(static_cast<size_t>(12 * L * count)), points(static_cast<size_t>(kW * C * count)),
-        sines(static_cast<size_t>(2 * count));
-    PlaceChunk(kinematics, qs + begin * J, count, frames.data(), points.data(), sines.data());
-    std::vector<S> x(n), y(n), z(n), nearest(n, std::numeric_limits<S>::infinity());
+    const PlacedChunk<S> chunk(kinematics, qs + begin * J, count);
+    const std::vector<S>&x = chunk.x, &y = chunk.y, &z = chunk.z;
+    std::vector<S> nearest(n, std::numeric_limits<S>::infinity());
     std::vector<int64_t> which(n, -1);
-    for (int64_t s = 0; s < S_; ++s) {
-      for (int64_t m = 0; m < count; ++m) {
-        x[s * count + m] = points[(kW * s) * count + m];
-        y[s * count + m] = points[(kW * s + 1) * count + m];
-        z[s * count + m] = points[(kW * s + 2) * count + m];
-      }
-    }
     for (int64_t k = 0; k < K; ++k) {
       scene.all[k].nearest(x.data(), y.data(), z.data(), scene.all[k].row, k, nearest.data(), which.data(), n);
     }
