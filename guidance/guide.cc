@@ -115,12 +115,22 @@ torch::jit::Module BuildGuide(const GuidanceConfig& config, const kinematics::Ro
   for (auto term = terms.rbegin(); term != terms.rend(); ++term) {
     chain = jit::ModuleBuilder("CostChain").Submodule("term", *term).Submodule("rest", chain).Methods("guidance/cost_chain.py").Build();
   }
-  return jit::ModuleBuilder("Guide")
-      .Submodule("normalizer", normalizer)
+  jit::ModuleBuilder guide("Guide");
+  guide.Submodule("normalizer", normalizer)
       .Submodule("costs", chain)
       .Attribute("num_joints", robot.num_joints())
-      .Methods("guidance/guide.py")
-      .Build();
+      .Methods("guidance/guide.py");
+  // With native kernels, an arm whose chain holds the built-in terms only has its whole gradient in one call of
+  // flowplan::arm_guidance; the chain stays for the cost's value and for what the operator does not take.
+  if (config.distance_kernels == models::Kernels::kNative && robot.is_arm() && config.user_cost.empty()) {
+    guide.Submodule("robot", robot.module())
+        .Attribute("native_kinds", c10::List<std::string>(kernels::ArmCollisionKinds()))
+        .Attribute("dt", dt)
+        .Methods("guidance/arm_guide.py");
+  } else {
+    guide.Methods("guidance/chain_gradient.py");
+  }
+  return guide.Build();
 }
 
 }  // namespace flowplan::guidance

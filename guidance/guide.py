@@ -4,7 +4,9 @@
 # normalized trajectories against
 #   sum_k w_k clip(dC_k/dx) * (hi - lo) / 2,
 # the chain rule through the normalizer. Submodules normalizer and costs (a
-# CostChain); attribute num_joints.
+# CostChain); attribute num_joints; the method native_gradient, from
+# guidance/arm_guide.py (an arm with the built-in terms and native kernels:
+# the same gradient in one native call) or guidance/chain_gradient.py (none).
 
 
 def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
@@ -39,7 +41,12 @@ def raw_gradient(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, floa
 
 
 def gradient(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tensor:
-    """The guidance gradient (B, T, D) with respect to normalized trajectories x (B, T, D)."""
+    """The guidance gradient (B, T, D) with respect to normalized trajectories
+    x (B, T, D): one native call where the guide has one that takes these
+    tensors (native_gradient), else the chain's terms through the normalizer."""
+    native = self.native_gradient(x, scene, opts)
+    if native is not None:
+        return native
     raw = self.normalizer.denormalize_unclamped(x)
     return self.raw_gradient(raw, scene, opts) * self.normalizer.raw_per_normalized()
 
