@@ -4,7 +4,8 @@
 # of the native operator flowplan::arm_guidance (kernels/arm_guidance_kernel.h)
 # instead of some hundred LibTorch operators through the chain. What the
 # operator does not take (x off the CPU, of another dtype or needing autograd,
-# a kind of shape not in native_kinds) goes to the chain. Submodule robot (an
+# normalizer statistics wider than x, a kind of shape not in native_kinds)
+# goes to the chain. Submodule robot (an
 # Arm); attributes native_kinds, dt (s between states). A planner saved with
 # it loads where libflowplan_kernels is loaded (docs/export.md).
 
@@ -13,7 +14,10 @@ def native_gradient(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, f
     """The guidance gradient (B, T, D) of normalized plans x (B, T, D) in one
     native call, or None where the operator does not take them."""
     normalizer = self.normalizer
-    if x.get_device() >= 0 or normalizer.lo.get_device() >= 0 or not x.is_floating_point() or x.element_size() < 4 or x.requires_grad:
+    if x.get_device() >= 0 or not x.is_floating_point() or x.element_size() < 4 or x.requires_grad:
+        return None
+    # Statistics on another device, or wider than x (float64 with float32 x: the chain's result is float64).
+    if normalizer.lo.get_device() >= 0 or normalizer.hi.get_device() >= 0 or normalizer.lo.element_size() > x.element_size():
         return None
     kinds: List[str] = []
     rows: List[Tensor] = []

@@ -3,6 +3,8 @@
 # and rest (another CostChain, or a NoCost at the end). Each term's gradient
 # [dC/dq, dC/dqd] is capped per state at guidance.clip (raw units) and weighted
 # by opts[term.weight_key].
+# kernels/arm_guidance_kernel.cc computes the chain of the built-in terms, their caps and weights too, for an arm with native
+# kernels (guidance/arm_guide.py): a change here is a change there.
 
 
 def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "jit/library.h"
 #include "kernels/arm_collision_kernel.h"
+#include "kernels/arm_guidance_kernel.h"
 #include "kernels/shape_distance_kernel.h"
 
 namespace flowplan::guidance {
@@ -120,9 +121,13 @@ torch::jit::Module BuildGuide(const GuidanceConfig& config, const kinematics::Ro
       .Submodule("costs", chain)
       .Attribute("num_joints", robot.num_joints())
       .Methods("guidance/guide.py");
-  // With native kernels, an arm whose chain holds the built-in terms only has its whole gradient in one call of
-  // flowplan::arm_guidance; the chain stays for the cost's value and for what the operator does not take.
-  if (config.distance_kernels == models::Kernels::kNative && robot.is_arm() && config.user_cost.empty()) {
+  // With native kernels, an arm whose chain holds the terms the operator computes, and no others, has its whole
+  // gradient in one call of flowplan::arm_guidance; the chain stays for the cost's value and for what the operator
+  // does not take. A term added to kCostTerms keeps the chain until the operator computes it too.
+  std::vector<std::string> weight_keys;
+  for (const CostTerm& term : kCostTerms) weight_keys.emplace_back(term.weight_key);
+  if (config.distance_kernels == models::Kernels::kNative && robot.is_arm() && config.user_cost.empty() &&
+      weight_keys == kernels::ArmGuidanceWeightKeys()) {
     guide.Submodule("robot", robot.module())
         .Attribute("native_kinds", c10::List<std::string>(kernels::ArmCollisionKinds()))
         .Attribute("dt", dt)

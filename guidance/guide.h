@@ -52,8 +52,9 @@ struct GuidanceConfig {
   std::string user_cost;            // a TorchScript file defining cost(self, q, qd, scene); empty: none
   double user_cost_weight = 1.0;    // weight of the user cost
   // The collision cost's obstacle distances: native kernels (flowplan::shape_distance; for an arm the whole
-  // hinge, kinematics included, as flowplan::arm_collision), or LibTorch's operators only (what `flowplan
-  // export` writes unless told --kernels native).
+  // hinge, kinematics included, as flowplan::arm_collision; and without a user cost the whole guidance gradient,
+  // every built-in term, its cap and the normalizer, as flowplan::arm_guidance), or LibTorch's operators only
+  // (what `flowplan export` writes unless told --kernels native).
   models::Kernels distance_kernels = models::Kernels::kNative;
 
   template <class V>
@@ -81,8 +82,9 @@ struct GuidanceConfig {
             "TorchScript file defining `def cost(self, q, qd, scene) -> Tensor` (docs/planning.md); empty for none");
     v.Field("user_cost_weight", user_cost_weight, "weight of the user cost", config::NonNegative());
     v.Field("distance_kernels", distance_kernels,
-            "the collision cost's obstacle distances (for an arm the whole cost): native kernels (needs "
-            "libflowplan_kernels where the planner runs) or portable");
+            "the collision cost's obstacle distances (for an arm the whole cost, and without a user cost the "
+            "whole guidance gradient): native kernels (needs libflowplan_kernels where the planner runs) or "
+            "portable");
   }
 };
 

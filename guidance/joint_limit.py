@@ -3,6 +3,8 @@
 #   C = sum over states and joints of relu(lower + m - q) + relu(q - upper + m),
 # m = guidance.joint_limit_margin. Submodule robot (its lower and upper limits);
 # attribute weight_key.
+# kernels/arm_guidance_kernel.cc computes this term too, for an arm with native
+# kernels (guidance/arm_guide.py): a change here is a change there.
 
 
 def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:

@@ -6,6 +6,8 @@
 # terms push within speeds the arm can follow, and never makes guidance run
 # alone. A robot without velocity limits (infinite) has no cost. Submodule
 # robot (its velocity_limit); attributes dt (s between states), weight_key.
+# kernels/arm_guidance_kernel.cc computes this term too, for an arm with native
+# kernels (guidance/arm_guide.py): a change here is a change there.
 
 
 def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:

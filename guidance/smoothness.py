@@ -4,6 +4,8 @@
 #   C = sum_i 12/(dt^3 s^2) e_q^2 - 12/(dt^2 s^2) e_q e_v + 4/(dt s^2) e_v^2,
 # s = guidance.smoothness_sigma. Attributes: dt (s between states), weight_key.
 # It smooths what the other terms push, and never makes guidance run alone.
+# kernels/arm_guidance_kernel.cc computes this term too, for an arm with native
+# kernels (guidance/arm_guide.py): a change here is a change there.
 
 
 def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:

@@ -21,11 +21,12 @@ S Relu(S v) {
 template <class S>
 struct PlanTerms {
   int64_t T, J, D;
-  S dt;
+  double dt_seconds;  // the script's dt, from which its coefficients are taken in double
+  S dt;               // dt as the script's products with tensors round it
 
   /// guidance/smoothness.py: e_q = q_{i+1} - q_i - dt qd_i, e_v = qd_{i+1} - qd_i.
   void Smoothness(const S* raw, double sigma, S* out) const {
-    const double s2 = sigma * sigma, dtd = static_cast<double>(dt);
+    const double s2 = sigma * sigma, dtd = dt_seconds;
     const S a = static_cast<S>(12.0 / (dtd * dtd * dtd * s2)), b = static_cast<S>(-6.0 / (dtd * dtd * s2)),
             c = static_cast<S>(4.0 / (dtd * s2));
     for (int64_t j = 0; j < J; ++j) {
@@ -90,13 +91,14 @@ void Accumulate(const std::vector<S>& term, double weight, double clip, int64_t 
     const S* g = term.data() + i * D;
     S* sum = total.data() + i * D;
     S divisor = 1;
-    if (clip > 0) {
+    const bool capped = !(clip <= 0);  // as clip_states: a NaN cap caps
+    if (capped) {
       S squares = 0;
       for (int64_t d = 0; d < D; ++d) squares += g[d] * g[d];
       const S norm = std::sqrt(squares);
       divisor = (norm < cap ? cap : norm) / cap;
     }
-    for (int64_t d = 0; d < D; ++d) sum[d] = sum[d] + w * (clip > 0 ? g[d] / divisor : g[d]);
+    for (int64_t d = 0; d < D; ++d) sum[d] = sum[d] + w * (capped ? g[d] / divisor : g[d]);
   }
 }
 
@@ -145,7 +147,7 @@ torch::Tensor Run(const torch::Tensor& x_in, const torch::Tensor& lo, const torc
   for (int64_t i = 0; i < states * D; ++i) raw[i] = (xs[i] + S(1)) * S(0.5) * range[i % D] + low[i % D];
 
   std::vector<S> total(static_cast<size_t>(states * D), S(0)), term(static_cast<size_t>(states * D));
-  const PlanTerms<S> plan{T, J, D, static_cast<S>(dt)};
+  const PlanTerms<S> plan{T, J, D, dt, static_cast<S>(dt)};
   auto each_plan = [&](auto&& fill) {
     std::fill(term.begin(), term.end(), S(0));
     for (int64_t b = 0; b < B; ++b) fill(raw + b * T * D, term.data() + b * T * D);
@@ -175,7 +177,13 @@ torch::Tensor Run(const torch::Tensor& x_in, const torch::Tensor& lo, const torc
     for (S& r : reaches) r = r + static_cast<S>(terms.margin);
     const torch::Tensor reach = torch::from_blob(reaches.data(), {static_cast<int64_t>(reaches.size())}, options);
     const torch::Tensor q = raw_tensor.view({states, D}).slice(1, 0, J).contiguous();
-    const torch::Tensor grad_q = std::get<1>(ArmCollision(q, arm, reach, kinds, rows, true)).contiguous();
+    torch::Tensor grad_q;
+    try {
+      grad_q = std::get<1>(ArmCollision(q, arm, reach, kinds, rows, true)).contiguous();
+    } catch (const std::runtime_error& e) {  // "arm_collision: ..." named as this operator's
+      const std::string what = e.what();
+      throw std::runtime_error("arm_guidance: " + what.substr(what.find(": ") == std::string::npos ? 0 : what.find(": ") + 2));
+    }
     const S* g = grad_q.data_ptr<S>();
     std::fill(term.begin(), term.end(), S(0));
     for (int64_t i = 0; i < states; ++i) {
@@ -191,6 +199,12 @@ torch::Tensor Run(const torch::Tensor& x_in, const torch::Tensor& lo, const torc
 
 }  // namespace
 
+const std::vector<std::string>& ArmGuidanceWeightKeys() {
+  static const std::vector<std::string> keys = {"guidance.collision_weight", "guidance.smoothness_weight",
+                                                "guidance.joint_limit_weight", "guidance.joint_speed_weight"};
+  return keys;
+}
+
 torch::Tensor ArmGuidance(const torch::Tensor& x, const torch::Tensor& lo, const torch::Tensor& hi,
                           const ArmTables& arm, const ArmLimits& limits, double dt,
                           const std::vector<std::string>& kinds, const std::vector<torch::Tensor>& rows,
@@ -198,8 +212,10 @@ torch::Tensor ArmGuidance(const torch::Tensor& x, const torch::Tensor& lo, const
   Check(x.dim() == 3, "expected x (B, T, D)");
   const auto dtype = x.scalar_type();
   Check(dtype == torch::kFloat32 || dtype == torch::kFloat64, "expected float32 or float64 x");
-  Check(x.device().is_cpu() && lo.device().is_cpu() && hi.device().is_cpu(), "expected tensors on the CPU");
-  Check(!x.requires_grad(), "no autograd (the scripts have it)");
+  Check(x.device().is_cpu() && lo.device().is_cpu() && hi.device().is_cpu() && limits.sphere_radii.device().is_cpu() &&
+            limits.lower.device().is_cpu() && limits.upper.device().is_cpu() && limits.velocity_limit.device().is_cpu(),
+        "expected tensors on the CPU");
+  Check(!x.requires_grad() && !lo.requires_grad() && !hi.requires_grad(), "no autograd (the scripts have it)");
   const int64_t D = x.size(2), J = arm.ancestors.dim() == 2 ? arm.ancestors.size(0) : -1;
   Check(D == 2 * J, "expected D = 2 J = " + std::to_string(2 * J) + " (positions and velocities), got " +
                         std::to_string(D));
@@ -210,7 +226,7 @@ torch::Tensor ArmGuidance(const torch::Tensor& x, const torch::Tensor& lo, const
     Check(t->dim() == 1 && t->size(0) == J, "expected lower, upper and velocity_limit (" + std::to_string(J) + ")");
   }
   Check(dt > 0, "expected a positive dt");
-  Check(terms.smoothness_sigma > 0, "expected a positive guidance.smoothness_sigma");
+  Check(terms.smoothness_weight == 0.0 || terms.smoothness_sigma > 0, "expected a positive guidance.smoothness_sigma");
   if (dtype == torch::kFloat32) return Run<float>(x, lo, hi, arm, limits, dt, kinds, rows, terms);
   return Run<double>(x, lo, hi, arm, limits, dt, kinds, rows, terms);
 }

@@ -24,6 +24,11 @@
 
 namespace flowplan::kernels {
 
+/// The weight keys of the terms ArmGuidance computes, in the order of the
+/// guide's chain (guidance/guide.cc, kCostTerms). A guide whose chain holds
+/// other terms keeps the chain (guide.cc compares the two lists).
+const std::vector<std::string>& ArmGuidanceWeightKeys();
+
 /// The settings of the terms, by their config names (guidance.*).
 struct GuidanceTerms {
   double collision_weight = 0, margin = 0;                // guidance.collision_weight, guidance.margin
@@ -45,11 +50,13 @@ struct ArmLimits {
 /// the normalizer's lo, hi (D,), states dt seconds apart, among the obstacles
 /// of `kinds` and `rows` (prepared, as ArmCollision takes them): the sum over
 /// the terms of weight times the term's gradient [dC/dq, dC/dqd] capped per
-/// state at `clip`, times (hi - lo) / 2, each number rounded as the scripts
-/// round it (their order of terms and of operations; float32 sums may differ
-/// in the last bits). A term of weight 0 is skipped, as the chain skips it.
-/// No autograd; the result does not depend on the thread count. Throws
-/// std::runtime_error naming what is wrong.
+/// state at `clip`, times (hi - lo) / 2: the scripts' order of terms and of
+/// operations, each product and sum rounded in x's dtype as theirs are, but
+/// for the cap's norm, summed in another order (the last bits of a capped
+/// state can differ). A term of weight 0 is skipped, as the chain skips it.
+/// Every setting of GuidanceTerms must be given (a planner's settings hold
+/// them all). No autograd; the result does not depend on the thread count.
+/// Throws std::runtime_error naming what is wrong.
 torch::Tensor ArmGuidance(const torch::Tensor& x, const torch::Tensor& lo, const torch::Tensor& hi,
                           const ArmTables& arm, const ArmLimits& limits, double dt,
                           const std::vector<std::string>& kinds, const std::vector<torch::Tensor>& rows,

@@ -65,6 +65,13 @@ torch::Tensor Gradient(const torch::jit::Module& guide, const torch::Tensor& x, 
   return jit::Call(guide, "gradient", {x, scene, opts}).toTensor();
 }
 
+/// The guide's native gradient (None where it has none or the operator does not take the tensors).
+c10::IValue NativeGradient(const torch::jit::Module& guide, const torch::Tensor& x, const geometry::SceneRows& scene,
+                           const c10::Dict<std::string, double>& opts) {
+  torch::NoGradGuard no_grad;
+  return jit::Call(guide, "native_gradient", {x, scene, opts});
+}
+
 /// The chain's gradient in the same guide: Guide.gradient's second branch, written out.
 torch::Tensor ChainGradient(const torch::jit::Module& guide, const torch::Tensor& x, const geometry::SceneRows& scene,
                             const c10::Dict<std::string, double>& opts) {
@@ -123,8 +130,9 @@ geometry::SceneRows AsFloat(const geometry::SceneRows& scene) {
 double Largest(const torch::Tensor& t) { return t.abs().max().item<double>(); }
 
 // Each setting turns a term on, off or into its other regime: the defaults (collision and smoothness, capped);
-// every term at once with an active joint-speed hinge; the joint-limit hinge without a cap; a cap that binds on
-// every state; the collision term alone.
+// every term at once with a joint-speed hinge active on most segments; the joint-limit hinge without a cap; a
+// cap that binds on every state; the collision term alone; every term but collision, the joint-speed hinge
+// active on some segments only (and a sigma of 0 where smoothness is off: the chain never reads it).
 const std::vector<std::map<std::string, double>> kSettings = {
     {{"guidance.clip", 1.0}},
     {{"guidance.clip", 1.0}, {"guidance.joint_speed_weight", 0.3}, {"guidance.joint_speed_ratio", 0.2},
@@ -132,6 +140,10 @@ const std::vector<std::map<std::string, double>> kSettings = {
     {{"guidance.clip", 0.0}, {"guidance.joint_limit_weight", 0.3}, {"guidance.smoothness_sigma", 3.0}},
     {{"guidance.clip", 0.01}, {"guidance.collision_weight", 5.0}, {"guidance.margin", 0.1}},
     {{"guidance.clip", 1.0}, {"guidance.smoothness_weight", 0.0}, {"guidance.collision_weight", 1.0}},
+    {{"guidance.clip", 0.5}, {"guidance.collision_weight", 0.0}, {"guidance.joint_speed_weight", 1.0},
+     {"guidance.joint_speed_ratio", 2.5}, {"guidance.joint_limit_weight", 0.2}},
+    {{"guidance.clip", 1.0}, {"guidance.smoothness_weight", 0.0}, {"guidance.smoothness_sigma", 0.0},
+     {"guidance.joint_speed_weight", 0.3}},
 };
 
 TEST(ArmGuidanceTest, OneNativeCallGivesTheChainsGradientInBothPrecisions) {
@@ -141,21 +153,48 @@ TEST(ArmGuidanceTest, OneNativeCallGivesTheChainsGradientInBothPrecisions) {
     const geometry::SceneRows scene = SceneAbout(guide, x, seed);
     for (const auto& over : kSettings) {
       const auto opts = Opts(over);
+      ASSERT_FALSE(NativeGradient(guide, x, scene, opts).isNone()) << "the operator must take float64 plans";
       const torch::Tensor chain = ChainGradient(guide, x, scene, opts);
       const torch::Tensor native = Gradient(guide, x, scene, opts);
       ASSERT_EQ(native.sizes(), x.sizes());
       ASSERT_EQ(native.scalar_type(), torch::kFloat64);
       EXPECT_GT((chain.abs() > 0).sum().item<int64_t>(), x.numel() / 4) << "the test needs gradients at many entries";
       EXPECT_LT(Largest(native - chain), 1e-12 * Largest(chain)) << "seed " << seed;
+      if (over.at("guidance.clip") == 0.0) {
+        EXPECT_TRUE(torch::equal(native, chain)) << "uncapped, every number is rounded as the chain rounds it";
+      }
 
       const torch::Tensor x32 = x.to(torch::kFloat32);
       const geometry::SceneRows scene32 = AsFloat(scene);
+      ASSERT_FALSE(NativeGradient(guide, x32, scene32, opts).isNone()) << "and float32 plans";
       const torch::Tensor native32 = Gradient(guide, x32, scene32, opts);
       ASSERT_EQ(native32.scalar_type(), torch::kFloat32);
       // float32: the operators' and the kernel's sums round alike but for their order.
-      EXPECT_LT(Largest(native32 - ChainGradient(guide, x32, scene32, opts)), 1e-5 * Largest(chain)) << "seed " << seed;
+      const torch::Tensor chain32 = ChainGradient(guide, x32, scene32, opts);
+      EXPECT_LT(Largest(native32 - chain32), 1e-5 * Largest(chain)) << "seed " << seed;
+      if (over.at("guidance.clip") == 0.0) {
+        EXPECT_TRUE(torch::equal(native32, chain32)) << "float32, uncapped";
+      }
     }
   }
+}
+
+TEST(ArmGuidanceTest, ShortPlansAndStridedPlans) {
+  // One state (no segment), two states (one segment, both ends), and plans that are a strided view.
+  const torch::jit::Module guide = Guide(models::Kernels::kNative);
+  const auto opts = Opts(kSettings[1]);
+  for (int64_t T : {1, 2}) {
+    const torch::Tensor x = Plans(2, T, 20 + T);
+    const geometry::SceneRows scene = SceneAbout(guide, x, 20 + T);
+    const torch::Tensor chain = ChainGradient(guide, x, scene, opts);
+    EXPECT_LT(Largest(Gradient(guide, x, scene, opts) - chain), 1e-12 * Largest(chain)) << "T = " << T;
+  }
+  const torch::Tensor wide = Plans(12, 16, 23);
+  const torch::Tensor x = wide.slice(0, 0, 12, 3);  // every third plan: not contiguous
+  ASSERT_FALSE(x.is_contiguous());
+  const geometry::SceneRows scene = SceneAbout(guide, x, 23);
+  const torch::Tensor chain = ChainGradient(guide, x, scene, opts);
+  EXPECT_LT(Largest(Gradient(guide, x, scene, opts) - chain), 1e-12 * Largest(chain));
 }
 
 TEST(ArmGuidanceTest, NativeGradientMatchesThePortableGuide) {
@@ -200,6 +239,9 @@ TEST(ArmGuidanceTest, WhoHasTheNativeGradientAndWhatGoesToTheChain) {
   std::ofstream(cost) << "def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
                          "    return (q * 0.0).sum([1, 2])\n";
   const torch::jit::Module with_user = Guide(models::Kernels::kNative, cost);
+  EXPECT_TRUE(native.hasattr("native_kinds"));
+  EXPECT_FALSE(portable.hasattr("native_kinds"));
+  EXPECT_FALSE(with_user.hasattr("native_kinds"));
   const torch::Tensor user = Gradient(with_user, x, scene, opts);
   EXPECT_TRUE(torch::equal(user, ChainGradient(with_user, x, scene, opts)));
   EXPECT_TRUE(torch::equal(user, chain)) << "a user cost of zero adds nothing";
@@ -208,6 +250,14 @@ TEST(ArmGuidanceTest, WhoHasTheNativeGradientAndWhatGoesToTheChain) {
   const torch::Tensor through = jit::Call(native, "gradient", {tracked, scene, opts}).toTensor();
   EXPECT_TRUE(through.requires_grad());
   EXPECT_TRUE(torch::equal(through.detach(), ChainGradient(portable, x, scene, opts)));
+  // float64 statistics with float32 plans: the chain, whose result is float64.
+  torch::jit::Module wide_statistics = StateNormalizer().module().clone();
+  wide_statistics.to(torch::kFloat64);  // as a user's planner.double() leaves it
+  ASSERT_EQ(wide_statistics.attr("lo").toTensor().scalar_type(), torch::kFloat64);
+  const torch::jit::Module wide = BuildGuide(GuidanceConfig(), Franka(), wide_statistics, kDt);
+  const torch::Tensor x32 = x.to(torch::kFloat32);
+  EXPECT_TRUE(NativeGradient(wide, x32, scene, opts).isNone());
+  EXPECT_EQ(Gradient(wide, x32, scene, opts).scalar_type(), torch::kFloat64);
   // Without obstacles: the other terms alone.
   EXPECT_LT(Largest(Gradient(native, x, geometry::SceneRows(), opts) - ChainGradient(native, x, geometry::SceneRows(), opts)),
             1e-12 * Largest(chain));
@@ -218,7 +268,7 @@ TEST(ArmGuidanceTest, BadInputIsOneClearError) {
   const torch::Tensor x = Plans(1, 8, 9);
   const geometry::SceneRows scene = SceneAbout(guide, x, 9);
   auto opts = Opts();
-  opts.erase("guidance.joint_speed_ratio");
+  ASSERT_EQ(opts.erase("guidance.joint_speed_ratio"), 1u);
   EXPECT_THAT([&] { Gradient(guide, x, scene, opts); },
               ::testing::ThrowsMessage<Error>(HasSubstr("arm_guidance: opts: no setting guidance.joint_speed_ratio")));
   const c10::OperatorHandle op = c10::Dispatcher::singleton().findSchemaOrThrow("flowplan::arm_guidance", "");
