@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <limits>
 
 #include "core/error.h"
 #include "guidance/guide.h"
@@ -195,6 +196,24 @@ TEST(ArmGuidanceTest, ShortPlansAndStridedPlans) {
   const geometry::SceneRows scene = SceneAbout(guide, x, 23);
   const torch::Tensor chain = ChainGradient(guide, x, scene, opts);
   EXPECT_LT(Largest(Gradient(guide, x, scene, opts) - chain), 1e-12 * Largest(chain));
+}
+
+TEST(ArmGuidanceTest, ANaNStateSpreadsAsInTheChain) {
+  // A NaN in one state's position: the chain's gradient is NaN there and at its neighbours (smoothness, joint
+  // speed) and, through each state's cap, across the whole state; the native gradient has NaN at the same entries
+  // and the chain's numbers elsewhere.
+  const torch::jit::Module guide = Guide(models::Kernels::kNative);
+  torch::Tensor x = Plans(2, 12, 31);
+  const geometry::SceneRows scene = SceneAbout(guide, x, 31);
+  x[1][5][2] = std::numeric_limits<double>::quiet_NaN();
+  for (const auto& over : {kSettings[1], kSettings[2]}) {
+    const auto opts = Opts(over);
+    const torch::Tensor chain = ChainGradient(guide, x, scene, opts), native = Gradient(guide, x, scene, opts);
+    EXPECT_GT(torch::isnan(chain).sum().item<int64_t>(), 0);
+    EXPECT_TRUE(torch::equal(torch::isnan(native), torch::isnan(chain)));
+    const torch::Tensor finite = ~torch::isnan(chain);
+    EXPECT_LT(Largest(native.masked_select(finite) - chain.masked_select(finite)), 1e-12 * Largest(chain.masked_select(finite)));
+  }
 }
 
 TEST(ArmGuidanceTest, NativeGradientMatchesThePortableGuide) {
