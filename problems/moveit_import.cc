@@ -127,6 +127,44 @@ class Reader {
   std::string path_;
 };
 
+/// A robot state's virtual joint (multi_dof_joint_state: joint_names, transforms of translation and rotation)
+/// must be the identity: the world frame is taken to be the robot's base frame, so a robot placed elsewhere in
+/// the world would see every obstacle misplaced. An absent state, transform or part is the identity; so is an
+/// all-zero rotation (an unset ROS quaternion).
+void CheckVirtualJoint(const Reader& r, const YAML::Node& state, const std::string& entry) {
+  if (!state.IsDefined() || !state.IsMap()) return;
+  const YAML::Node multi = state["multi_dof_joint_state"];
+  if (!multi.IsDefined() || multi.IsNull()) return;
+  if (!multi.IsMap()) r.Fail(entry, "expected a mapping with joint_names and transforms");
+  const YAML::Node transforms = multi["transforms"];
+  if (!transforms.IsDefined() || transforms.IsNull()) return;
+  if (!transforms.IsSequence()) r.Fail(entry + ".transforms", "expected a list of transforms");
+  const YAML::Node names = multi["joint_names"];
+  for (size_t i = 0; i < transforms.size(); ++i) {
+    std::string where = entry + ".transforms[" + std::to_string(i) + "]";
+    if (names.IsDefined() && names.IsSequence() && i < names.size() && names[i].IsScalar()) {
+      where += " (" + names[i].as<std::string>() + ")";
+    }
+    const YAML::Node t = transforms[i];
+    if (!t.IsMap()) r.Fail(where, "expected a mapping with translation and rotation");
+    std::vector<double> translation = {0, 0, 0}, rotation = {0, 0, 0, 1};
+    if (t["translation"]) translation = r.Components(t["translation"], where + ".translation", {"x", "y", "z"});
+    if (t["rotation"]) rotation = r.Components(t["rotation"], where + ".rotation", {"x", "y", "z", "w"});
+    const bool unset = rotation[0] == 0 && rotation[1] == 0 && rotation[2] == 0 && rotation[3] == 0;
+    const bool turned = !unset && (std::abs(rotation[0]) > 1e-9 || std::abs(rotation[1]) > 1e-9 ||
+                                   std::abs(rotation[2]) > 1e-9 || std::abs(std::abs(rotation[3]) - 1.0) > 1e-9);
+    const bool moved = std::abs(translation[0]) > 1e-9 || std::abs(translation[1]) > 1e-9 || std::abs(translation[2]) > 1e-9;
+    if (moved || turned) {
+      r.Fail(where, "the robot is placed away from the world's origin (translation " +
+                        config::internal::FormatDouble(translation[0]) + ", " +
+                        config::internal::FormatDouble(translation[1]) + ", " +
+                        config::internal::FormatDouble(translation[2]) +
+                        "); the importer takes the world frame as the robot's base frame and does not move the "
+                        "obstacles: give the objects in the base frame");
+    }
+  }
+}
+
 YAML::Node Load(const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) throw Error(path + ": no such file");
   YAML::Node root = config::ParseYamlFile(path);
@@ -226,6 +264,7 @@ auto Guarded(const std::string& path, F read) {
 NamedScene ReadScene(const std::string& path, const MoveItImportOptions& options) {
   const YAML::Node root = Load(path);
   const Reader r(path);
+  CheckVirtualJoint(r, root["robot_state"], "robot_state.multi_dof_joint_state");
   const YAML::Node world = root["world"];
   if (!world.IsDefined()) r.Fail("world", "missing (not a MoveIt planning scene?)");
   if (!world.IsMap()) r.Fail("world", "expected a mapping, got " + config::internal::Describe(world));
@@ -328,6 +367,7 @@ void ReadRequest(const std::string& request_path, const std::string& scene_path,
   if (start.IsDefined() && !start.IsMap()) {
     r.Fail(prefix + "start_state", "expected a mapping with joint_state, got " + config::internal::Describe(start));
   }
+  CheckVirtualJoint(r, start, prefix + "start_state.multi_dof_joint_state");
   if (start.IsDefined() && start["joint_state"] && !start["joint_state"].IsMap()) {
     r.Fail(prefix + "start_state.joint_state",
            "expected a mapping with name and position, got " + config::internal::Describe(start["joint_state"]));

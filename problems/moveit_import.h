@@ -29,7 +29,9 @@
 //
 // Joints are matched by name; names the robot does not have (the fingers) are
 // ignored. The world frame is taken to be the robot's base frame: a virtual
-// joint's transform (multi_dof_joint_state) is not applied. An all-zero
+// joint (multi_dof_joint_state, in the scene's robot_state or the request's
+// start_state) must be the identity, as in MotionBenchMaker's Panda sets;
+// any other transform is an error naming it. An all-zero
 // orientation (an unset ROS pose) is the identity, as in MoveIt. Only the first goal constraint is read, and only its joint
 // constraints. Without a start_state the scene's robot_state is the start.
 

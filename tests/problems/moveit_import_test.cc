@@ -321,11 +321,34 @@ INSTANTIATE_TEST_SUITE_P(
                   "", "scene: world.collision_objects[0] (thing).header: expected a mapping with frame_id"},
         Malformed{"JointStateNotAMapping", "", "start_state: {joint_state: 5}\ngoal_constraints: []\n",
                   "request: start_state.joint_state: expected a mapping with name and position"},
+        Malformed{"VirtualJointMoved",
+                  "robot_state:\n  multi_dof_joint_state:\n    joint_names: [virtual_joint]\n"
+                  "    transforms: [{translation: {x: 0.2, y: 0, z: 0}, rotation: {x: 0, y: 0, z: 0, w: 1}}]\n" +
+                      Object("      primitives: [{type: sphere, dimensions: [0.1]}]\n"
+                             "      primitive_poses: [{position: [0.5, 0, 0.5]}]\n"),
+                  "", "scene: robot_state.multi_dof_joint_state.transforms[0] (virtual_joint): the robot is placed "
+                      "away from the world's origin (translation 0.2, 0.0, 0.0)"},
         Malformed{"NamesPositions", "",
                   "start_state: {joint_state: {name: [panda_joint1, panda_joint2], position: [0]}}\n"
                   "goal_constraints: []\n",
                   "request: start_state.joint_state: 2 names but 1 positions"}),
     [](const ::testing::TestParamInfo<Malformed>& info) { return std::string(info.param.name); });
+
+TEST(MoveItImportTest, AnIdentityVirtualJointIsTheBaseFrame) {
+  // MotionBenchMaker's Panda scenes carry the virtual joint at the identity (and an unset rotation is too).
+  const std::string request = Write("request.yaml", Request(kStart, kGoal));
+  const Problem plain = ImportMoveItProblem(Franka(), Write("scene.yaml", kScene), request, "p", Options());
+  for (const char* rotation : {"{x: 0, y: 0, z: 0, w: 1}", "{x: 0, y: 0, z: 0, w: 0}"}) {
+    const std::string scene = Write("scene_virtual.yaml", std::string("robot_state:\n  multi_dof_joint_state:\n"
+                                                                      "    joint_names: [virtual_joint]\n"
+                                                                      "    transforms: [{translation: {x: 0, y: 0, z: 0}, rotation: ") +
+                                                              rotation + "}]\n" + kScene);
+    const Problem placed = ImportMoveItProblem(Franka(), scene, request, "p", Options());
+    EXPECT_EQ(placed.obstacle_names, plain.obstacle_names);
+    EXPECT_EQ(placed.scene.size(), plain.scene.size());
+    EXPECT_EQ(placed.start_q, plain.start_q);
+  }
+}
 
 TEST(MoveItImportTest, PairsAreFoundByNumber) {
   const auto dir = flowplan::testing::ScratchDir() / "set";
