@@ -367,6 +367,7 @@ class Families:
             text.append("")
         text += [f"**the {len(self.families)} families pooled** (every test plan of them)\n",
                  "| planner | success | median time (s) | p95 time (s) |", "|---|---|---|---|"]
+        tested = {}  # planner -> its test reports, one per family, where every family's was planned
         for planner in PLANNERS:
             setting = [] if planner == "rrt_connect" else self.chosen(planner)
             reports = [None if setting is None else self.report(self.path("test", f"{planner}_{family}"), planner,
@@ -375,16 +376,13 @@ class Families:
             if any(r is None for r in reports):
                 text.append(f"| {LABELS[planner]} | not run | | |")
                 continue
+            tested[planner] = reports
             row = pooled(reports)
             summary["families"]["pooled"][planner] = {key: row[key] for key in ("success", "median_time_s", "p95_time_s")}
             text.append(f"| {LABELS[planner]} | {row['success']:.1%} | {row['median_time_s']:.3f} | "
                         f"{row['p95_time_s']:.2f} |")
         text.append("")
-        tested = {planner: [self.report(self.path("test", f"{planner}_{family}"), planner,
-                                        [] if planner == "rrt_connect" else self.chosen(planner), "test", family, True)
-                            for family in self.families] if (planner == "rrt_connect" or self.chosen(planner))
-                  else [None] for planner in ("hybrid", "rrt_connect")}
-        if not any(r is None for reports in tested.values() for r in reports):
+        if "hybrid" in tested and "rrt_connect" in tested:
             spread = paired_bootstrap(tested["hybrid"], tested["rrt_connect"])
             summary["families"]["hybrid_vs_rrt_connect"] = spread
             text += [f"The hybrid's pooled median minus RRT-Connect's, over the test problems drawn again with "
