@@ -347,6 +347,48 @@ YAML::Node Encode(const T& value) {
   }
 }
 
+/// Writes `value` to `out` straight from its fields (no YAML::Node tree, whose assignments cost time quadratic
+/// in its size): mappings and lists of mappings in block style, lists of scalars in flow style. With
+/// `skip_unset`, fields holding NaN (an unset number) are left out.
+template <class T>
+void Emit(YAML::Emitter& out, const T& value, bool skip_unset);
+
+/// The visitor of Emit: one key and value per field.
+class EmitWriter {
+ public:
+  EmitWriter(YAML::Emitter& out, bool skip_unset) : out_(out), skip_unset_(skip_unset) {}
+  template <class T>
+  void Field(const char* name, const T& value, const char* /*help*/, Bounds /*bounds*/ = {}) {
+    if constexpr (std::is_floating_point_v<T>) {
+      if (skip_unset_ && value != value) return;
+    }
+    out_ << YAML::Key << name << YAML::Value;
+    Emit(out_, value, skip_unset_);
+  }
+
+ private:
+  YAML::Emitter& out_;
+  bool skip_unset_;
+};
+
+template <class T>
+void Emit(YAML::Emitter& out, const T& value, bool skip_unset) {
+  if constexpr (IsConfigStruct<T>::value) {
+    out << YAML::BeginMap;
+    EmitWriter writer(out, skip_unset);
+    const_cast<T&>(value).Visit(writer);
+    out << YAML::EndMap;
+  } else if constexpr (IsVector<T>::value || IsArray<T>::value) {
+    using Element = typename T::value_type;
+    const bool nested = IsConfigStruct<Element>::value || IsVector<Element>::value || IsArray<Element>::value;
+    out << (nested && !value.empty() ? YAML::Block : YAML::Flow) << YAML::BeginSeq;
+    for (const auto& element : value) Emit(out, element, skip_unset);
+    out << YAML::EndSeq;
+  } else {
+    out << EncodeScalar(value).Scalar();
+  }
+}
+
 }  // namespace internal
 
 /// Applies the keys present in `node` onto `config` (keys absent keep their values).
@@ -376,11 +418,12 @@ T Load(const std::string& path, const std::vector<std::string>& overrides) {
   return config;
 }
 
-/// Resolved config as YAML text (reads back to the same values).
+/// Resolved config as YAML text (reads back to the same values). With `skip_unset`, fields holding NaN (an
+/// unset number) are left out.
 template <class T>
-std::string ToYaml(const T& config) {
+std::string ToYaml(const T& config, bool skip_unset = false) {
   YAML::Emitter out;
-  out << internal::Encode(config);
+  internal::Emit(out, config, skip_unset);
   return std::string(out.c_str()) + "\n";
 }
 
