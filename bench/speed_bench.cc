@@ -274,7 +274,7 @@ int Main(int argc, char** argv) {
   {
     const experiment::TrainedPlanner mpd = experiment::LoadTrainedPlanner(mpd_checkpoint, "", {});
     mpd.planner->Save(mpd_file);  // the eager reference checks its DDPM sampler against this file
-    const classical::RrtConnectPlanner rrt(plain.planner->info(), config.rrt_connect);
+    const classical::RrtConnectPlanner rrt(plain.planner->info(), config.rrt_connect, config.check);
     const torch::Tensor ends =
         jit::Call(flow->module(), "ik", {torch::tensor({{0.5, -0.3, 0.2}, {0.5, 0.3, 0.2}}, torch::kFloat64)}).toTensor();
     const torch::Tensor rest = torch::zeros({1, D - ends.size(1)});

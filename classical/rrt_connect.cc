@@ -1,20 +1,13 @@
 #include "classical/rrt_connect.h"
 
-#include <ompl/base/MotionValidator.h>
-#include <ompl/base/PlannerTerminationCondition.h>
-#include <ompl/base/ProblemDefinition.h>
-#include <ompl/base/SpaceInformation.h>
-#include <ompl/base/spaces/RealVectorStateSpace.h>
-#include <ompl/geometric/PathGeometric.h>
-#include <ompl/geometric/planners/rrt/RRTConnect.h>
-#include <ompl/util/Console.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <mutex>
+#include <limits>
 #include <optional>
 #include <sstream>
+
+#include <spdlog/fmt/fmt.h>
 
 #include "core/error.h"
 #include "core/random.h"
@@ -23,235 +16,250 @@
 namespace flowplan::classical {
 namespace {
 
-namespace ob = ompl::base;
-namespace og = ompl::geometric;
+using Clock = std::chrono::steady_clock;
+using Config = std::vector<double>;  // (J) joint values
+using Path = std::vector<Config>;
 
-/// OMPL's uniform sampler with a seed of our own (OMPL seeds every RNG from one global sequence otherwise).
-class SeededSampler : public ob::RealVectorStateSampler {
- public:
-  SeededSampler(const ob::StateSpace* space, uint64_t seed) : ob::RealVectorStateSampler(space) {
-    rng_.setLocalSeed(static_cast<std::uint_fast32_t>(seed));
-  }
-};
-
-/// RRT-Connect whose own random choices draw from a seed of ours.
-class SeededRrtConnect : public og::RRTConnect {
- public:
-  SeededRrtConnect(const ob::SpaceInformationPtr& si, uint64_t seed) : og::RRTConnect(si) {
-    rng_.setLocalSeed(static_cast<std::uint_fast32_t>(seed));
-  }
-};
-
-torch::Tensor ToTensor(const ob::State* state, int64_t J) {
-  auto* values = state->as<ob::RealVectorStateSpace::StateType>()->values;
-  return torch::from_blob(values, {J}, torch::kFloat64).clone();
+double Distance2(const double* a, const double* b, size_t J) {
+  double total = 0.0;
+  for (size_t j = 0; j < J; ++j) total += (a[j] - b[j]) * (a[j] - b[j]);
+  return total;
 }
 
-/// The n + 1 states (n + 1, J) of the motion from a to b (J,) a motion check looks at: a, n − 1 between, b.
-torch::Tensor MotionStates(const torch::Tensor& a, const torch::Tensor& b, int64_t n) {
-  const torch::Tensor s = torch::linspace(0.0, 1.0, n + 1, torch::kFloat64).unsqueeze(1);
-  return a + s * (b - a);
-}
-
-/// Whether each motion from[p] → to[p] ((P, J) float64) is valid, every motion checked at the states the motion
-/// validator checks it at, all of them in one call of `valid` ((M, J) float64 -> (M,) bool): (P) flags.
-std::vector<bool> MotionsValid(const ob::StateSpacePtr& space, const torch::Tensor& from, const torch::Tensor& to,
-                               const std::function<torch::Tensor(const torch::Tensor&)>& valid) {
-  const int64_t P = from.size(0), J = from.size(1);
-  std::vector<torch::Tensor> states;
-  std::vector<int64_t> counts;
-  ob::ScopedState<> s1(space), s2(space);
-  const auto fa = from.accessor<double, 2>(), ta = to.accessor<double, 2>();
-  for (int64_t p = 0; p < P; ++p) {
-    for (int64_t j = 0; j < J; ++j) {
-      s1[static_cast<unsigned>(j)] = fa[p][j];
-      s2[static_cast<unsigned>(j)] = ta[p][j];
+/// One tree of configurations, each with its parent (-1 at the root), stored flat.
+class Tree {
+ public:
+  explicit Tree(size_t J) : J_(J) {}
+  size_t size() const { return parent_.size(); }
+  const double* at(size_t i) const { return &values_[i * J_]; }
+  size_t Add(const double* q, int64_t parent) {
+    values_.insert(values_.end(), q, q + J_);
+    parent_.push_back(parent);
+    return parent_.size() - 1;
+  }
+  /// The node nearest to q (Euclidean in joint space); the first of a tie.
+  size_t Nearest(const double* q) const {
+    size_t best = 0;
+    double best_d = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < size(); ++i) {
+      const double d = Distance2(at(i), q, J_);
+      if (d < best_d) {
+        best_d = d;
+        best = i;
+      }
     }
-    const int64_t n = std::max<int64_t>(1, space->validSegmentCount(s1.get(), s2.get()));
-    states.push_back(MotionStates(from[p], to[p], n));
-    counts.push_back(n + 1);
+    return best;
   }
-  std::vector<bool> ok(static_cast<size_t>(P), true);
-  if (P == 0) return ok;
-  const torch::Tensor flags = valid(torch::cat(states));
-  const auto f = flags.accessor<bool, 1>();
-  int64_t at = 0;
-  for (int64_t p = 0; p < P; ++p) {
-    for (int64_t k = 0; k < counts[static_cast<size_t>(p)]; ++k) ok[static_cast<size_t>(p)] = ok[static_cast<size_t>(p)] && f[at + k];
-    at += counts[static_cast<size_t>(p)];
-  }
-  return ok;
-}
-
-/// Checks a whole motion with one batched validity call over its interpolated states.
-class BatchedMotionValidator : public ob::MotionValidator {
- public:
-  using ValidFn = std::function<torch::Tensor(const torch::Tensor&)>;  // (M, J) float64 -> (M,) bool
-  BatchedMotionValidator(ob::SpaceInformation* si, ValidFn check) : ob::MotionValidator(si), check_(std::move(check)) {}
-
-  bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
-    const torch::Tensor ok = Along(s1, s2);
-    const bool all = ok.all().item<bool>();
-    if (all) ++valid_; else ++invalid_;
-    return all;
-  }
-
-  bool checkMotion(const ob::State* s1, const ob::State* s2, std::pair<ob::State*, double>& last_valid) const override {
-    const torch::Tensor ok = Along(s1, s2);
-    const int64_t n = ok.size(0) - 1;  // segments
-    const torch::Tensor bad = (~ok).nonzero();
-    if (bad.size(0) == 0) {
-      ++valid_;
-      return true;
+  /// The configurations from the root to node i.
+  Path Branch(size_t i) const {
+    Path out;
+    for (int64_t n = static_cast<int64_t>(i); n >= 0; n = parent_[static_cast<size_t>(n)]) {
+      out.emplace_back(at(static_cast<size_t>(n)), at(static_cast<size_t>(n)) + J_);
     }
-    const int64_t first_bad = bad[0][0].item<int64_t>();
-    const double fraction = static_cast<double>(std::max<int64_t>(first_bad - 1, 0)) / static_cast<double>(n);
-    if (last_valid.first != nullptr) si_->getStateSpace()->interpolate(s1, s2, fraction, last_valid.first);
-    last_valid.second = fraction;
-    ++invalid_;
-    return false;
+    std::reverse(out.begin(), out.end());
+    return out;
   }
 
  private:
-  /// Validity of s1, the interpolated states and s2: (n + 1,) bool.
-  torch::Tensor Along(const ob::State* s1, const ob::State* s2) const {
-    const auto space = si_->getStateSpace();
-    const int64_t J = space->getDimension();
-    const int64_t n = std::max<int64_t>(1, space->validSegmentCount(s1, s2));
-    return check_(MotionStates(ToTensor(s1, J), ToTensor(s2, J), n));
-  }
-  ValidFn check_;
+  size_t J_;
+  std::vector<double> values_;
+  std::vector<int64_t> parent_;
 };
 
-using MotionCheck = std::function<std::vector<bool>(const torch::Tensor&, const torch::Tensor&)>;
+/// What a search may spend: iterations, and the plan's wall-clock stop.
+struct Budget {
+  int64_t iterations;
+  Clock::time_point deadline;
+};
 
-/// Deterministic shortcutting of a valid polyline (M, J): from each kept point, jump to the farthest later point
-/// the motion to which is valid. The candidates are checked farthest first, in calls of 1, 2, 4, ... of them.
-torch::Tensor Shortcut(const torch::Tensor& points, const MotionCheck& motions) {
-  const int64_t M = points.size(0);
-  if (M < 3) return points;
-  std::vector<int64_t> kept = {0};
-  int64_t i = 0;
-  while (i + 1 < M) {
-    int64_t next = i + 1;  // the motion to the next point is valid: the polyline is
-    for (int64_t top = M - 1, chunk = 1; top > i + 1 && next == i + 1; top -= chunk, chunk *= 2) {
-      const int64_t bottom = std::max(i + 2, top - chunk + 1);  // candidates top, top − 1, ..., bottom
-      const torch::Tensor to = points.slice(0, bottom, top + 1).flip(0).contiguous();
-      const std::vector<bool> ok = motions(points[i].expand_as(to).contiguous(), to);
-      for (size_t c = 0; c < ok.size(); ++c) {
-        if (ok[c]) {
-          next = top - static_cast<int64_t>(c);
+/// RRT-Connect between two valid configurations in one world.
+class Search {
+ public:
+  Search(const collision::Checker& checker, const std::vector<double>& lower, const std::vector<double>& upper,
+         double range)
+      : checker_(checker), lower_(lower), upper_(upper), range_(range), J_(lower.size()) {}
+
+  bool Motion(const double* a, const double* b) const { return checker_.MotionValid(a, b); }
+
+  /// A path from `from` to `to`, or none within the budget.
+  std::optional<Path> Connect(const Config& from, const Config& to, uint64_t seed, const Budget& budget) const {
+    if (Motion(from.data(), to.data())) return Path{from, to};
+    Rng rng(seed);
+    Tree start(J_), goal(J_);
+    start.Add(from.data(), -1);
+    goal.Add(to.data(), -1);
+    Tree* a = &start;
+    Tree* b = &goal;
+    Config sample(J_), step(J_);
+    for (int64_t it = 0; it < budget.iterations; ++it) {
+      if ((it & 63) == 0 && Clock::now() > budget.deadline) break;
+      for (size_t j = 0; j < J_; ++j) sample[j] = rng.Uniform(lower_[j], upper_[j]);
+      // Extend tree a by one step towards the sample.
+      const size_t near = a->Nearest(sample.data());
+      if (!Steer(a->at(near), sample.data(), step.data())) {
+        std::swap(a, b);
+        continue;
+      }
+      const size_t added = a->Add(step.data(), static_cast<int64_t>(near));
+      // Connect tree b to the new node, step after step.
+      size_t from_b = b->Nearest(step.data());
+      const Config target(a->at(added), a->at(added) + J_);
+      bool reached = false;
+      Config next(J_);
+      while (true) {
+        const bool whole = Distance2(b->at(from_b), target.data(), J_) <= range_ * range_;
+        if (whole) {
+          next = target;
+        } else {
+          Toward(b->at(from_b), target.data(), next.data());
+        }
+        if (!checker_.Valid(next.data()) || !Motion(b->at(from_b), next.data())) break;
+        if (whole) {
+          reached = true;
+          break;
+        }
+        from_b = b->Add(next.data(), static_cast<int64_t>(from_b));
+      }
+      if (reached) {
+        // The start tree's branch to its meeting node, then the goal tree's from its meeting node to the goal.
+        const bool a_is_start = a == &start;
+        Path path = start.Branch(a_is_start ? added : from_b);
+        Path to_goal = goal.Branch(a_is_start ? from_b : added);
+        path.insert(path.end(), to_goal.rbegin(), to_goal.rend());
+        return path;
+      }
+      std::swap(a, b);
+    }
+    return std::nullopt;
+  }
+
+  /// Shortcutting of a valid polyline: from each kept point, jump to the farthest later point whose motion is valid.
+  Path Shortcut(const Path& points) const {
+    const size_t M = points.size();
+    if (M < 3) return points;
+    Path kept = {points[0]};
+    size_t i = 0;
+    while (i + 1 < M) {
+      size_t next = i + 1;
+      for (size_t candidate = M - 1; candidate > i + 1; --candidate) {
+        if (Motion(points[i].data(), points[candidate].data())) {
+          next = candidate;
           break;
         }
       }
+      kept.push_back(points[next]);
+      i = next;
     }
-    kept.push_back(next);
-    i = next;
+    return kept;
   }
-  return points.index({torch::tensor(kept, torch::kInt64)});
-}
 
-/// The polyline (M, J) with `parts` − 1 evenly spaced points inserted in every segment: (parts (M − 1) + 1, J).
-torch::Tensor Subdivide(const torch::Tensor& points, int64_t parts) {
-  const int64_t M = points.size(0);
-  if (M < 2) return points;
-  const torch::Tensor u = torch::arange(parts, torch::kFloat64).div(static_cast<double>(parts)).view({1, parts, 1});
-  const torch::Tensor a = points.slice(0, 0, M - 1).unsqueeze(1), b = points.slice(0, 1, M).unsqueeze(1);
-  return torch::cat({(a + u * (b - a)).flatten(0, 1), points.slice(0, M - 1)});
-}
-
-/// Shortcutting again through points along the segments, `passes` times: each pass subdivides every segment in
-/// four and shortcuts, so the path can leave a vertex part way along a segment and draws tighter around obstacles.
-torch::Tensor Tighten(torch::Tensor points, const MotionCheck& motions, int passes) {
-  for (int p = 0; p < passes; ++p) points = Shortcut(Subdivide(points, 4), motions);
-  return points;
-}
-
-/// Chaikin's corner cutting, `iterations` times, of a polyline (M, J): every segment's points at 1/4 and 3/4
-/// replace the inner vertices (the first segment's 1/4 point and the last one's 3/4 point are left out); the ends
-/// stay. It converges to the quadratic B-spline of the points.
-torch::Tensor CutCorners(torch::Tensor points, int iterations) {
-  for (int k = 0; k < iterations && points.size(0) > 2; ++k) {
-    const int64_t M = points.size(0);
-    const torch::Tensor a = points.slice(0, 0, M - 1), b = points.slice(0, 1, M);
-    const torch::Tensor inner = torch::stack({0.75 * a + 0.25 * b, 0.25 * a + 0.75 * b}, 1).flatten(0, 1);  // (2(M−1), J)
-    points = torch::cat({points.slice(0, 0, 1), inner.slice(0, 1, inner.size(0) - 1), points.slice(0, M - 1)});
+  /// Shortcutting again through points along the segments, `passes` times: each pass subdivides every segment
+  /// in four and shortcuts, so the path can leave a vertex part way along a segment and draws tighter.
+  Path Tighten(Path points, int passes) const {
+    for (int p = 0; p < passes; ++p) {
+      if (points.size() < 3) break;
+      Path dense = {points[0]};
+      for (size_t k = 1; k < points.size(); ++k) {
+        for (int part = 1; part <= 4; ++part) {
+          Config c(J_);
+          for (size_t j = 0; j < J_; ++j) c[j] = points[k - 1][j] + 0.25 * part * (points[k][j] - points[k - 1][j]);
+          dense.push_back(part == 4 ? points[k] : c);
+        }
+      }
+      points = Shortcut(dense);
+    }
+    return points;
   }
-  return points;
-}
 
-/// The valid polyline (M, J) with its corners rounded: Chaikin's corner cutting with the most iterations, of
-/// kSmoothing down to one, whose polyline is valid as a whole (checked in one call each); the polyline itself if none.
-torch::Tensor RoundCorners(const torch::Tensor& points, const MotionCheck& motions) {
-  constexpr int kSmoothing = 4;
-  if (points.size(0) < 3) return points;
-  for (int iterations = kSmoothing; iterations >= 1; --iterations) {
-    const torch::Tensor rounded = CutCorners(points, iterations);
-    const int64_t M = rounded.size(0);
-    const std::vector<bool> ok = motions(rounded.slice(0, 0, M - 1).contiguous(), rounded.slice(0, 1, M).contiguous());
-    if (std::all_of(ok.begin(), ok.end(), [](bool v) { return v; })) return rounded;
+  /// The valid polyline with its corners rounded: Chaikin's corner cutting with the most iterations (of 4, down to
+  /// 1) whose polyline is valid and has at most `max_points` points; the polyline itself if none.
+  Path RoundCorners(const Path& points, size_t max_points) const {
+    if (points.size() < 3) return points;
+    for (int iterations = 4; iterations >= 1; --iterations) {
+      Path rounded = points;
+      for (int k = 0; k < iterations && rounded.size() > 2; ++k) {
+        Path next = {rounded.front()};
+        for (size_t m = 0; m + 1 < rounded.size(); ++m) {
+          Config a(J_), b(J_);
+          for (size_t j = 0; j < J_; ++j) {
+            a[j] = 0.75 * rounded[m][j] + 0.25 * rounded[m + 1][j];
+            b[j] = 0.25 * rounded[m][j] + 0.75 * rounded[m + 1][j];
+          }
+          if (m > 0) next.push_back(a);
+          if (m + 2 < rounded.size()) next.push_back(b);
+        }
+        next.push_back(rounded.back());
+        rounded = std::move(next);
+      }
+      if (rounded.size() > max_points) continue;
+      bool ok = true;
+      for (size_t m = 1; m + 1 < rounded.size() && ok; ++m) ok = checker_.Valid(rounded[m].data());
+      for (size_t m = 0; m + 1 < rounded.size() && ok; ++m) ok = Motion(rounded[m].data(), rounded[m + 1].data());
+      if (ok) return rounded;
+    }
+    return points;
   }
-  return points;
-}
 
-void QuietOmpl() {
-  static std::once_flag once;
-  std::call_once(once, [] { ompl::msg::setLogLevel(ompl::msg::LOG_WARN); });
-}
+ private:
+  /// `to` itself if within range of `from`, else the point at range along the way: written to out; whether
+  /// that point is valid.
+  bool Steer(const double* from, const double* to, double* out) const {
+    if (Distance2(from, to, J_) <= range_ * range_) {
+      std::copy(to, to + J_, out);
+    } else {
+      Toward(from, to, out);
+    }
+    return checker_.Valid(out) && Motion(from, out);
+  }
+  void Toward(const double* from, const double* to, double* out) const {
+    const double scale = range_ / std::sqrt(Distance2(from, to, J_));
+    for (size_t j = 0; j < J_; ++j) out[j] = from[j] + scale * (to[j] - from[j]);
+  }
+
+  const collision::Checker& checker_;
+  const std::vector<double>& lower_;
+  const std::vector<double>& upper_;
+  double range_;
+  size_t J_;
+};
 
 }  // namespace
 
 RrtConnectPlanner::RrtConnectPlanner(const kinematics::TrajectoryInfo& trajectory, RrtConnectConfig config,
-                                     validity::ConfigurationCheck configuration_check)
-    : robot_(kinematics::MakeRobot(trajectory.robot, "rrt_connect: robot")),
-      horizon_(trajectory.horizon),
+                                     validity::CheckConfig check)
+    : horizon_(trajectory.horizon),
       state_dim_(trajectory.state_dim()),
       dt_(trajectory.dt),
       config_(config),
-      configuration_check_(std::move(configuration_check)) {
-  const int64_t J = robot_->num_joints();
+      checker_(kinematics::MakeRobot(trajectory.robot, "rrt_connect: robot"), trajectory.dt, check) {
+  body_ = checker_.body();
+  const int64_t J = checker_.robot().num_joints();
   if (state_dim_ != J && state_dim_ != 2 * J) {
     throw Error("rrt_connect: states of " + std::to_string(state_dim_) + " dimensions; expected J = " +
                 std::to_string(J) + " positions or 2J = " + std::to_string(2 * J) + " positions and velocities");
   }
   if (horizon_ < 2) throw Error("rrt_connect: expected a horizon of at least 2 states");
-  if (!(dt_ > 0.0)) throw Error("rrt_connect: expected a positive dt");
-  const auto& d = robot_->description();
+  const auto& d = checker_.robot().description();
+  double diagonal = 0.0;
   for (int64_t j = 0; j < J; ++j) {
     if (!std::isfinite(d.joint_lower[j]) || !std::isfinite(d.joint_upper[j]) || d.joint_lower[j] >= d.joint_upper[j]) {
-      throw Error("rrt_connect: joint " + std::to_string(j) + " of robot \"" + d.name +
+      throw Error("rrt_connect: joint " + d.JointName(static_cast<int>(j)) + " of robot \"" + d.name +
                   "\" has no finite range to sample in");
     }
+    diagonal += (d.joint_upper[j] - d.joint_lower[j]) * (d.joint_upper[j] - d.joint_lower[j]);
   }
-  QuietOmpl();
-}
-
-torch::Tensor RrtConnectPlanner::Valid(const torch::Tensor& q, const geometry::SceneRows& scene) const {
-  const int64_t M = q.size(0), J = q.size(1);
-  torch::Tensor valid =
-      geometry::CountObstacles(scene) == 0
-          ? torch::ones({M}, torch::kBool)
-          : std::get<0>(robot_->NearestObstacles(q, scene).clearance.min(1)) >= config_.margin;
-  if (configuration_check_) {
-    const torch::Tensor q64 = q.to(torch::kFloat64).contiguous();
-    const double* values = q64.data_ptr<double>();
-    for (int64_t m = 0; m < M; ++m) {
-      if (valid[m].item<bool>() && !configuration_check_(std::vector<double>(values + m * J, values + (m + 1) * J)).empty()) {
-        valid[m] = false;
-      }
-    }
-  }
-  return valid;
+  range_ = config_.range > 0.0 ? config_.range : 0.2 * std::sqrt(diagonal);
 }
 
 planning::PlanResult RrtConnectPlanner::Plan(const planning::PlanRequest& request) const {
   return PlanAlong(request, torch::Tensor());
 }
 
-planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& request,
-                                                  const torch::Tensor& guides) const {
+planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& request, const torch::Tensor& guides,
+                                                  int64_t max_iterations) const {
+  const int64_t iterations = max_iterations > 0 ? max_iterations : config_.max_iterations;
   planning::CheckEnds(request.start, request.goal, state_dim_, "plan");
-  const int64_t B = request.start.size(0), J = robot_->num_joints(), T = horizon_;
+  const int64_t B = request.start.size(0), J = checker_.robot().num_joints(), T = horizon_;
   if (guides.defined() && (guides.dim() != 3 || guides.size(0) != B || guides.size(1) < 2 ||
                            guides.size(2) != state_dim_)) {
     std::ostringstream shape;
@@ -259,126 +267,139 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
     throw Error("rrt_connect: guide paths of shape " + shape.str() + "; expected (" + std::to_string(B) +
                 ", T >= 2, " + std::to_string(state_dim_) + ")");
   }
-  geometry::CheckRows(request.scene, static_cast<int>(robot_->workspace_dim()), "plan");
-  geometry::SceneRows scene;
-  for (const auto& entry : request.scene) scene.insert(entry.key(), entry.value().to(torch::kFloat64));
-  scene = geometry::PreparedRows(scene, static_cast<int>(robot_->workspace_dim()));  // once for every check
-  torch::NoGradGuard no_grad;
-  const auto& d = robot_->description();
+  geometry::CheckRows(request.scene, static_cast<int>(checker_.robot().workspace_dim()), "plan");
+  const collision::Checker world = checker_.ConfigurationChecker(request.scene, request.world);
+  const auto& d = checker_.robot().description();
+  const std::vector<double>& lower = d.joint_lower;
+  const std::vector<double>& upper = d.joint_upper;
+  const Search search(world, lower, upper, range_);
   planning::PlanResult result;
   result.plans = torch::empty({B, T, state_dim_}, torch::kFloat32);
   result.found = torch::zeros({B}, torch::kBool);
   result.call_seconds.assign(static_cast<size_t>(B), 0.0);
   result.call_plans.assign(static_cast<size_t>(B), 1);
+  result.refused.assign(static_cast<size_t>(B), false);
+  result.failure.assign(static_cast<size_t>(B), "");
   if (guides.defined()) result.route.assign(static_cast<size_t>(B), "unseeded");
-  // Ends exactly at a limit can round to just outside it in float32: clamp them onto the limits.
-  const torch::Tensor lower = torch::tensor(d.joint_lower, torch::kFloat64).slice(0, 0, J);
-  const torch::Tensor upper = torch::tensor(d.joint_upper, torch::kFloat64).slice(0, 0, J);
-  const torch::Tensor start_q = torch::max(torch::min(request.start.slice(1, 0, J).to(torch::kFloat64), upper), lower);
-  const torch::Tensor goal_q = torch::max(torch::min(request.goal.slice(1, 0, J).to(torch::kFloat64), upper), lower);
+  const torch::Tensor starts = request.start.slice(1, 0, J).to(torch::kFloat64).contiguous();
+  const torch::Tensor goals = request.goal.slice(1, 0, J).to(torch::kFloat64).contiguous();
+  const torch::Tensor guide_q =
+      guides.defined() ? guides.slice(2, 0, J).to(torch::kFloat64).contiguous() : torch::Tensor();
+  auto clamp = [&](Config q) {
+    for (int64_t j = 0; j < J; ++j) q[j] = std::clamp(q[j], lower[j], upper[j]);
+    return q;
+  };
+  const size_t max_points = static_cast<size_t>(std::max<int64_t>(2, (T + 1) / 2));
   for (int64_t b = 0; b < B; ++b) {
-    const auto began = std::chrono::steady_clock::now();
+    const auto began = Clock::now();
+    const Budget budget{iterations,
+                        began + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(config_.time_limit))};
     const uint64_t seed = StreamSeed(request.seed, static_cast<uint64_t>(b));
-    auto space = std::make_shared<ob::RealVectorStateSpace>(static_cast<unsigned>(J));
-    ob::RealVectorBounds bounds(static_cast<unsigned>(J));
-    for (int64_t j = 0; j < J; ++j) {
-      bounds.setLow(static_cast<unsigned>(j), d.joint_lower[j]);
-      bounds.setHigh(static_cast<unsigned>(j), d.joint_upper[j]);
-    }
-    space->setBounds(bounds);
-    space->setStateSamplerAllocator(
-        [seed](const ob::StateSpace* s) { return std::make_shared<SeededSampler>(s, StreamSeed(seed, 1)); });
-    auto si = std::make_shared<ob::SpaceInformation>(space);
-    auto valid = [this, scene](const torch::Tensor& q) { return Valid(q, scene); };
-    si->setStateValidityChecker([&](const ob::State* s) {
-      return space->satisfiesBounds(s) && valid(ToTensor(s, J).unsqueeze(0))[0].item<bool>();
-    });
-    si->setStateValidityCheckingResolution(config_.resolution);
-    si->setMotionValidator(std::make_shared<BatchedMotionValidator>(si.get(), valid));
-    si->setup();
-    const MotionCheck motions = [&](const torch::Tensor& from, const torch::Tensor& to) {
-      return MotionsValid(space, from, to, valid);
-    };
-
-    torch::Tensor points = torch::stack({start_q[b], goal_q[b]});  // the straight line unless a path is found
-    const torch::Tensor ends_valid = valid(points);
-    if (ends_valid.all().item<bool>()) {
-      auto state = [&](const torch::Tensor& q) {  // (J,) float64
-        ob::ScopedState<> s(space);
-        for (int64_t j = 0; j < J; ++j) s[static_cast<unsigned>(j)] = q[j].item<double>();
-        return s;
-      };
+    const Config start_raw(starts.data_ptr<double>() + b * J, starts.data_ptr<double>() + (b + 1) * J);
+    const Config goal_raw(goals.data_ptr<double>() + b * J, goals.data_ptr<double>() + (b + 1) * J);
+    // Ends within limit_tolerance of a limit are planned from the limit.
+    const Config start = clamp(start_raw), goal = clamp(goal_raw);
+    Path points = {start, goal};  // the straight line unless a path is found
+    std::string refusal = checker_.Refusal("start", start_raw, world);
+    if (refusal.empty()) refusal = checker_.Refusal("goal", goal_raw, world);
+    std::optional<Path> path;
+    bool seeded = false;
+    if (!refusal.empty()) {
+      result.refused[static_cast<size_t>(b)] = true;
+      result.failure[static_cast<size_t>(b)] = refusal;
+    } else {
       // The stretches of the guide kept at either end: head[0] = start, tail.back() = goal; RRT-Connect joins
       // head.back() to tail.front().
-      std::vector<torch::Tensor> head = {start_q[b]}, tail = {goal_q[b]};
-      if (guides.defined() && torch::isfinite(guides[b]).all().item<bool>()) {
-        const torch::Tensor g = torch::max(torch::min(guides[b].slice(1, 0, J).to(torch::kFloat64), upper), lower);
-        std::vector<torch::Tensor> line = {start_q[b]};
-        for (int64_t k = 1; k + 1 < g.size(0); ++k) line.push_back(g[k]);
-        line.push_back(goal_q[b]);
+      Path head = {start}, tail = {goal};
+      if (guide_q.defined() && torch::isfinite(guide_q[b]).all().item<bool>()) {
+        const int64_t G = guide_q.size(1);
+        const double* g = guide_q.data_ptr<double>() + b * G * J;
+        Path line = {start};
+        for (int64_t k = 1; k + 1 < G; ++k) line.push_back(clamp(Config(g + k * J, g + (k + 1) * J)));
+        line.push_back(goal);
         const size_t M = line.size();
-        // Whether the motion from line[k] to line[k + 1] is valid, for every k in one call; the guide is kept up
-        // to its first invalid motion from either end.
-        const torch::Tensor polyline = torch::stack(line);
-        const std::vector<bool> joins = motions(polyline.slice(0, 0, static_cast<int64_t>(M) - 1).contiguous(),
-                                                polyline.slice(0, 1, static_cast<int64_t>(M)).contiguous());
-        size_t first_gap = 0, last_gap = M - 1;
-        while (first_gap + 1 < M && joins[first_gap]) ++first_gap;
-        if (first_gap + 1 < M) {
-          while (last_gap > first_gap + 1 && joins[last_gap - 1]) --last_gap;
-        }
+        std::vector<bool> valid_point(M, true);
+        for (size_t k = 1; k + 1 < M; ++k) valid_point[k] = world.Valid(line[k].data());
+        auto joins = [&](size_t k) {  // the motion line[k] -> line[k + 1], both ends valid
+          return valid_point[k] && valid_point[k + 1] && search.Motion(line[k].data(), line[k + 1].data());
+        };
+        size_t first_gap = 0;
+        while (first_gap + 1 < M && joins(first_gap)) ++first_gap;
         if (first_gap + 1 == M) {  // the whole polyline is valid: nothing to join
           head = line;
           tail.clear();
         } else {
+          size_t last_gap = M - 1;
+          while (last_gap > first_gap + 1 && joins(last_gap - 1)) --last_gap;
           head.assign(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(first_gap) + 1);
           tail.assign(line.begin() + static_cast<std::ptrdiff_t>(last_gap), line.end());
         }
       }
-      // RRT-Connect from `from` to `to` (J,), within max_iterations and what is left of the plan's time_limit.
-      auto search = [&](const torch::Tensor& from, const torch::Tensor& to) -> std::optional<og::PathGeometric> {
-        auto problem = std::make_shared<ob::ProblemDefinition>(si);
-        problem->setStartAndGoalStates(state(from), state(to));
-        auto planner = std::make_shared<SeededRrtConnect>(si, StreamSeed(seed, 2));
-        if (config_.range > 0.0) planner->setRange(config_.range);
-        planner->setProblemDefinition(problem);
-        planner->setup();
-        int64_t calls = 0;
-        const ob::PlannerTerminationCondition stop([&] {
-          return ++calls > config_.max_iterations ||
-                 std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count() > config_.time_limit;
-        });
-        if (planner->solve(stop) != ob::PlannerStatus::EXACT_SOLUTION) return std::nullopt;
-        return *problem->getSolutionPath()->as<og::PathGeometric>();
-      };
-      std::optional<og::PathGeometric> path;
-      bool seeded = head.size() > 1 || tail.size() != 1;  // something of the guide is kept
+      seeded = head.size() > 1 || tail.size() != 1;  // something of the guide is kept
       if (tail.empty()) {
-        path.emplace(si);
-        for (const torch::Tensor& q : head) path->append(state(q).get());
-      } else if (const auto found = search(head.back(), tail.front())) {
-        path.emplace(si);
-        for (size_t k = 0; k + 1 < head.size(); ++k) path->append(state(head[k]).get());
-        for (unsigned k = 0; k < found->getStateCount(); ++k) path->append(found->getState(k));
-        for (size_t k = 1; k < tail.size(); ++k) path->append(state(tail[k]).get());
+        path = head;
+      } else if (const auto joined = search.Connect(head.back(), tail.front(), StreamSeed(seed, 2), budget)) {
+        Path whole(head.begin(), head.end() - 1);
+        whole.insert(whole.end(), joined->begin(), joined->end());
+        whole.insert(whole.end(), tail.begin() + 1, tail.end());
+        path = std::move(whole);
       } else if (seeded) {
-        // The guide's ends can lead into places hard to leave (a narrow gap the guide pushed into): search from
-        // the start to the goal as unseeded.
+        // The guide's ends can lead into places hard to leave: search from the start to the goal as unseeded.
         seeded = false;
-        path = search(start_q[b], goal_q[b]);
+        path = search.Connect(start, goal, StreamSeed(seed, 2), budget);
       }
-      if (guides.defined()) result.route[static_cast<size_t>(b)] = seeded ? "seeded" : "unseeded";
-      if (path) {
-        std::vector<torch::Tensor> rows;
-        for (const ob::State* s : path->getStates()) rows.push_back(ToTensor(s, J));
-        points = torch::stack(rows);
-        if (config_.simplify) points = RoundCorners(Tighten(Shortcut(points, motions), motions, 2), motions);
-        result.found[b] = true;
+      if (!path) {
+        result.failure[static_cast<size_t>(b)] =
+            "RRT-Connect found no path within " + std::to_string(iterations) + " iterations or " +
+            fmt::format("{:g} s", config_.time_limit);
       }
     }
-    result.plans[b] = planning::TimedStates(points, T, dt_, state_dim_).to(torch::kFloat32);
-    result.call_seconds[static_cast<size_t>(b)] =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+    if (guides.defined()) result.route[static_cast<size_t>(b)] = seeded ? "seeded" : "unseeded";
+    torch::Tensor states;
+    if (path) {
+      // Simplified, then timed; the plan is found when the plan checker passes it as returned (float32). A
+      // rounded path that fails (a state that grazes an obstacle within the motion check's resolution) falls
+      // back to the path before rounding.
+      std::vector<Path> candidates;
+      if (config_.simplify) {
+        const Path tight = search.Tighten(search.Shortcut(*path), 2);
+        candidates.push_back(search.RoundCorners(tight, max_points));
+        candidates.push_back(tight);
+      }
+      candidates.push_back(*path);
+      // Each path timed smoothly first; then, if a motion between states cut a corner of it, with its corners on
+      // states.
+      std::string why;
+      for (const Path& candidate : candidates) {
+        std::vector<double> flat;
+        for (const Config& q : candidate) flat.insert(flat.end(), q.begin(), q.end());
+        for (const bool snap : {false, true}) {
+          const planning::TimedPath timed = planning::TimePath(flat, J, T, dt_, d.velocity_limit, snap);
+          if (snap && !timed.corners_on_states) continue;
+          states = planning::StatesOf(timed, J, T, state_dim_).to(torch::kFloat32);
+          const validity::PlanVerdict verdict =
+              checker_.Check(states.unsqueeze(0), request.start[b], request.goal[b], request.scene, {},
+                             request.world)[0];
+          if (verdict.valid()) {
+            result.found[b] = true;
+            break;
+          }
+          if (why.empty()) why = "the timed path fails the plan check: " + verdict.reason;
+        }
+        if (result.found[b].item<bool>()) {
+          why.clear();
+          break;
+        }
+      }
+      result.failure[static_cast<size_t>(b)] = why;
+    }
+    if (!result.found[b].item<bool>()) {
+      std::vector<double> flat;
+      for (const Config& q : points) flat.insert(flat.end(), q.begin(), q.end());
+      if (!path) states = planning::StatesOf(planning::TimePath(flat, J, T, dt_, d.velocity_limit), J, T, state_dim_).to(torch::kFloat32);
+    }
+    result.plans[b] = states;
+    result.call_seconds[static_cast<size_t>(b)] = std::chrono::duration<double>(Clock::now() - began).count();
   }
   return result;
 }

@@ -1,17 +1,33 @@
 #include "experiment/experiment_config.h"
 
+#include <spdlog/spdlog.h>
+
 namespace flowplan::experiment {
 
 namespace {
 
-/// Configs written before model.architecture became model.name (older run
-/// folders, checkpoints and exported planners) read as if written today.
-YAML::Node Migrated(YAML::Node node) {
+/// Keys that no longer mean anything: RRT-Connect's own margin and motion resolution (it is valid by the plan
+/// checker's check.* now) and the sampled self-check's resolution (self-collision is certified along motions).
+constexpr std::pair<const char*, const char*> kRetiredKeys[] = {
+    {"rrt_connect", "margin"}, {"rrt_connect", "resolution"}, {"check", "self_resolution"}};
+
+/// Configs written before model.architecture became model.name, or with retired keys (older run folders,
+/// checkpoints and exported planners) read as if written today; `source` is named in a warning when `warn`.
+YAML::Node Migrated(YAML::Node node, const std::string& source = "", bool warn = false) {
   if (node.IsMap() && node["model"] && node["model"].IsMap()) {
     YAML::Node model = node["model"];
     if (model["architecture"] && !model["name"]) {
       model["name"] = YAML::Clone(model["architecture"]);
       model.remove("architecture");
+    }
+  }
+  for (const auto& [section, key] : kRetiredKeys) {
+    if (node.IsMap() && node[section] && node[section].IsMap() && node[section][key]) {
+      if (warn) {
+        spdlog::warn("{}: {}.{} is no longer used (RRT-Connect and the plan checker share check.*); ignored",
+                     source, section, key);
+      }
+      node[section].remove(key);
     }
   }
   return node;
@@ -21,7 +37,7 @@ YAML::Node Migrated(YAML::Node node) {
 
 ExperimentConfig LoadExperiment(const std::string& path, const std::vector<std::string>& overrides) {
   ExperimentConfig result;
-  if (!path.empty()) config::Apply(Migrated(config::ParseYamlFile(path)), result, path);
+  if (!path.empty()) config::Apply(Migrated(config::ParseYamlFile(path), path, true), result, path);
   for (const auto& assignment : overrides) config::Apply(config::ParseOverride(assignment), result, config::kCommandLine);
   return result;
 }
@@ -30,7 +46,9 @@ ExperimentConfig LoadExperimentText(const std::string& yaml, const std::string& 
                                     const std::string& overlay_path, const std::vector<std::string>& overrides) {
   ExperimentConfig result;
   config::Apply(Migrated(config::ParseYamlText(yaml, source)), result, source);
-  if (!overlay_path.empty()) config::Apply(Migrated(config::ParseYamlFile(overlay_path)), result, overlay_path);
+  if (!overlay_path.empty()) {
+    config::Apply(Migrated(config::ParseYamlFile(overlay_path), overlay_path, true), result, overlay_path);
+  }
   for (const auto& assignment : overrides) config::Apply(config::ParseOverride(assignment), result, config::kCommandLine);
   return result;
 }

@@ -14,6 +14,16 @@
 #include "experiment/commands.h"
 
 namespace flowplan::experiment {
+
+void CheckOutputsFree(const std::string& prefix, bool force) {
+  if (force) return;
+  for (const char* extension : {".json", ".h5", ".png"}) {
+    if (std::filesystem::exists(prefix + extension)) {
+      throw Error(prefix + extension + ": exists; give --force to replace it, or --out another prefix");
+    }
+  }
+}
+
 namespace {
 
 void RunPlan(const PlanArgs& args) {
@@ -33,6 +43,7 @@ void RunPlan(const PlanArgs& args) {
                 subject.robot->description().name + "\"");
   }
   const std::string prefix = args.out.empty() ? subject.run_folder + "/plan" : args.out;
+  CheckOutputsFree(prefix, args.force);
   EnsureParentFolder(prefix);
   AtomicFile h5_file(prefix + ".h5");  // fails before any work if the output cannot be written
 
@@ -46,7 +57,7 @@ void RunPlan(const PlanArgs& args) {
   const int64_t K = inputs.scene.size();
   spdlog::info("planning {} samples with {} around {} obstacle{} ({})", args.num_samples, subject.source, K,
                K == 1 ? "" : "s",
-               args.rrt_connect ? fmt::format("margin {}, {} iterations", subject.config.rrt_connect.margin,
+               args.rrt_connect ? fmt::format("check.margin {}, {} iterations", subject.config.check.margin,
                                               subject.config.rrt_connect.max_iterations)
                                 : fmt::format("guidance scale {}, splitting {}", subject.config.guidance.scale,
                                               config::EnumName(subject.config.sampler.splitting)));
@@ -55,13 +66,17 @@ void RunPlan(const PlanArgs& args) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   const int64_t lost = args.num_samples - result.found.sum().item<int64_t>();
   if (lost > 0) {
-    spdlog::warn("{} of {} plans not found, each written as the straight line from start to goal{}", lost,
-                 args.num_samples,
-                 args.rrt_connect ? fmt::format(" (the start or goal keeps less than rrt_connect.margin {} from an "
-                                                "obstacle, or rrt_connect.max_iterations {} were not enough)",
-                                                subject.config.rrt_connect.margin,
-                                                subject.config.rrt_connect.max_iterations)
-                                  : std::string());
+    for (size_t b = 0; b < result.failure.size(); ++b) {
+      if (!result.failure[b].empty()) {
+        spdlog::warn("{} of {} plans not found, each written as the straight line from start to goal (plan {}: {})",
+                     lost, args.num_samples, b, result.failure[b]);
+        break;
+      }
+    }
+    if (result.failure.empty()) {
+      spdlog::warn("{} of {} plans not found, each written as the straight line from start to goal", lost,
+                   args.num_samples);
+    }
   }
 
   const PlanScores scores = ScorePlans(result, subject, inputs);
@@ -92,7 +107,7 @@ Command AddPlanCommand(CLI::App& app) {
   plan->add_option("--ckpt", a.ckpt, "checkpoint file, or a run folder (its newest checkpoint)");
   plan->add_option("--planner", a.planner_file, "an exported planner file (instead of --ckpt)")->check(CLI::ExistingFile);
   plan->add_flag("--rrt-connect", a.rrt_connect,
-                 "plan with OMPL's RRT-Connect (rrt_connect.*) for the robot and trajectories of --config's generate.*");
+                 "plan with RRT-Connect (rrt_connect.*, valid by check.*) for the robot and trajectories of --config's generate.*");
   plan->add_flag("--hybrid", a.hybrid,
                  "with --ckpt or --planner: the learned planner proposes hybrid.proposals plans, the plan checker "
                  "(check.*) keeps the valid ones and returns the best by guidance cost, then length; RRT-Connect "
@@ -127,6 +142,7 @@ Command AddPlanCommand(CLI::App& app) {
   plan->add_option("--out", a.out, "output prefix: PREFIX.h5, PREFIX.json, PREFIX.png (default RUN_DIR/plan)");
   plan->add_flag("--execute", a.execute, "also track every plan in MuJoCo and report contacts");
   plan->add_flag("!--no-plot", a.plot, "do not draw PREFIX.png");
+  plan->add_flag("--force", a.force, "replace PREFIX.h5, PREFIX.json and PREFIX.png if they exist");
   plan->add_option("--goal-tolerance", a.goal_tolerance,
                    "a plan succeeds if its last TCP is this close to the goal TCP (and it collides nowhere)");
   plan->add_option("--max-speed-ratio", a.max_speed_ratio,

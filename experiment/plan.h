@@ -27,7 +27,7 @@ namespace flowplan::experiment {
 struct PlanArgs {
   std::string ckpt;                    // --ckpt: a run folder or checkpoint file
   std::string planner_file;            // --planner: an exported planner file (instead of --ckpt)
-  bool rrt_connect = false;            // --rrt-connect: OMPL's RRT-Connect for the robot of generate.*
+  bool rrt_connect = false;            // --rrt-connect: RRT-Connect for the robot of generate.*
   bool hybrid = false;                 // --hybrid: the learned planner proposes, RRT-Connect falls back
   std::string overlay_path;            // --config: YAML applied over the planner's config
   std::vector<std::string> overrides;  // key=value, e.g. guidance.scale=2
@@ -47,6 +47,7 @@ struct PlanArgs {
   std::string out;                     // --out: output prefix (default: RUN_DIR/plan)
   bool execute = false;                // --execute: track the plans in MuJoCo
   bool plot = true;                    // --no-plot clears it
+  bool force = false;                  // --force: replace existing outputs
   double goal_tolerance = 0.03;        // --goal-tolerance: success radius around the goal TCP (world units)
   double max_speed_ratio = 1.5;        // --max-speed-ratio: a feasible plan's joint speeds stay within this × the limits
 };
@@ -58,7 +59,6 @@ struct PlanSubject {
   kinematics::TrajectoryInfo trajectory;  // what it plans
   std::shared_ptr<const kinematics::Robot> robot;
   planning::PlanSettings settings;        // the call's settings (a learned planner's)
-  validity::ConfigurationCheck configuration_check;  // the built-in Franka's self-collision and floor; else empty
   std::string source;                     // what was loaded, for the report
   std::string run_folder;                 // default output folder
 };
@@ -70,6 +70,7 @@ struct PlanInputs {
   std::string scene_source;   // the file, or "scene (config)"
   torch::Tensor start, goal;  // (D,) raw, float32
   torch::Tensor goal_tcp;     // (W,) float64: --goal-tcp, or the goal's TCP
+  collision::WorldOptions world;  // a problem's floor and held joints (unset: check.floor_height, the robot's)
 };
 
 /// The scores of N plans against K obstacles.
@@ -95,8 +96,13 @@ PlanInputs ResolvePlanInputs(const PlanArgs& args, const PlanSubject& subject);
 /// plan_report.cc: scores the plans (N, T, D) of `result`.
 PlanScores ScorePlans(const planning::PlanResult& result, const PlanSubject& subject, const PlanInputs& inputs);
 
-/// plan_execute.cc: whether `robot` has the built-in Franka's kinematics and geometry (limits may differ).
+/// plan_execute.cc: whether `robot` has the built-in Franka's kinematic tree and TCP (limits and collision
+/// spheres may differ).
 bool IsBuiltInFranka(const kinematics::RobotDescription& robot);
+
+/// plan_execute.cc: the robot a planner file or checkpoint carries, with the built-in Franka's collision body
+/// (spheres, held fingers, self-collision pairs) when it is the Franka.
+kinematics::RobotDescription ResolveRobot(const kinematics::RobotDescription& carried);
 
 /// The plan checker of `subject` (its robot, dt, check.* and configuration check).
 validity::PlanChecker MakePlanChecker(const PlanSubject& subject);
@@ -144,11 +150,14 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
 /// and '.' made '_' (a family's "shelf/3" is /problems/shelf_3).
 std::string ProblemGroup(const std::string& name);
 
-/// plan_inputs.cc: why `state` (D,) cannot be planned from or to (outside the
-/// joint limits, or a collision sphere closer than check.margin to an
-/// obstacle), or empty.
+/// plan_inputs.cc: why `state` (D,) cannot be planned from or to (past a
+/// joint limit, or not valid by the plan checker in `rows` and `world`), or empty.
 std::string RefusalOf(const std::string& name, const torch::Tensor& state, const PlanSubject& subject,
-                      const geometry::SceneRows& rows);
+                      const geometry::SceneRows& rows, const collision::WorldOptions& world = {});
+
+/// plan.cc: refuses to replace PREFIX.h5, PREFIX.json or PREFIX.png unless --force.
+/// @throws flowplan::Error naming the file that exists.
+void CheckOutputsFree(const std::string& prefix, bool force);
 
 /// plan_report.cc: draws PREFIX.png from PREFIX.h5 with scripts/plot.py; returns
 /// the figure's path, or why it was not drawn.

@@ -20,17 +20,46 @@ void CheckBuiltInFranka(const kinematics::Robot& robot) {
 
 }  // namespace
 
+namespace {
+
+/// The kinematic tree and TCP of a description, as text: what must match for a robot to move as another does.
+std::string Kinematics(const kinematics::RobotDescription& d) {
+  std::string text = d.name + " " + std::to_string(d.num_joints) + " " + std::to_string(d.tcp_link);
+  auto numbers = [&](const auto& values) {
+    for (double v : values) text += " " + config::internal::FormatDouble(v);
+  };
+  for (const kinematics::RobotLink& link : d.links) {
+    text += " | " + link.name + " " + std::to_string(link.parent) + " " + std::to_string(link.joint);
+    numbers(link.pos);
+    numbers(link.quat);
+    numbers(link.axis);
+  }
+  numbers(d.tcp_pos);
+  numbers(d.tcp_quat);
+  return text;
+}
+
+}  // namespace
+
 bool IsBuiltInFranka(const kinematics::RobotDescription& robot) {
   static const sim::FrankaModel model = sim::LoadFrankaModel();
-  auto geometry = [](kinematics::RobotDescription d) {
-    d.velocity_limit.clear();
-    return kinematics::RobotToYaml(d);
-  };
-  return geometry(model.description()) == geometry(robot);
+  return Kinematics(model.description()) == Kinematics(robot);
+}
+
+kinematics::RobotDescription ResolveRobot(const kinematics::RobotDescription& carried) {
+  if (!IsBuiltInFranka(carried)) return carried;
+  // A file made before the Franka's description said how its fingers move and which of its links may touch: the
+  // built-in description's collision body, with the file's own limits.
+  kinematics::RobotDescription robot = sim::LoadFrankaModel().description();
+  robot.joint_lower = carried.joint_lower;
+  robot.joint_upper = carried.joint_upper;
+  robot.velocity_limit = carried.velocity_limit;
+  if (!carried.home.empty()) robot.home = carried.home;
+  return robot;
 }
 
 validity::PlanChecker MakePlanChecker(const PlanSubject& subject) {
-  return validity::PlanChecker(subject.robot, subject.trajectory.dt, subject.config.check, subject.configuration_check);
+  return validity::PlanChecker(subject.robot, subject.trajectory.dt, subject.config.check);
 }
 
 std::vector<sim::ExecutionResult> ExecutePlans(const torch::Tensor& plans, const PlanSubject& subject,

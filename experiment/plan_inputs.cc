@@ -131,13 +131,12 @@ void CheckOutsideObstacles(const std::string& name, const torch::Tensor& state, 
 }  // namespace
 
 std::string RefusalOf(const std::string& name, const torch::Tensor& state, const PlanSubject& subject,
-                      const geometry::SceneRows& rows) {
-  // A plan of this one state, from and to it: what the checker says of it is what no plan through it can avoid.
-  const validity::PlanVerdict verdict = MakePlanChecker(subject).Check(state.view({1, 1, -1}), state, state, rows)[0];
-  if (verdict.valid()) return "";
-  std::string reason = verdict.reason;
-  if (reason.rfind("state 0: ", 0) == 0) reason = reason.substr(9);
-  return "the " + name + " cannot be part of a valid plan: " + reason;
+                      const geometry::SceneRows& rows, const collision::WorldOptions& world) {
+  const validity::PlanChecker checker = MakePlanChecker(subject);
+  const int64_t J = subject.robot->num_joints();
+  const torch::Tensor q = state.slice(0, 0, J).to(torch::kFloat64).contiguous();
+  return checker.Refusal(name, std::vector<double>(q.data_ptr<double>(), q.data_ptr<double>() + J),
+                         checker.ConfigurationChecker(rows, world));
 }
 
 PlanInputs ResolvePlanInputs(const PlanArgs& args, const PlanSubject& subject) {

@@ -43,6 +43,8 @@ PlanInputs ProblemInputs(const problems::Problem& problem, const PlanSubject& su
   inputs.scene = problem.scene;
   inputs.scene_source = where;
   inputs.rows = geometry::Rows(inputs.scene, W, where + ": scene");
+  inputs.world = problem.World();
+  if (problem.refused() && problem.start_q.empty()) return inputs;  // a pair the import could not read
   inputs.start = state(problem.start_q, "start_q");
   inputs.goal = state(problem.goal_q, "goal_q");
   inputs.goal_tcp = subject.robot->Tcp(inputs.goal.slice(0, 0, J).view({1, J}).to(torch::kFloat64)).view({W});
@@ -75,6 +77,7 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
   const int64_t count = args.limit > 0 ? std::min<int64_t>(args.limit, static_cast<int64_t>(set.problems.size()))
                                        : static_cast<int64_t>(set.problems.size());
   const std::string prefix = args.out.empty() ? subject.run_folder + "/plan_problems" : args.out;
+  CheckOutputsFree(prefix, args.force);
   EnsureParentFolder(prefix);
   AtomicFile h5_file(prefix + ".h5");
   // Every problem's inputs are read before any planning, so that a bad entry fails at once.
@@ -114,8 +117,10 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
     ThrowIfInterrupted();
     const problems::Problem& problem = set.problems[static_cast<size_t>(p)];
     const PlanInputs& in = inputs[static_cast<size_t>(p)];
-    std::string refusal = RefusalOf("start", in.start, subject, in.rows);
-    if (refusal.empty()) refusal = RefusalOf("goal", in.goal, subject, in.rows);
+    // Refused by whoever made the problem (the import), or by this planner's check.
+    std::string refusal = problem.refused() ? problem.reason : "";
+    if (refusal.empty()) refusal = RefusalOf("start", in.start, subject, in.rows, in.world);
+    if (refusal.empty()) refusal = RefusalOf("goal", in.goal, subject, in.rows, in.world);
     std::string entry = "{\"name\": " + JsonString(problem.name);
     if (!refusal.empty()) {
       spdlog::info("problem {}/{} {}: refused: {}", p + 1, count, problem.name, refusal);
@@ -129,6 +134,7 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
     request.scene = in.rows;
     request.seed = StreamSeed(static_cast<uint64_t>(args.seed), static_cast<uint64_t>(p));
     request.settings = subject.settings;
+    request.world = in.world;
     const auto began = std::chrono::steady_clock::now();
     results.push_back(planning::PlanInChunks(*subject.planner, request, threads, args.batch));
     planning_wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();

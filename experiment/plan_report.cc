@@ -155,7 +155,8 @@ PlanScores ScorePlans(const planning::PlanResult& result, const PlanSubject& sub
   scores.quality = validity::MeasurePlans(plans, robot, subject.trajectory.dt, subject.config.check.joint_tolerance);
   scores.speed_ratio = torch::zeros({N}, torch::kFloat64);
   for (int64_t i = 0; i < N; ++i) scores.speed_ratio[i] = scores.quality[static_cast<size_t>(i)].max_speed_ratio;
-  scores.verdicts = MakePlanChecker(subject).Check(plans, inputs.start, inputs.goal, inputs.rows, result.found);
+  scores.verdicts =
+      MakePlanChecker(subject).Check(plans, inputs.start, inputs.goal, inputs.rows, result.found, inputs.world);
   return scores;
 }
 
@@ -183,6 +184,9 @@ std::string SamplesJson(const PlanArgs& args, const planning::PlanResult& result
                     ", \"call_seconds\": " + JsonNumber(result.call_seconds[n]) +
                     ", \"plans_in_call\": " + std::to_string(result.call_plans[n]) +
                     (result.route.empty() ? std::string() : ", \"route\": " + JsonString(result.route[n])) +
+                    (result.failure.empty() ? std::string()
+                                            : ", \"planner_failure\": " + JsonString(result.failure[n]) +
+                                                  ", \"refused\": " + Bool(result.refused[n])) +
                     ", \"found\": " + Bool(result.found[i].item<bool>()) +
                     ",\n      \"quality\": " + QualityJson(scores.quality[n]) +
                     ",\n      \"tcp_clearance\": " + Numbers(scores.tcp_clearance[i]) +

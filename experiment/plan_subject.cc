@@ -11,7 +11,6 @@
 #include "experiment/trained_planner.h"
 #include "hybrid/hybrid_planner.h"
 #include "planning/learned_planner.h"
-#include "sim/franka_self_collision.h"
 
 namespace flowplan::experiment {
 namespace fs = std::filesystem;
@@ -94,7 +93,7 @@ void MakeHybrid(PlanSubject& subject) {
   std::unique_ptr<planning::LearnedPlanner> proposer(dynamic_cast<planning::LearnedPlanner*>(subject.planner.release()));
   FLOWPLAN_DEMAND(proposer != nullptr);
   auto fallback = std::make_unique<classical::RrtConnectPlanner>(subject.trajectory, subject.config.rrt_connect,
-                                                                 subject.configuration_check);
+                                                                 subject.config.check);
   subject.planner = std::make_unique<hybrid::HybridPlanner>(std::move(proposer), std::move(fallback),
                                                             MakePlanChecker(subject), subject.config.hybrid);
   subject.source = "hybrid(" + subject.source + ", rrt_connect)";
@@ -111,12 +110,11 @@ PlanSubject LoadPlanSubject(const PlanArgs& args) {
   PlanSubject subject = !args.planner_file.empty() ? FromFile(args)
                         : args.rrt_connect         ? FromRrtConnect(args)
                                                    : FromCheckpoint(args);
+  subject.trajectory.robot = ResolveRobot(subject.trajectory.robot);
   subject.robot = kinematics::MakeRobot(subject.trajectory.robot, subject.source + ": robot");
-  // The built-in Franka's plans are checked for self-collision and the floor too; RRT-Connect avoids them.
-  if (IsBuiltInFranka(subject.robot->description())) subject.configuration_check = sim::FrankaConfigurationCheck();
   if (args.rrt_connect) {
     subject.planner = std::make_unique<classical::RrtConnectPlanner>(subject.trajectory, subject.config.rrt_connect,
-                                                                     subject.configuration_check);
+                                                                     subject.config.check);
   }
   if (args.hybrid) MakeHybrid(subject);
   return subject;

@@ -10,7 +10,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "experiment/commands.h"
-#include "kinematics/robot.h"
+#include "collision/body_model.h"
 #include "problems/moveit_import.h"
 #include "sim/franka_model.h"
 
@@ -25,6 +25,7 @@ struct ImportArgs {
   std::vector<std::string> frames;
   std::string grasp = "touching-tcp";
   double grasp_margin = 0.01;
+  double limit_tolerance = 0.002;
 };
 
 std::string Stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
@@ -41,8 +42,12 @@ void RunImport(const ImportArgs& args) {
     }
     for (size_t i = 0; i < args.files.size(); i += 2) pairs.emplace_back(args.files[i], args.files[i + 1]);
   }
+  const collision::BodyModel body(sim::LoadFrankaModel().description(), "the Franka");
   problems::MoveItImportOptions options;
   options.joint_names = problems::FrankaJointNames();
+  for (const kinematics::RobotLink& link : body.description().links) {
+    if (link.joint < 0 && !link.joint_name.empty()) options.held_names.push_back(link.joint_name);
+  }
   if (!args.frames.empty()) options.base_frames = args.frames;
   bool known = false;
   for (const auto& [rule, name] : problems::EnumEntries(problems::GraspRule{})) {
@@ -53,11 +58,13 @@ void RunImport(const ImportArgs& args) {
   }
   if (!known) throw Error("--grasped: \"" + args.grasp + "\" is not one of touching-tcp, none");
   options.grasp_margin = args.grasp_margin;
+  options.limit_tolerance = args.limit_tolerance;
 
-  const kinematics::Robot arm(sim::LoadFrankaModel().description(), "the Franka");
   problems::ProblemSet set;
   set.source = "moveit import";
-  // Every pair is read before anything is written: a bad file leaves no output.
+  int refused = 0, clamped = 0;
+  // Every pair is read before anything is written. A pair that cannot be planned is a refused problem; a pair
+  // whose files are not MoveIt files ends the import with the error naming the file.
   for (const auto& [scene, request] : pairs) {
     const std::string name = Stem(scene);  // scene0001: a name that no YAML reader takes for a number
     for (const problems::Problem& earlier : set.problems) {
@@ -66,18 +73,18 @@ void RunImport(const ImportArgs& args) {
                     "); their problems and scene files would share the name");
       }
     }
-    set.problems.push_back(problems::ImportMoveItProblem(arm, scene, request, name, options));
+    set.problems.push_back(problems::ImportMoveItProblem(body, scene, request, name, options));
     const problems::Problem& p = set.problems.back();
     if (!p.left_out.empty()) {
       std::string list;
       for (const auto& id : p.left_out) list += (list.empty() ? "" : ", ") + id;
-      spdlog::info("{}: left out {} (the goal's TCP is in or within {} m of it)", scene, list, options.grasp_margin);
+      spdlog::debug("{}: left out {} (the goal's TCP is in or within {} m of it)", scene, list, options.grasp_margin);
     }
-    for (const auto& [what, clearance] : {std::pair{"start", p.start_clearance}, std::pair{"goal", p.goal_clearance}}) {
-      if (clearance < 0.0) {
-        spdlog::warn("{}: the {}'s collision spheres overlap the scene by {:.3f} m (flowplan's spheres are "
-                     "coarser than MoveIt's meshes)", request, what, -clearance);
-      }
+    for (const std::string& note : p.notes) spdlog::info("{}: {}", request, note);
+    clamped += !p.notes.empty();
+    if (p.refused()) {
+      ++refused;
+      spdlog::warn("{}: refused: {}", request, p.reason);
     }
   }
   if (!args.scenes_dir.empty()) {
@@ -91,7 +98,8 @@ void RunImport(const ImportArgs& args) {
   WriteFileAtomically(args.out, problems::ProblemSetYaml(set));
   size_t obstacles = 0;
   for (const auto& p : set.problems) obstacles += static_cast<size_t>(p.scene.size());
-  spdlog::info("wrote {}: {} problems, {} obstacles{}", args.out, set.problems.size(), obstacles,
+  spdlog::info("wrote {}: {} problems ({} refused, {} with a value moved onto a joint limit), {} obstacles{}", args.out,
+               set.problems.size(), refused, clamped, obstacles,
                args.scenes_dir.empty() ? "" : ", their scenes in " + args.scenes_dir);
 }
 
@@ -107,12 +115,16 @@ Command AddScenesCommand(CLI::App& app) {
   import->add_option("--dir", args->folder, "a folder of sceneNNNN.yaml / requestNNNN.yaml pairs (MotionBenchMaker)");
   import->add_option("--out", args->out, "problem file to write (YAML)")->required();
   import->add_option("--scenes-dir", args->scenes_dir, "also write each problem's scene as DIR/NAME.yaml");
-  import->add_option("--frame", args->frames,
-                     "frame ids taken as the robot's base (default: panda_link0, world, base_link, empty)");
+  import->add_option("--frame", args->frames, "frame ids that are the robot's base (default: panda_link0, base_link)");
   import->add_option("--grasped", args->grasp,
                      "obstacles a goal grasps, left out: touching-tcp (the goal's TCP is in or near it) or none");
   import->add_option("--grasp-margin", args->grasp_margin, "m: how near the goal's TCP counts as touching")
       ->check(CLI::NonNegativeNumber);
+  import->add_option("--limit-tolerance", args->limit_tolerance,
+                     "rad: a start or goal past a joint limit by at most this is moved onto it; by more, the problem "
+                     "is refused")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   return {import, [args] { RunImport(*args); }};
 }
 

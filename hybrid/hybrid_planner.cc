@@ -36,11 +36,13 @@ void HybridPlanner::RetimeTooFast(torch::Tensor& candidates, std::vector<validit
     // The proposal's states as a polyline: they passed the start, goal and joint-limit checks, and every state of
     // the re-timed plan lies on a segment between two of them (the motion between two states may cut a corner of
     // the polyline: the re-timed plan is checked again in full).
-    timed.push_back(planning::TimedStates(candidates[n].slice(1, 0, J).to(torch::kFloat64), T, proposer_->info().dt, D)
+    timed.push_back(planning::TimedStates(candidates[n].slice(1, 0, J).to(torch::kFloat64), T, proposer_->info().dt, D,
+                                          checker_.robot().description().velocity_limit)
                         .to(candidates.scalar_type()));
   }
   const torch::Tensor again = torch::stack(timed);  // (R, T, D)
-  const std::vector<validity::PlanVerdict> second = checker_.Check(again, one.start[0], one.goal[0], one.scene, {});
+  const std::vector<validity::PlanVerdict> second =
+      checker_.Check(again, one.start[0], one.goal[0], one.scene, {}, one.world);
   candidates = candidates.clone();
   for (size_t r = 0; r < too_fast.size(); ++r) {
     if (!second[r].valid()) continue;  // the proposal keeps its own verdict, and its own states for a seed
@@ -62,7 +64,7 @@ HybridPlanner::Proposals HybridPlanner::Propose(const planning::PlanRequest& one
   const planning::PlanResult planned = proposer_->Plan(request);
   Proposals p;
   p.plans = planned.plans;
-  p.verdicts = checker_.Check(p.plans, one.start[0], one.goal[0], one.scene, planned.found);
+  p.verdicts = checker_.Check(p.plans, one.start[0], one.goal[0], one.scene, planned.found, one.world);
   p.retimed.assign(static_cast<size_t>(N), false);
   RetimeTooFast(p.plans, p.verdicts, p.retimed, one);
   for (const auto& v : p.verdicts) p.any_valid = p.any_valid || v.valid();
@@ -107,12 +109,31 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
   result.call_seconds.assign(static_cast<size_t>(B), 0.0);
   result.call_plans.assign(static_cast<size_t>(B), 1);
   result.route.assign(static_cast<size_t>(B), "none");
+  result.refused.assign(static_cast<size_t>(B), false);
+  result.failure.assign(static_cast<size_t>(B), "");
   for (int64_t b = 0; b < B; ++b) {
     const auto began = std::chrono::steady_clock::now();
     planning::PlanRequest one = request;
     one.start = request.start.slice(0, b, b + 1);
     one.goal = request.goal.slice(0, b, b + 1);
     one.seed = StreamSeed(request.seed, static_cast<uint64_t>(b));
+    planning::PlanRequest classical = one;
+    classical.settings = {};  // RRT-Connect takes its settings from its config
+    if (config_.order == HybridOrder::kClassicalFirst) {
+      // RRT-Connect on a small budget first: the easy problems end here, as fast as RRT-Connect alone; a start or
+      // goal it refuses ends the request.
+      const planning::PlanResult first = fallback_->PlanAlong(classical, torch::Tensor(), config_.classical_iterations);
+      if (first.found[0].item<bool>() || first.refused[0]) {
+        result.plans[b] = first.plans[0];
+        result.found[b] = first.found[0];
+        result.refused[static_cast<size_t>(b)] = first.refused[0];
+        result.failure[static_cast<size_t>(b)] = first.failure[0];
+        result.route[static_cast<size_t>(b)] = first.found[0].item<bool>() ? "rrt_connect" : "none";
+        result.call_seconds[static_cast<size_t>(b)] =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+        continue;
+      }
+    }
     // The unguided proposals first when asked (no cost gradients: a fraction of a guided plan's time), then the
     // guided ones when none of those is valid.
     Proposals proposed;
@@ -137,19 +158,17 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
       result.route[static_cast<size_t>(b)] = "proposal " + of_n + (unguided ? " unguided" : "") +
                                                (proposed.retimed[static_cast<size_t>(best)] ? " retimed" : "");
     } else {
-      planning::PlanRequest classical = one;
-      classical.settings = {};  // RRT-Connect takes its settings from its config
       planning::PlanResult fallback =
           best >= 0 ? fallback_->PlanAlong(classical, candidates.slice(0, best, best + 1)) : fallback_->Plan(classical);
       bool seeded = !fallback.route.empty() && fallback.route[0] == "seeded";
       validity::PlanVerdict verdict =
-          checker_.Check(fallback.plans, one.start[0], one.goal[0], request.scene, fallback.found)[0];
+          checker_.Check(fallback.plans, one.start[0], one.goal[0], request.scene, fallback.found, one.world)[0];
       if (seeded && !verdict.valid()) {
         // A path along the proposal can be too long to keep within the speed limits: search without it (a search
         // of its own, with RRT-Connect's whole budget). A refused seeded plan is kept if that finds nothing.
         planning::PlanResult unseeded = fallback_->Plan(classical);
         const validity::PlanVerdict second =
-            checker_.Check(unseeded.plans, one.start[0], one.goal[0], request.scene, unseeded.found)[0];
+            checker_.Check(unseeded.plans, one.start[0], one.goal[0], request.scene, unseeded.found, one.world)[0];
         if (second.valid() || unseeded.found[0].item<bool>()) {
           seeded = false;
           fallback = std::move(unseeded);
@@ -158,6 +177,10 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
       }
       result.plans[b] = fallback.plans[0];
       result.found[b] = fallback.found[0];  // a path RRT-Connect found but the checker refuses fails with its reason
+      if (!fallback.refused.empty()) {
+        result.refused[static_cast<size_t>(b)] = fallback.refused[0];
+        result.failure[static_cast<size_t>(b)] = fallback.failure[0];
+      }
       result.route[static_cast<size_t>(b)] =
           !verdict.valid() ? "none" : seeded ? "rrt_connect seeded by proposal " + of_n : "rrt_connect";
     }

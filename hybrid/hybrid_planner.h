@@ -18,7 +18,11 @@
 // seeded by proposal k of N", or "none" when neither gave a valid plan (the
 // plan returned is then RRT-Connect's, with its found: a path the checker
 // refuses, which the report's check names the reason of, or the straight line
-// it falls back to, found = false).
+// it falls back to, found = false). With order = classical_first, RRT-Connect
+// plans first within classical_iterations (a cheap plan where one is easy to
+// find) and the learned planner, then the fallback as above, only when it
+// fails. A start or goal the checker refuses is not planned: the result is
+// refused, with the checker's reason (PlanResult::refused, ::failure).
 
 #include <memory>
 
@@ -30,6 +34,18 @@
 
 namespace flowplan::hybrid {
 
+/// Which planner of the hybrid goes first.
+enum class HybridOrder {
+  kLearnedFirst,    // the learned planner proposes; RRT-Connect when no proposal is valid
+  kClassicalFirst,  // RRT-Connect within classical_iterations first; then as learned_first
+};
+
+inline const config::EnumNames<HybridOrder>& EnumEntries(HybridOrder) {
+  static const config::EnumNames<HybridOrder> names = {{HybridOrder::kLearnedFirst, "learned_first"},
+                                                       {HybridOrder::kClassicalFirst, "classical_first"}};
+  return names;
+}
+
 /// The `hybrid` section of an experiment config.
 struct HybridConfig {
   // The defaults: one guided proposal, RRT-Connect seeded by it when it is not valid. On the scene families'
@@ -40,7 +56,8 @@ struct HybridConfig {
   int64_t proposals = 1;         // N: plans the learned planner proposes per request, in one call
   bool seeded_fallback = true;   // RRT-Connect starts from the proposal of least guidance cost (PlanAlong)
   bool unguided_first = false;  // propose without guidance first; the guided proposals only when none is valid
-
+  HybridOrder order = HybridOrder::kLearnedFirst;
+  int64_t classical_iterations = 300;  // classical_first: RRT-Connect's iterations before the learned planner
   template <class V>
   void Visit(V& v) {
     v.Field("proposals", proposals, "plans the learned planner proposes per request, in one call",
@@ -50,6 +67,9 @@ struct HybridConfig {
             "joins them");
     v.Field("unguided_first", unguided_first,
             "propose without guidance first (guidance.scale = 0), and guided only when no unguided proposal is valid");
+    v.Field("order", order, "which planner goes first");
+    v.Field("classical_iterations", classical_iterations,
+            "classical_first: RRT-Connect's iterations before the learned planner proposes", config::Positive());
   }
 };
 

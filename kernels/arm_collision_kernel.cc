@@ -38,27 +38,7 @@ inline __attribute__((always_inline)) int64_t HingeLoop(const S* __restrict x, c
   return active;
 }
 
-/// The nearest-obstacle pass of n points (x, y, z) against obstacle `index`'s prepared row: where its
-/// distance is below `nearest` (or is NaN, torch.min's minimum), it becomes `nearest` and `index` `which`.
-/// Vectorised as the hinge pass.
-template <class S>
-using NearestPass = void (*)(const S* x, const S* y, const S* z, const S* row, int64_t index, S* nearest,
-                             int64_t* which, int64_t n);
-
-template <template <class, int> class Shape, class S>
-inline __attribute__((always_inline)) void NearestLoop(const S* __restrict x, const S* __restrict y,
-                                                       const S* __restrict z, const S* __restrict row, int64_t index,
-                                                       S* __restrict nearest, int64_t* __restrict which, int64_t n) {
-  for (int64_t i = 0; i < n; ++i) {
-    const S p[kW] = {x[i], y[i], z[i]};
-    const S d = Shape<S, kW>::Distance(p, row, nullptr);
-    const bool take = d < nearest[i] || (d != d && nearest[i] == nearest[i]);  // the first NaN stays
-    nearest[i] = take ? d : nearest[i];
-    which[i] = take ? index : which[i];
-  }
-}
-
-/// Each shape's passes, per dtype: Passes<Shape, S>::Hinge() and Nearest().
+/// Each shape's passes, per dtype: Passes<Shape, S>::Hinge().
 template <template <class, int> class Shape, class S>
 struct Passes;
 
@@ -70,15 +50,9 @@ struct Passes;
                                                   T* __restrict penetration, int64_t n) {                       \
     return HingeLoop<shapes::Shape, T>(x, y, z, reach, row, depth, penetration, n);                             \
   }                                                                                                             \
-  FLOWPLAN_VECTOR_CLONES void Shape##Nearest_##T(const T* __restrict x, const T* __restrict y,                  \
-                                                 const T* __restrict z, const T* __restrict row, int64_t index, \
-                                                 T* __restrict nearest, int64_t* __restrict which, int64_t n) { \
-    NearestLoop<shapes::Shape, T>(x, y, z, row, index, nearest, which, n);                                      \
-  }                                                                                                             \
   template <>                                                                                                   \
   struct Passes<shapes::Shape, T> {                                                                             \
     static HingePass<T> Hinge() { return &Shape##Hinge_##T; }                                                   \
-    static NearestPass<T> Nearest() { return &Shape##Nearest_##T; }                                             \
   };
 FLOWPLAN_ARM_PASSES(Sphere, float)
 FLOWPLAN_ARM_PASSES(Box, float)
@@ -90,12 +64,11 @@ FLOWPLAN_ARM_PASSES(Cylinder, double)
 FLOWPLAN_ARM_PASSES(Capsule, double)
 #undef FLOWPLAN_ARM_PASSES
 
-/// One kind's obstacles: its distance (for a gradient), its vectorised passes, its rows.
+/// One kind's obstacles: its distance (for a gradient), its vectorised pass, its rows.
 template <class S>
 struct Obstacles {
   S (*distance)(const S*, const S*, S*);
   HingePass<S> hinge;
-  NearestPass<S> nearest;
   const S* rows;
   int64_t columns;
   int64_t count;
@@ -111,7 +84,7 @@ Obstacles<S> Prepare(const std::string& kind, const torch::Tensor& rows) {
                                                                std::to_string(rows.size(1)) + ")"
                                                          : std::to_string(rows.dim()) + " dimensions"));
   }
-  return {&Kernel::Distance, Passes<Shape, S>::Hinge(), Passes<Shape, S>::Nearest(), rows.data_ptr<S>(), Kernel::kColumns,
+  return {&Kernel::Distance, Passes<Shape, S>::Hinge(), rows.data_ptr<S>(), Kernel::kColumns,
           rows.size(0)};
 }
 
@@ -124,12 +97,11 @@ Obstacles<S> PrepareKind(const std::string& kind, const torch::Tensor& rows) {
   throw std::runtime_error("arm_collision: unknown shape kind " + kind);
 }
 
-/// An obstacle of any kind: its distance, its passes, its prepared row.
+/// An obstacle of any kind: its distance, its pass, its prepared row.
 template <class S>
 struct Obstacle {
   S (*distance)(const S*, const S*, S*);
   HingePass<S> hinge;
-  NearestPass<S> nearest;
   const S* row;
 };
 
@@ -148,7 +120,7 @@ struct SceneObstacles {
     }
     for (const Obstacles<S>& kind : kinds) {
       for (int64_t k = 0; k < kind.count; ++k) {
-        all.push_back({kind.distance, kind.hinge, kind.nearest, kind.rows + k * kind.columns});
+        all.push_back({kind.distance, kind.hinge, kind.rows + k * kind.columns});
       }
     }
   }
@@ -385,46 +357,11 @@ void RunHinge(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor&
   });
 }
 
-template <class S>
-void RunNearest(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& radii_in,
-                const std::vector<std::string>& kinds, const std::vector<torch::Tensor>& rows_in,
-                torch::Tensor& clearance, torch::Tensor& index) {
-  const torch::Tensor radii = radii_in.to(q.options()).contiguous();
-  const ArmKinematics<S> kinematics(arm, q.size(1), radii.size(0));
-  const int64_t M = q.size(0), J = kinematics.J, S_ = kinematics.S_;
-  const SceneObstacles<S> scene(kinds, rows_in, q.options());
-  const S* qs = q.data_ptr<S>();
-  const S* radius = radii.data_ptr<S>();
-  S* out_clearance = clearance.data_ptr<S>();
-  int64_t* out_index = index.data_ptr<int64_t>();
-  const int64_t K = static_cast<int64_t>(scene.all.size());
-
-  // As the hinge: a chunk's centres side by side, each obstacle one vectorised pass over them, in the scene's
-  // order (ties: the first).
-  at::parallel_for(0, M, 16, [&](int64_t begin, int64_t end) {
-    const int64_t count = end - begin, n = count * S_;
-    const PlacedChunk<S> chunk(kinematics, qs + begin * J, count);
-    const std::vector<S>&x = chunk.x, &y = chunk.y, &z = chunk.z;
-    std::vector<S> nearest(n, std::numeric_limits<S>::infinity());
-    std::vector<int64_t> which(n, -1);
-    for (int64_t k = 0; k < K; ++k) {
-      scene.all[k].nearest(x.data(), y.data(), z.data(), scene.all[k].row, k, nearest.data(), which.data(), n);
-    }
-    for (int64_t s = 0; s < S_; ++s) {
-      for (int64_t m = 0; m < count; ++m) {
-        const int64_t i = s * count + m;
-        out_clearance[(begin + m) * S_ + s] = K == 0 ? nearest[i] : nearest[i] - radius[s];
-        out_index[(begin + m) * S_ + s] = which[i];
-      }
-    }
-  });
-}
-
 void Check(bool ok, const std::string& what) {
   if (!ok) throw std::runtime_error("arm_collision: " + what);
 }
 
-/// The checks both entry points make of q (M, J), the tables and S spheres (`per_sphere`: reach or radii).
+/// The checks of q (M, J), the tables and S spheres (`per_sphere`: their reach).
 void CheckArm(const torch::Tensor& q, const ArmTables& arm, const torch::Tensor& per_sphere, const char* name,
               const std::vector<std::string>& kinds, const std::vector<torch::Tensor>& rows) {
   Check(q.dim() == 2, "expected q (M, J)");
@@ -478,23 +415,6 @@ std::tuple<torch::Tensor, torch::Tensor> ArmCollision(const torch::Tensor& q_in,
     RunHinge<double>(q, arm, reach, kinds, rows, value, with_gradient ? &gradient : nullptr);
   }
   return {value, gradient};
-}
-
-std::tuple<torch::Tensor, torch::Tensor> ArmNearestObstacles(const torch::Tensor& q_in, const ArmTables& arm,
-                                                             const torch::Tensor& radii,
-                                                             const std::vector<std::string>& kinds,
-                                                             const std::vector<torch::Tensor>& rows) {
-  CheckArm(q_in, arm, radii, "radii", kinds, rows);
-  const torch::Tensor q = q_in.contiguous();
-  const int64_t M = q.size(0), S = radii.size(0);
-  torch::Tensor clearance = torch::empty({M, S}, q.options());
-  torch::Tensor index = torch::empty({M, S}, q.options().dtype(torch::kInt64));
-  if (q.scalar_type() == torch::kFloat32) {
-    RunNearest<float>(q, arm, radii, kinds, rows, clearance, index);
-  } else {
-    RunNearest<double>(q, arm, radii, kinds, rows, clearance, index);
-  }
-  return {clearance, index};
 }
 
 }  // namespace flowplan::kernels

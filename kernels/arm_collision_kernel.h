@@ -38,7 +38,7 @@ struct ArmTables {
   torch::Tensor ancestors;       // (J, S) 1 where joint j moves sphere s
 };
 
-/// The shape kinds both functions below know (geometry/scene.py's names);
+/// The shape kinds ArmCollision knows (geometry/scene.py's names);
 /// callers send scenes with any other kind to the scripts.
 const std::vector<std::string>& ArmCollisionKinds();
 
@@ -59,20 +59,5 @@ std::tuple<torch::Tensor, torch::Tensor> ArmCollision(const torch::Tensor& q, co
                                                       const torch::Tensor& reach,
                                                       const std::vector<std::string>& kinds,
                                                       const std::vector<torch::Tensor>& rows, bool with_gradient);
-
-/// For each collision sphere of configurations q (M, J) with radii (S,)
-/// among the obstacles of `kinds` and `rows` (as ArmCollision's): the signed
-/// distance of its surface to the nearest obstacle (M, S) (negative: they
-/// overlap; +inf without obstacles) and that obstacle's index (M, S) int64
-/// in the scene's numbering (the kinds' order, then the rows'; the first of
-/// a tie; -1 without obstacles), what kinematics/kinematics.py's
-/// sphere_nearest_obstacle computes from Arm.sphere_centres: the plan
-/// checker's and RRT-Connect's clearance (kinematics::Robot::NearestObstacles).
-/// A NaN distance is the nearest (the first, as torch.min). Threads and
-/// errors as ArmCollision.
-std::tuple<torch::Tensor, torch::Tensor> ArmNearestObstacles(const torch::Tensor& q, const ArmTables& arm,
-                                                             const torch::Tensor& radii,
-                                                             const std::vector<std::string>& kinds,
-                                                             const std::vector<torch::Tensor>& rows);
 
 }  // namespace flowplan::kernels

@@ -23,16 +23,3 @@ def sphere_clearance(centres: Tensor, radii: Tensor, scene: Dict[str, Tensor]) -
     return clearance.min(1)[0]
 
 
-def sphere_nearest_obstacle(centres: Tensor, radii: Tensor, scene: Dict[str, Tensor]) -> Tuple[Tensor, Tensor]:
-    """For each of M configurations' collision spheres, centres (M, S, W) and
-    radii (S,): the signed distance (M, S) of its surface to the nearest
-    obstacle of `scene` (negative: they overlap; +inf without obstacles), and
-    that obstacle's index (M, S) (-1 without obstacles)."""
-    M = centres.size(0)
-    S = centres.size(1)
-    distance = scene_distance_only(centres.reshape(M * S, -1), scene)
-    if distance.size(1) == 0:
-        nothing = torch.zeros([M, S], dtype=centres.dtype, device=centres.device)
-        return nothing + float("inf"), nothing.long() - 1
-    nearest, index = distance.min(1)
-    return nearest.view(M, S) - radii.to(distance.dtype).view(1, S), index.view(M, S)

@@ -71,8 +71,15 @@ torch::jit::Module BuildArm(const RobotDescription& d) {
   torch::Tensor frame_points = torch::zeros({4 * L, S + 2 * J}, torch::kFloat64);
   for (int64_t l = 0; l < L; ++l) {
     const RobotLink& link = d.links[static_cast<size_t>(l)];
-    for (int i = 0; i < 3; ++i) positions[l][i] = link.pos[i];
-    for (int i = 0; i < 4; ++i) quaternions[l][i] = link.quat[i];
+    if (link.joint >= 0 && link.type != JointType::kRevolute) {
+      throw Error("kinematics: robot \"" + d.name + "\": link \"" + link.name +
+                  "\": the guidance kinematics plan revolute joints only");
+    }
+    std::array<double, 3> pos;
+    std::array<double, 4> quat;
+    FixedPose(link, pos, quat);  // a held link welded at its offset
+    for (int i = 0; i < 3; ++i) positions[l][i] = pos[i];
+    for (int i = 0; i < 4; ++i) quaternions[l][i] = quat[i];
     const torch::Tensor k = CrossMatrix(link.axis);
     cross.push_back(k);
     cross_sq.push_back(k.matmul(k));
@@ -141,12 +148,6 @@ torch::jit::Module BuildPoint(const RobotDescription& d) {
 Robot::Robot(const RobotDescription& description, const std::string& where) : description_(description) {
   description_.Validate(where);
   module_ = description_.kind == RobotKind::kPoint ? BuildPoint(description_) : BuildArm(description_);
-  if (is_arm()) {
-    auto buffer = [&](const char* name) { return module_.attr(name).toTensor(); };
-    arm_tables_ = {buffer("fixed"),         buffer("fixed_cross"), buffer("fixed_cross_sq"),
-                   buffer("link_joint"),    buffer("link_turns"),  module_.attr("parents").toIntVector(),
-                   buffer("frame_points"),  buffer("ancestors")};
-  }
 }
 
 torch::Tensor Robot::SphereRadii() const { return module_.attr("sphere_radii").toTensor(); }
@@ -161,50 +162,6 @@ torch::Tensor Robot::Clearance(const torch::Tensor& q, const geometry::SceneRows
   const torch::Tensor q64 = q.to(torch::kFloat64);
   const torch::Tensor centres = SphereCentres(q64);
   return jit::CallFunction("sphere_clearance", {centres, SphereRadii(), scene}).toTensor();
-}
-
-SphereClearance Robot::NearestObstacles(const torch::Tensor& q, const geometry::SceneRows& scene) const {
-  const auto& native = kernels::ArmCollisionKinds();
-  bool all_native = is_arm() && q.dim() == 2 && q.size(1) == num_joints() && q.device().is_cpu() && !q.requires_grad();
-  bool prepared = true;
-  for (const auto& entry : scene) {
-    all_native = all_native && std::find(native.begin(), native.end(), entry.key()) != native.end();
-    prepared = prepared && all_native && entry.value().size(1) == kernels::PreparedShapeColumns(entry.key(), 3);
-  }
-  if (all_native) {
-    const geometry::SceneRows rows = prepared ? scene : geometry::PreparedRows(scene, 3);
-    std::vector<std::string> kinds;
-    std::vector<torch::Tensor> tensors;
-    for (const auto& entry : rows) {
-      kinds.push_back(entry.key());
-      tensors.push_back(entry.value());
-    }
-    auto [clearance, obstacle] = kernels::ArmNearestObstacles(q.to(torch::kFloat64), arm_tables_, SphereRadii(), kinds, tensors);
-    return {clearance, obstacle};
-  }
-  const torch::Tensor centres = SphereCentres(q.to(torch::kFloat64));
-  const auto out = jit::CallFunction("sphere_nearest_obstacle", {centres, SphereRadii(), scene}).toTuple();
-  return {out->elements()[0].toTensor(), out->elements()[1].toTensor()};
-}
-
-torch::Tensor Robot::MotionBound() const {
-  const RobotDescription& d = description_;
-  const int64_t J = d.num_joints, S = d.num_spheres();
-  if (d.kind == RobotKind::kPoint) return torch::ones({J, S}, torch::kFloat64);
-  auto norm = [](const std::array<double, 3>& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); };
-  torch::Tensor bound = torch::zeros({J, S}, torch::kFloat64);
-  for (int64_t s = 0; s < S; ++s) {
-    const RobotSphere& sphere = d.spheres[static_cast<size_t>(s)];
-    // Walking up from the sphere's link: `reach` is the longest the chain from
-    // the current link's origin to the centre can be.
-    double reach = norm(sphere.centre);
-    for (int l = sphere.link; l >= 0; l = d.links[static_cast<size_t>(l)].parent) {
-      const RobotLink& link = d.links[static_cast<size_t>(l)];
-      if (link.joint >= 0) bound[link.joint][s] = reach;  // the hinge's axis passes through this link's origin
-      reach += norm(link.pos);
-    }
-  }
-  return bound;
 }
 
 torch::Tensor Robot::PointClearance(const torch::Tensor& points, const geometry::SceneRows& scene) {

@@ -2,9 +2,11 @@
 
 // A robot's kinematics: a TorchScript module built from a RobotDescription
 // (the class Arm of kinematics/arm.py for a tree of hinge joints, the class
-// Point of kinematics/point.py for a ball or disc), the one implementation
-// that guidance, exported planners, RRT-Connect, the start/goal checks, the
-// reports and the problem generator use. Every method is batched; gradients
+// Point of kinematics/point.py for a ball or disc): the kinematics guidance,
+// exported planners, inverse kinematics and the reports' scores use. (The
+// validity of configurations and motions is collision/checker.h's, on the
+// same description; tests hold the two placements to each other and to
+// MuJoCo.) Every method is batched; gradients
 // flow to q through autograd, and the module also writes out the
 // vector–Jacobian products guidance uses (so that exported planners plan under
 // torch.inference_mode(), where autograd cannot run).
@@ -18,7 +20,6 @@
 #include <string>
 
 #include "geometry/scene_rows.h"
-#include "kernels/arm_collision_kernel.h"
 #include "kinematics/robot_description.h"
 
 namespace flowplan::kinematics {
@@ -43,12 +44,6 @@ struct IkSettings {
   double posture_gain = 0.1;    // pull towards home in the task's null space
   double position_tolerance = kIkPositionTolerance;
   double orientation_tolerance = kIkOrientationTolerance;
-};
-
-/// Each collision sphere's distance to the nearest obstacle of a scene.
-struct SphereClearance {
-  torch::Tensor clearance;  // (M, S) float64: signed distance of the sphere's surface (negative: overlap; +inf: no obstacle)
-  torch::Tensor obstacle;   // (M, S) int64: index of that obstacle in the scene's numbering (-1: no obstacle)
 };
 
 /// Immutable after construction and safe to share between threads.
@@ -82,20 +77,6 @@ class Robot {
   /// (negative: they overlap). float64.
   torch::Tensor Clearance(const torch::Tensor& q, const geometry::SceneRows& scene) const;
 
-  /// Per collision sphere of q (M, J): its clearance from the nearest obstacle of `scene`, and which that is.
-  /// float64. For an arm among shapes the native kernels know, q on the CPU and
-  /// needing no gradient, one native call (kernels::ArmNearestObstacles); else the scripts. `scene` may be prepared
-  /// (geometry::PreparedRows), which spares each call that work.
-  SphereClearance NearestObstacles(const torch::Tensor& q, const geometry::SceneRows& scene) const;
-
-  /// (J, S) float64: a bound, valid at every configuration, on how far collision
-  /// sphere s's centre moves (world units) per unit of joint j: the distance of
-  /// the centre from joint j's axis is at most the summed lengths of the link
-  /// offsets between them (0 where joint j does not move sphere s; 1 for a point
-  /// robot, whose sphere is its position). Along a joint-space segment Δq the
-  /// centre stays within Σ_j bound[j, s] |Δq_j| of where it started.
-  torch::Tensor MotionBound() const;
-
   /// Signed distance (M, K) of points (M, W) to every obstacle of `scene`. float64.
   static torch::Tensor PointClearance(const torch::Tensor& points, const geometry::SceneRows& scene);
 
@@ -108,7 +89,6 @@ class Robot {
  private:
   RobotDescription description_;
   torch::jit::Module module_;
-  kernels::ArmTables arm_tables_;  // an arm's: the module's buffers, for the native kernels
 };
 
 /// The kinematics of `description` (an arm or a point).

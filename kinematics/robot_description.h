@@ -9,8 +9,9 @@
 // source, which tests tie back to MuJoCo.
 //
 // Two kinds of robot:
-//  - kArm: a tree of links turned by hinge joints; the state's first J entries
-//    are the joint angles (rad); the TCP and the spheres ride on links.
+//  - kArm: a tree of links moved by revolute and prismatic joints; the state's
+//    first J entries are the joint values (rad or m); the TCP and the spheres
+//    ride on links.
 //  - kPoint: a ball (or disc, W = 2) of radius `point_radius` whose centre is the
 //    state's first J = W entries (m); its TCP is that centre.
 
@@ -30,16 +31,31 @@ inline const config::EnumNames<RobotKind>& EnumEntries(RobotKind) {
   return names;
 }
 
+/// How a link moves in its parent: turning about its axis (rad) or sliding along it (m).
+enum class JointType { kRevolute, kPrismatic };
+
+inline const config::EnumNames<JointType>& EnumEntries(JointType) {
+  static const config::EnumNames<JointType> names = {{JointType::kRevolute, "revolute"},
+                                                     {JointType::kPrismatic, "prismatic"}};
+  return names;
+}
+
 /// One rigid body of the tree. Its pose in the world is
-///   X_link = X_parent · Trans(pos) · Rot(quat) · Rot(axis, q[joint]),
-/// with q[joint] omitted for a welded link (joint == -1).
+///   X_link = X_parent · Trans(pos) · Rot(quat) · Motion(axis, v),
+/// where Motion turns about the axis through the link origin by v (revolute)
+/// or slides along it by v (prismatic), and v is q[joint] for a planned joint
+/// and `offset` for a link that is not planned (joint == -1): welded where
+/// offset is 0, held at a value otherwise (a gripper's fingers held open).
 struct RobotLink {
   std::string name;
   int parent = -1;                                 // index into RobotDescription::links; -1: world
   std::array<double, 3> pos{0.0, 0.0, 0.0};        // m, origin in the parent frame at q = 0
   std::array<double, 4> quat{1.0, 0.0, 0.0, 0.0};  // (w, x, y, z), orientation in the parent frame
-  int joint = -1;                                  // index into q of the hinge turning this link; -1: welded
-  std::array<double, 3> axis{0.0, 0.0, 1.0};       // hinge axis through the link origin, link frame
+  int joint = -1;                                  // index into q of the joint moving this link; -1: not planned
+  std::array<double, 3> axis{0.0, 0.0, 1.0};       // joint axis through the link origin, link frame
+  JointType type = JointType::kRevolute;           // how the joint moves the link
+  double offset = 0.0;                             // joint == -1: the value the link is held at (rad or m)
+  std::string joint_name;                          // the joint's name in the robot's files (MoveIt, URDF); may be empty
 
   template <class V>
   void Visit(V& v) {
@@ -47,9 +63,15 @@ struct RobotLink {
     v.Field("parent", parent, "index of the parent link, -1 for the world", config::AtLeast(-1));
     v.Field("pos", pos, "origin in the parent frame at q = 0 (m)");
     v.Field("quat", quat, "orientation in the parent frame (w, x, y, z)");
-    v.Field("joint", joint, "index of the hinge joint turning the link, -1 if welded", config::AtLeast(-1));
-    v.Field("axis", axis, "hinge axis in the link frame");
+    v.Field("joint", joint, "index of the planned joint moving the link, -1 if not planned", config::AtLeast(-1));
+    v.Field("axis", axis, "joint axis in the link frame");
+    v.Field("type", type, "how the joint moves the link");
+    v.Field("offset", offset, "a link that is not planned: the joint value it is held at (0: welded)");
+    v.Field("joint_name", joint_name, "the joint's name in the robot's own files");
   }
+
+  /// Whether the link moves against its parent at all (planned, or held away from 0).
+  bool moves() const { return joint >= 0 || offset != 0.0; }
 };
 
 /// A collision sphere fixed to one link of an arm.
@@ -85,6 +107,9 @@ struct RobotDescription {
   std::array<double, 4> tcp_quat{1.0, 0.0, 0.0, 0.0};  // (w, x, y, z), TCP orientation there
   std::vector<RobotSphere> spheres;       // (S,), arm only
   double point_radius = 0.0;              // point only: radius of the ball or disc (m)
+  bool self_collision = false;            // arm: whether spheres of different links may not overlap
+  std::vector<std::array<std::string, 2>> self_collision_ignore;  // arm: link pairs never checked against each other
+  std::vector<std::string> floor_exempt;  // arm: links not checked against a floor (they stand on it)
 
   template <class V>
   void Visit(V& v) {
@@ -103,6 +128,10 @@ struct RobotDescription {
     v.Field("tcp_quat", tcp_quat, "arm: TCP orientation in its link frame (w, x, y, z)");
     v.Field("spheres", spheres, "arm: collision spheres");
     v.Field("point_radius", point_radius, "point: radius of the ball or disc (m)", config::NonNegative());
+    v.Field("self_collision", self_collision, "arm: spheres of different links must not overlap");
+    v.Field("self_collision_ignore", self_collision_ignore,
+            "arm: pairs of link names never checked against each other (neighbours, and pairs that touch anyway)");
+    v.Field("floor_exempt", floor_exempt, "arm: links not checked against a floor (the base that stands on it)");
   }
 
   /// Number of collision spheres S (1 for a point robot).
@@ -111,12 +140,75 @@ struct RobotDescription {
   /// Index of the link called `name`, or -1.
   int FindLink(const std::string& name) const;
 
+  /// Index of the planned joint called `name` (RobotLink::joint_name), or -1.
+  int FindJoint(const std::string& name) const;
+
+  /// The name of planned joint j: its link's joint_name, or "joint j+1" when it has none.
+  std::string JointName(int j) const;
+
   /// @throws flowplan::Error, prefixed by `where`, if the description is
   ///   inconsistent: a parent after its child, a joint index outside [0, J) or
   ///   used twice, a sphere or the TCP on no link, limits of the wrong size, a
   ///   point robot whose J is not W.
   void Validate(const std::string& where) const;
 };
+
+/// The pose in its parent of a link that is not planned (joint == -1), with
+/// the motion it is held at folded in: Trans(pos) · Rot(quat) · Motion(axis,
+/// offset) as a position and a (w, x, y, z) quaternion. A planned link's pos and quat.
+void FixedPose(const RobotLink& link, std::array<double, 3>& pos, std::array<double, 4>& quat);
+
+/// A collision sphere of a robot file, on a link named by its name.
+struct NamedSphere {
+  std::string link;
+  std::array<double, 3> centre{0.0, 0.0, 0.0};  // m, in the link frame
+  double radius = 0.0;                          // m
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("link", link, "name of the link carrying the sphere");
+    v.Field("centre", centre, "centre in the link frame (m)");
+    v.Field("radius", radius, "radius (m)", config::Positive());
+  }
+};
+
+/// A link pair never checked against each other, and why (adjacent, default,
+/// always, never: collision/self_pairs.h; or by hand).
+struct IgnoredLinkPair {
+  std::array<std::string, 2> links;
+  std::string reason;
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("links", links, "the two links' names");
+    v.Field("reason", reason, "why they are not checked");
+  }
+};
+
+/// A robot's collision body as a file gives it, by link names: what a robot
+/// folder's robot.yaml holds under `collision` (hand-editable; docs/robots.md).
+struct CollisionBody {
+  std::vector<NamedSphere> spheres;
+  bool self_collision = true;
+  std::vector<IgnoredLinkPair> self_collision_ignore;
+  std::vector<std::string> floor_exempt;
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("spheres", spheres, "collision spheres: [{link, centre, radius}]");
+    v.Field("self_collision", self_collision, "spheres of different links must not overlap");
+    v.Field("self_collision_ignore", self_collision_ignore, "link pairs never checked: [{links: [a, b], reason}]");
+    v.Field("floor_exempt", floor_exempt, "links not checked against a floor");
+  }
+};
+
+/// Replaces the spheres, self-collision settings and floor exemptions of
+/// `robot` by those of `body`. `source` names the file in errors.
+/// @throws flowplan::Error naming a link the robot does not have.
+void ApplyCollisionBody(const CollisionBody& body, RobotDescription& robot, const std::string& source);
+
+/// The collision body of `robot`, by link names.
+CollisionBody CollisionBodyOf(const RobotDescription& robot);
 
 /// The description as YAML text (reads back to the same values, bit for bit).
 std::string RobotToYaml(const RobotDescription& robot);

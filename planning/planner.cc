@@ -44,8 +44,13 @@ PlanResult PlanInChunks(const Planner& planner, const PlanRequest& request, int 
     result.call_seconds.insert(result.call_seconds.end(), part.call_seconds.begin(), part.call_seconds.end());
     result.call_plans.insert(result.call_plans.end(), part.call_plans.begin(), part.call_plans.end());
     result.route.insert(result.route.end(), part.route.begin(), part.route.end());
+    result.refused.insert(result.refused.end(), part.refused.begin(), part.refused.end());
+    result.failure.insert(result.failure.end(), part.failure.begin(), part.failure.end());
   }
-  if (result.route.size() != static_cast<size_t>(N)) result.route.clear();  // every part says it, or none
+  // Every part says it, or none.
+  if (result.route.size() != static_cast<size_t>(N)) result.route.clear();
+  if (result.refused.size() != static_cast<size_t>(N)) result.refused.clear();
+  if (result.failure.size() != static_cast<size_t>(N)) result.failure.clear();
   result.plans = chunks > 0 ? torch::cat(plans, 0) : torch::empty({0, planner.horizon(), planner.state_dim()});
   result.found = chunks > 0 ? torch::cat(found, 0) : torch::empty({0}, torch::kBool);
   return result;

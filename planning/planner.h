@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "collision/world.h"
 #include "geometry/scene_rows.h"
 
 namespace flowplan::planning {
@@ -37,6 +38,8 @@ struct PlanRequest {
   geometry::SceneRows scene;    // the obstacles; empty: free space
   uint64_t seed = 0;            // every random draw of the call derives from it
   PlanSettings settings;        // this call's settings (default: the planner's)
+  collision::WorldOptions world;  // the floor and held joints, when the request sets them (checks and RRT-Connect
+                                 // heed them; guidance does not)
 };
 
 struct PlanResult {
@@ -51,6 +54,10 @@ struct PlanResult {
   /// hybrid: "proposal 3 of 8", "proposal 1 of 1 unguided retimed", "rrt_connect"; RRT-Connect seeded by guides:
   /// "seeded", "unseeded"); empty otherwise.
   std::vector<std::string> route;
+  /// (B) whether plan b was refused (its start or goal cannot be planned from or to), and why a plan was not
+  /// found ("" when found); empty for planners that always find one.
+  std::vector<bool> refused;
+  std::vector<std::string> failure;
 };
 
 class Planner {

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "collision/body_model.h"
 #include "core/error.h"
 #include "core/random.h"
 
@@ -72,6 +73,7 @@ std::vector<double> RandomQuaternion(Rng& rng) {
 ProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProblemsConfig& config, uint64_t seed) {
   CheckConfig(config);
   if (!arm.is_arm() || arm.workspace_dim() != 3) throw Error("blocked problems: expected an arm in a 3-D workspace");
+  const collision::BodyModel body(arm.description(), "blocked problems: robot");
   ProblemSet set;
   set.seed = static_cast<int64_t>(seed);
   set.source = "blocked: " + config::ToYaml(config);  // how they were drawn
@@ -136,7 +138,8 @@ ProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProble
         problem.goal_q.push_back(ik.q[1][j].item<double>());
       }
       const Point start_tcp = problem.start_tcp, goal_tcp = problem.goal_tcp;  // the drawn points
-      DescribeEnds(arm, problem);  // the clearances (and the TCPs of the IK, within its tolerance)
+      problem.floor_height = 0.0;  // the arm stands on the floor
+      DescribeEnds(body, problem);  // the clearances (and the TCPs of the IK, within its tolerance)
       problem.start_tcp = start_tcp;
       problem.goal_tcp = goal_tcp;
       set.problems.push_back(std::move(problem));

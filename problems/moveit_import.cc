@@ -6,11 +6,14 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <memory>
 #include <regex>
 
+#include "collision/checker.h"
 #include "core/error.h"
 #include "geometry/scene_rows.h"
 
@@ -127,42 +130,56 @@ class Reader {
   std::string path_;
 };
 
-/// A robot state's virtual joint (multi_dof_joint_state: joint_names, transforms of translation and rotation)
-/// must be the identity: the world frame is taken to be the robot's base frame, so a robot placed elsewhere in
-/// the world would see every obstacle misplaced. An absent state, transform or part is the identity; so is an
-/// all-zero rotation (an unset ROS quaternion).
-void CheckVirtualJoint(const Reader& r, const YAML::Node& state, const std::string& entry) {
-  if (!state.IsDefined() || !state.IsMap()) return;
+/// The pose of the robot's base in the world from a robot state's virtual joint (multi_dof_joint_state:
+/// joint_names, transforms of translation and rotation); the identity when there is none. An absent transform or
+/// part is the identity; so is an all-zero rotation (an unset ROS quaternion). Only the first transform is the
+/// base's (MoveIt's one virtual joint).
+Pose ReadVirtualJoint(const Reader& r, const YAML::Node& state, const std::string& entry) {
+  Pose base;
+  if (!state.IsDefined() || !state.IsMap()) return base;
   const YAML::Node multi = state["multi_dof_joint_state"];
-  if (!multi.IsDefined() || multi.IsNull()) return;
+  if (!multi.IsDefined() || multi.IsNull()) return base;
   if (!multi.IsMap()) r.Fail(entry, "expected a mapping with joint_names and transforms");
   const YAML::Node transforms = multi["transforms"];
-  if (!transforms.IsDefined() || transforms.IsNull()) return;
+  if (!transforms.IsDefined() || transforms.IsNull()) return base;
   if (!transforms.IsSequence()) r.Fail(entry + ".transforms", "expected a list of transforms");
-  const YAML::Node names = multi["joint_names"];
-  for (size_t i = 0; i < transforms.size(); ++i) {
-    std::string where = entry + ".transforms[" + std::to_string(i) + "]";
-    if (names.IsDefined() && names.IsSequence() && i < names.size() && names[i].IsScalar()) {
-      where += " (" + names[i].as<std::string>() + ")";
-    }
-    const YAML::Node t = transforms[i];
-    if (!t.IsMap()) r.Fail(where, "expected a mapping with translation and rotation");
-    std::vector<double> translation = {0, 0, 0}, rotation = {0, 0, 0, 1};
-    if (t["translation"]) translation = r.Components(t["translation"], where + ".translation", {"x", "y", "z"});
-    if (t["rotation"]) rotation = r.Components(t["rotation"], where + ".rotation", {"x", "y", "z", "w"});
-    const bool unset = rotation[0] == 0 && rotation[1] == 0 && rotation[2] == 0 && rotation[3] == 0;
-    const bool turned = !unset && (std::abs(rotation[0]) > 1e-9 || std::abs(rotation[1]) > 1e-9 ||
-                                   std::abs(rotation[2]) > 1e-9 || std::abs(std::abs(rotation[3]) - 1.0) > 1e-9);
-    const bool moved = std::abs(translation[0]) > 1e-9 || std::abs(translation[1]) > 1e-9 || std::abs(translation[2]) > 1e-9;
-    if (moved || turned) {
-      r.Fail(where, "the robot is placed away from the world's origin (translation " +
-                        config::internal::FormatDouble(translation[0]) + ", " +
-                        config::internal::FormatDouble(translation[1]) + ", " +
-                        config::internal::FormatDouble(translation[2]) +
-                        "); the importer takes the world frame as the robot's base frame and does not move the "
-                        "obstacles: give the objects in the base frame");
-    }
+  if (transforms.size() == 0) return base;
+  if (transforms.size() > 1) {
+    r.Fail(entry + ".transforms", "expected one transform (the virtual joint), got " + std::to_string(transforms.size()));
   }
+  const YAML::Node names = multi["joint_names"];
+  std::string where = entry + ".transforms[0]";
+  if (names.IsDefined() && names.IsSequence() && names.size() > 0 && names[0].IsScalar()) {
+    where += " (" + names[0].as<std::string>() + ")";
+  }
+  const YAML::Node t = transforms[0];
+  if (!t.IsMap()) r.Fail(where, "expected a mapping with translation and rotation");
+  if (t["translation"]) {
+    const std::vector<double> p = r.Components(t["translation"], where + ".translation", {"x", "y", "z"});
+    base.position = {p[0], p[1], p[2]};
+  }
+  if (t["rotation"]) {
+    const std::vector<double> q = r.Components(t["rotation"], where + ".rotation", {"x", "y", "z", "w"});
+    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (norm >= 1e-9) base.orientation = {q[3] / norm, q[0] / norm, q[1] / norm, q[2] / norm};
+  }
+  return base;
+}
+
+/// The inverse of a rigid transform.
+Pose Inverse(const Pose& pose) {
+  Pose out;
+  out.orientation = {pose.orientation[0], -pose.orientation[1], -pose.orientation[2], -pose.orientation[3]};
+  const Vec3 back = Rotate(out.orientation, pose.position);
+  out.position = {-back[0], -back[1], -back[2]};
+  return out;
+}
+
+bool IsIdentity(const Pose& pose) {
+  const auto& p = pose.position;
+  const auto& q = pose.orientation;
+  return std::abs(p[0]) < 1e-12 && std::abs(p[1]) < 1e-12 && std::abs(p[2]) < 1e-12 && std::abs(q[1]) < 1e-12 &&
+         std::abs(q[2]) < 1e-12 && std::abs(q[3]) < 1e-12;
 }
 
 YAML::Node Load(const std::string& path) {
@@ -228,19 +245,6 @@ YAML::Node RequestNode(const Reader& r, const YAML::Node& root, std::string& pre
   return root;
 }
 
-void CheckLimits(const kinematics::Robot& arm, const std::vector<double>& q, const std::string& path,
-                 const std::string& what, const MoveItImportOptions& options) {
-  const auto& d = arm.description();
-  constexpr double kSlack = 1e-6;  // rad: limits written with fewer digits
-  for (size_t j = 0; j < q.size(); ++j) {
-    if (q[j] < d.joint_lower[j] - kSlack || q[j] > d.joint_upper[j] + kSlack) {
-      throw Error(path + ": " + what + ": " + options.joint_names[j][0] + " = " + config::internal::FormatDouble(q[j]) +
-                  " is outside the joint limits [" + config::internal::FormatDouble(d.joint_lower[j]) + ", " +
-                  config::internal::FormatDouble(d.joint_upper[j]) + "]");
-    }
-  }
-}
-
 }  // namespace
 
 std::vector<std::vector<std::string>> FrankaJointNames() {
@@ -261,10 +265,48 @@ auto Guarded(const std::string& path, F read) {
   }
 }
 
-NamedScene ReadScene(const std::string& path, const MoveItImportOptions& options) {
+/// The fixed frames of a scene (fixed_frame_transforms: [{child_frame_id, transform}]), each a pose in the world.
+std::map<std::string, Pose> ReadFixedFrames(const Reader& r, const YAML::Node& root) {
+  std::map<std::string, Pose> frames;
+  const YAML::Node list = root["fixed_frame_transforms"];
+  if (!list.IsDefined() || list.IsNull()) return frames;
+  if (!list.IsSequence()) r.Fail("fixed_frame_transforms", "expected a list of transforms");
+  for (size_t i = 0; i < list.size(); ++i) {
+    const std::string entry = "fixed_frame_transforms[" + std::to_string(i) + "]";
+    const YAML::Node item = list[i];
+    if (!item.IsMap()) r.Fail(entry, "expected a mapping with child_frame_id and transform");
+    const std::string child = r.Text(item["child_frame_id"], entry + ".child_frame_id");
+    Pose pose;
+    const YAML::Node t = item["transform"];
+    if (t.IsDefined() && !t.IsNull()) {
+      if (!t.IsMap()) r.Fail(entry + ".transform", "expected a mapping with translation and rotation");
+      if (t["translation"]) {
+        const std::vector<double> p = r.Components(t["translation"], entry + ".transform.translation", {"x", "y", "z"});
+        pose.position = {p[0], p[1], p[2]};
+      }
+      if (t["rotation"]) {
+        const std::vector<double> q = r.Components(t["rotation"], entry + ".transform.rotation", {"x", "y", "z", "w"});
+        const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        if (norm >= 1e-9) pose.orientation = {q[3] / norm, q[0] / norm, q[1] / norm, q[2] / norm};
+      }
+    }
+    frames[child] = pose;
+  }
+  return frames;
+}
+
+/// The scene's obstacles in the robot's base frame, the base standing at `base_given` in the world (nullptr:
+/// where the scene's own robot_state's virtual joint puts it); `base_out` receives that pose.
+NamedScene ReadScene(const std::string& path, const MoveItImportOptions& options, const Pose* base_given,
+                     Pose* base_out) {
   const YAML::Node root = Load(path);
   const Reader r(path);
-  CheckVirtualJoint(r, root["robot_state"], "robot_state.multi_dof_joint_state");
+  const Pose base = base_given != nullptr
+                        ? *base_given
+                        : ReadVirtualJoint(r, root["robot_state"], "robot_state.multi_dof_joint_state");
+  if (base_out != nullptr) *base_out = base;
+  const Pose base_from_world = Inverse(base);
+  const std::map<std::string, Pose> fixed = ReadFixedFrames(r, root);
   const YAML::Node world = root["world"];
   if (!world.IsDefined()) r.Fail("world", "missing (not a MoveIt planning scene?)");
   if (!world.IsMap()) r.Fail("world", "expected a mapping, got " + config::internal::Describe(world));
@@ -288,12 +330,28 @@ NamedScene ReadScene(const std::string& path, const MoveItImportOptions& options
                                                                     config::internal::Describe(object["header"]));
       if (object["header"]["frame_id"]) frame = r.Text(object["header"]["frame_id"], entry + ".header.frame_id");
     }
+    // Where the frame stands in the base frame: the base itself, the world, or a fixed frame in the world.
+    Pose frame_pose;
     bool known = false;
-    for (const std::string& base : options.base_frames) known = known || frame == base;
+    for (const std::string& name : options.base_frames) known = known || frame == name;
+    if (!known) {
+      for (const std::string& name : options.world_frames) known = known || frame == name;
+      const auto it = fixed.find(frame);
+      if (!known && it != fixed.end()) {
+        frame_pose = Compose(base_from_world, it->second);
+        known = true;
+      } else if (known) {
+        frame_pose = base_from_world;
+      }
+    }
     if (!known) {
       std::string list;
-      for (const std::string& base : options.base_frames) list += (list.empty() ? "" : ", ") + ("\"" + base + "\"");
-      r.Fail(entry + ".header.frame_id", "\"" + frame + "\" is not the robot's base frame (" + list + ")");
+      for (const auto* names : {&options.base_frames, &options.world_frames}) {
+        for (const std::string& name : *names) list += (list.empty() ? "" : ", ") + ("\"" + name + "\"");
+      }
+      for (const auto& entry_frame : fixed) list += ", \"" + entry_frame.first + "\"";
+      r.Fail(entry + ".header.frame_id", "\"" + frame + "\" is neither the robot's base, the world nor a fixed frame (" +
+                                             list + ")");
     }
     for (const char* unsupported : {"meshes", "planes"}) {
       const YAML::Node n = object[unsupported];
@@ -308,7 +366,8 @@ NamedScene ReadScene(const std::string& path, const MoveItImportOptions& options
         r.Fail(entry + ".operation", "\"" + op + "\": only added objects can be imported (ADD 0, APPEND 2)");
       }
     }
-    const Pose object_pose = object["pose"] ? r.ReadPose(object["pose"], entry + ".pose") : Pose{};
+    const Pose object_pose =
+        Compose(frame_pose, object["pose"] ? r.ReadPose(object["pose"], entry + ".pose") : Pose{});
     const YAML::Node primitives = object["primitives"];
     const YAML::Node poses = object["primitive_poses"];
     if (!primitives.IsDefined() || !primitives.IsSequence() || primitives.size() == 0) {
@@ -356,8 +415,31 @@ NamedScene ReadScene(const std::string& path, const MoveItImportOptions& options
   return out;
 }
 
-void ReadRequest(const std::string& request_path, const std::string& scene_path, const MoveItImportOptions& options,
-                 std::vector<double>& start_q, std::vector<double>& goal_q) {
+/// What a request says of the robot: start and goal (J), the joints it holds (by name), where its base stands.
+struct RequestRead {
+  std::vector<double> start_q, goal_q;
+  std::map<std::string, double> held;
+  bool base_given = false;  // the request's start_state places the base (a virtual joint)
+  Pose base;
+};
+
+/// The values a JointState {name, position} gives to `held_names` (joints the robot holds), by name.
+void HeldPositions(const Reader& r, const YAML::Node& state, const std::string& entry,
+                   const std::vector<std::string>& held_names, std::map<std::string, double>& held) {
+  const YAML::Node names = state["name"];
+  const YAML::Node positions = state["position"];
+  if (!names.IsDefined() || !names.IsSequence() || !positions.IsDefined() || !positions.IsSequence()) return;
+  for (size_t i = 0; i < names.size() && i < positions.size(); ++i) {
+    const std::string name = r.Text(names[i], entry + ".name[" + std::to_string(i) + "]");
+    for (const std::string& h : held_names) {
+      if (name == h) held[h] = r.Number(positions[i], entry + ".position[" + std::to_string(i) + "]");
+    }
+  }
+}
+
+RequestRead ReadRequest(const std::string& request_path, const std::string& scene_path,
+                        const MoveItImportOptions& options) {
+  RequestRead out;
   const YAML::Node root = Load(request_path);
   const Reader r(request_path);
   std::string prefix;
@@ -367,22 +449,32 @@ void ReadRequest(const std::string& request_path, const std::string& scene_path,
   if (start.IsDefined() && !start.IsMap()) {
     r.Fail(prefix + "start_state", "expected a mapping with joint_state, got " + config::internal::Describe(start));
   }
-  CheckVirtualJoint(r, start, prefix + "start_state.multi_dof_joint_state");
+  if (start.IsDefined() && start["multi_dof_joint_state"] && start["multi_dof_joint_state"]["transforms"] &&
+      start["multi_dof_joint_state"]["transforms"].IsSequence() &&
+      start["multi_dof_joint_state"]["transforms"].size() > 0) {
+    out.base = ReadVirtualJoint(r, start, prefix + "start_state.multi_dof_joint_state");
+    out.base_given = true;
+  }
   if (start.IsDefined() && start["joint_state"] && !start["joint_state"].IsMap()) {
     r.Fail(prefix + "start_state.joint_state",
            "expected a mapping with name and position, got " + config::internal::Describe(start["joint_state"]));
   }
+  // The scene's robot state first (MoveIt's start state is a change of it), then the request's own.
+  const YAML::Node scene = Load(scene_path);
+  const Reader s(scene_path);
+  const YAML::Node scene_state = scene["robot_state"];
+  const bool scene_has_state = scene_state.IsDefined() && scene_state.IsMap() && scene_state["joint_state"] &&
+                               scene_state["joint_state"].IsMap();
+  if (scene_has_state) HeldPositions(s, scene_state["joint_state"], "robot_state.joint_state", options.held_names, out.held);
   if (start.IsDefined() && start["joint_state"] && start["joint_state"]["name"] &&
       start["joint_state"]["name"].IsSequence() && start["joint_state"]["name"].size() > 0) {
-    start_q = JointPositions(r, start["joint_state"], prefix + "start_state.joint_state", options);
+    out.start_q = JointPositions(r, start["joint_state"], prefix + "start_state.joint_state", options);
+    HeldPositions(r, start["joint_state"], prefix + "start_state.joint_state", options.held_names, out.held);
   } else {
-    const YAML::Node scene = Load(scene_path);
-    const Reader s(scene_path);
-    const YAML::Node state = scene["robot_state"];
-    if (!state.IsDefined() || !state.IsMap() || !state["joint_state"]) {
+    if (!scene_has_state) {
       r.Fail(prefix + "start_state", "missing, and " + scene_path + " has no robot_state.joint_state either");
     }
-    start_q = JointPositions(s, state["joint_state"], "robot_state.joint_state", options);
+    out.start_q = JointPositions(s, scene_state["joint_state"], "robot_state.joint_state", options);
   }
 
   const YAML::Node goals = request["goal_constraints"];
@@ -393,7 +485,7 @@ void ReadRequest(const std::string& request_path, const std::string& scene_path,
   if (!joints.IsDefined() || !joints.IsSequence() || joints.size() == 0) {
     r.Fail(entry + "[0].joint_constraints", "missing: only joint-space goals are imported");
   }
-  goal_q.assign(options.joint_names.size(), NAN);
+  out.goal_q.assign(options.joint_names.size(), NAN);
   for (size_t i = 0; i < joints.size(); ++i) {
     const std::string where = entry + "[0].joint_constraints[" + std::to_string(i) + "]";
     if (!joints[i].IsMap()) r.Fail(where, "expected a mapping with joint_name and position");
@@ -401,55 +493,95 @@ void ReadRequest(const std::string& request_path, const std::string& scene_path,
     const double position = r.Number(joints[i]["position"], where + ".position");
     for (size_t j = 0; j < options.joint_names.size(); ++j) {
       for (const std::string& accepted : options.joint_names[j]) {
-        if (name == accepted) goal_q[j] = position;
+        if (name == accepted) out.goal_q[j] = position;
       }
     }
   }
-  for (size_t j = 0; j < goal_q.size(); ++j) {
-    if (std::isnan(goal_q[j])) r.Fail(entry + "[0].joint_constraints", "no constraint on " + options.joint_names[j][0]);
+  for (size_t j = 0; j < out.goal_q.size(); ++j) {
+    if (std::isnan(out.goal_q[j])) r.Fail(entry + "[0].joint_constraints", "no constraint on " + options.joint_names[j][0]);
   }
+  return out;
+}
+
+/// A number in a note or a reason: 7 significant digits.
+std::string Num7(double v) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.7g", v);
+  return text;
+}
+
+/// Joint values past a limit by at most options.limit_tolerance are moved onto it, with a note each; the first
+/// one past it by more gives the refusal. Compared in float64.
+std::string Limits(const kinematics::RobotDescription& robot, std::vector<double>& q, const std::string& what,
+                   const MoveItImportOptions& options, std::vector<std::string>& notes) {
+  for (size_t j = 0; j < q.size(); ++j) {
+    const double lower = robot.joint_lower[j], upper = robot.joint_upper[j];
+    if (q[j] >= lower && q[j] <= upper) continue;
+    const bool low = q[j] < lower;
+    const double past = low ? lower - q[j] : q[j] - upper;
+    const std::string text = what + ": " + options.joint_names[j][0] + " = " + Num7(q[j]) + " is " + Num7(past) +
+                             " past its " + (low ? "lower" : "upper") + " limit " + Num7(low ? lower : upper);
+    if (past > options.limit_tolerance) return text + " (more than the tolerance " + Num7(options.limit_tolerance) + ")";
+    notes.push_back(text + "; moved onto the limit");
+    q[j] = low ? lower : upper;
+  }
+  return "";
 }
 
 }  // namespace
 
 NamedScene ReadMoveItScene(const std::string& path, const MoveItImportOptions& options) {
-  return Guarded(path, [&] { return ReadScene(path, options); });
+  return Guarded(path, [&] { return ReadScene(path, options, nullptr, nullptr); });
 }
 
 void ReadMoveItRequest(const std::string& request_path, const std::string& scene_path,
                        const MoveItImportOptions& options, std::vector<double>& start_q,
                        std::vector<double>& goal_q) {
-  Guarded(request_path, [&] {
-    ReadRequest(request_path, scene_path, options, start_q, goal_q);
-    return 0;
-  });
+  const RequestRead read = Guarded(request_path, [&] { return ReadRequest(request_path, scene_path, options); });
+  start_q = read.start_q;
+  goal_q = read.goal_q;
 }
 
-Problem ImportMoveItProblem(const kinematics::Robot& arm, const std::string& scene_path,
+Problem ImportMoveItProblem(const collision::BodyModel& body, const std::string& scene_path,
                             const std::string& request_path, const std::string& name,
                             const MoveItImportOptions& options) {
-  if (static_cast<int64_t>(options.joint_names.size()) != arm.num_joints()) {
+  const kinematics::RobotDescription& robot = body.description();
+  if (static_cast<int>(options.joint_names.size()) != body.num_joints()) {
     throw InternalError("MoveIt import: " + std::to_string(options.joint_names.size()) + " joint names for " +
-                        std::to_string(arm.num_joints()) + " joints");
+                        std::to_string(body.num_joints()) + " joints");
   }
-  NamedScene read = ReadMoveItScene(scene_path, options);
+  const RequestRead request = Guarded(request_path, [&] { return ReadRequest(request_path, scene_path, options); });
+  Pose base;
+  NamedScene read = Guarded(scene_path, [&] {
+    return ReadScene(scene_path, options, request.base_given ? &request.base : nullptr, &base);
+  });
   Problem problem;
   problem.name = name;
-  ReadMoveItRequest(request_path, scene_path, options, problem.start_q, problem.goal_q);
-  CheckLimits(arm, problem.start_q, request_path, "start", options);
-  CheckLimits(arm, problem.goal_q, request_path, "goal", options);
+  problem.start_q = request.start_q;
+  problem.goal_q = request.goal_q;
+  problem.floor_height = options.floor_height;
+  for (const auto& [joint, value] : request.held) problem.held.push_back({joint, value});
+  if (!IsIdentity(base)) {
+    problem.base_pose = {base.position[0], base.position[1], base.position[2], base.orientation[0],
+                         base.orientation[1], base.orientation[2], base.orientation[3]};
+  }
+  std::string refusal = Limits(robot, problem.start_q, "start", options, problem.notes);
+  if (refusal.empty()) refusal = Limits(robot, problem.goal_q, "goal", options, problem.notes);
 
+  // The body as this problem holds it (a gripper's fingers open).
+  const auto held = std::make_shared<const collision::BodyModel>(collision::WithHeld(robot, problem.World().held),
+                                                                 request_path);
   // The grasped object: every obstacle the goal's TCP lies in or touches.
   if (options.grasp == GraspRule::kTouchingTcp && read.scene.size() > 0) {
-    const torch::Tensor goal_tcp = arm.Tcp(torch::tensor(problem.goal_q, torch::kFloat64).view({1, -1}));  // (1, W)
-    const torch::Tensor distance =
-        kinematics::Robot::PointClearance(goal_tcp, geometry::Rows(read.scene, 3, scene_path))[0];  // (K,)
+    double tcp[3];
+    held->Tcp(problem.goal_q.data(), tcp);
+    const collision::World world(read.scene, 3, {}, read.names, scene_path);
     geometry::Scene kept;
     std::vector<std::string> kept_names;
-    int64_t k = 0;
+    int k = 0;
     auto keep = [&](auto& from, auto& to) {
       for (const auto& obstacle : from) {
-        if (distance[k].item<double>() <= options.grasp_margin) {
+        if (world.Distance(k, tcp) <= options.grasp_margin) {
           problem.left_out.push_back(read.names[static_cast<size_t>(k)]);
         } else {
           to.push_back(obstacle);
@@ -467,7 +599,28 @@ Problem ImportMoveItProblem(const kinematics::Robot& arm, const std::string& sce
   }
   problem.scene = std::move(read.scene);
   problem.obstacle_names = std::move(read.names);
-  DescribeEnds(arm, problem);
+  DescribeEnds(*held, problem);
+  if (refusal.empty()) {
+    // A start or goal that is not valid (in an obstacle, in itself, below a floor) cannot begin or end a plan.
+    collision::Floor floor;
+    floor.present = std::isfinite(problem.floor_height);
+    floor.height = floor.present ? problem.floor_height : 0.0;
+    const collision::Checker checker(
+        held, std::make_shared<const collision::World>(problem.scene, 3, floor, problem.obstacle_names, scene_path),
+        {options.margin, 0.001});
+    for (const auto& [what, q] : {std::pair<const char*, const std::vector<double>*>{"start", &problem.start_q},
+                                  std::pair<const char*, const std::vector<double>*>{"goal", &problem.goal_q}}) {
+      const collision::Contact contact = checker.FirstContact(q->data());
+      if (contact.found()) {
+        refusal = std::string(what) + ": " + checker.Describe(contact);
+        break;
+      }
+    }
+  }
+  if (!refusal.empty()) {
+    problem.status = "refused";
+    problem.reason = refusal;
+  }
   return problem;
 }
 

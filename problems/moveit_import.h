@@ -27,19 +27,30 @@
 //     - joint_constraints:
 //         - {joint_name: panda_joint1, position: 0.1, tolerance_above: 0.001, tolerance_below: 0.001}
 //
-// Joints are matched by name; names the robot does not have (the fingers) are
-// ignored. The world frame is taken to be the robot's base frame: a virtual
-// joint (multi_dof_joint_state, in the scene's robot_state or the request's
-// start_state) must be the identity, as in MotionBenchMaker's Panda sets;
-// any other transform is an error naming it. An all-zero
-// orientation (an unset ROS pose) is the identity, as in MoveIt. Only the first goal constraint is read, and only its joint
-// constraints. Without a start_state the scene's robot_state is the start.
+// Joints are matched by name; names the robot does not have are ignored, and
+// joints the robot holds still (a gripper's fingers) take the start state's
+// values for the problem (Problem::held). The robot's base stands where the
+// virtual joint puts it (multi_dof_joint_state of the request's start_state,
+// else of the scene's robot_state; the identity without one): every obstacle
+// is moved into the base frame, and the base's pose in the world is kept
+// (Problem::base_pose). An object's frame is the robot's base, the world
+// (world_frames), or one of the scene's fixed_frame_transforms. An all-zero
+// orientation (an unset ROS pose) is the identity, as in MoveIt. Only the
+// first goal constraint is read, and only its joint constraints. Without a
+// start_state the scene's robot_state is the start.
+//
+// A problem that cannot be planned is still imported, with status "refused"
+// and the reason: a start or goal past a joint limit by more than
+// limit_tolerance (compared in float64), or not valid by flowplan's
+// validity check (collision/checker.h: the robot's spheres in an obstacle, in
+// itself, or below a floor). A value past a limit by no more than the
+// tolerance is moved onto the limit, and a note says so.
 
 #include <string>
 #include <vector>
 
 #include "geometry/scene.h"
-#include "kinematics/robot.h"
+#include "collision/body_model.h"
 #include "problems/problem.h"
 
 namespace flowplan::problems {
@@ -64,12 +75,19 @@ inline const config::EnumNames<GraspRule>& EnumEntries(GraspRule) {
 }
 
 struct MoveItImportOptions {
-  /// Frames taken as the robot's base frame; an object in any other is an error.
-  std::vector<std::string> base_frames = {"panda_link0", "world", "/world", "base_link", ""};
+  /// Frames that are the robot's base (its root link).
+  std::vector<std::string> base_frames = {"panda_link0", "base_link"};
+  /// Frames that are the world the virtual joint places the base in.
+  std::vector<std::string> world_frames = {"world", "/world", ""};
   /// Accepted names of each robot joint (J lists), e.g. {"panda_joint1", "joint1"}.
   std::vector<std::vector<std::string>> joint_names;
+  /// Joints the robot holds still, whose values the start state sets for the problem.
+  std::vector<std::string> held_names;
   GraspRule grasp = GraspRule::kTouchingTcp;
-  double grasp_margin = 0.01;  // m
+  double grasp_margin = 0.01;      // m
+  double limit_tolerance = 0.002;  // rad (m): past a limit by at most this, a value is moved onto it
+  double floor_height = -INFINITY; // the problems' floor (m), -inf: none (MoveIt scenes have none)
+  double margin = 0.0;             // clearance a start and goal keep from the obstacles to be plannable (check.margin)
 };
 
 /// The names the Franka's joints go by in MoveIt (panda_jointK) and in
@@ -90,10 +108,12 @@ void ReadMoveItRequest(const std::string& request_path, const std::string& scene
                        std::vector<double>& goal_q);
 
 /// One problem from a scene file and a request file: the obstacles (less the
-/// grasped one, by options.grasp), start and goal, their TCPs and clearances.
-/// @throws flowplan::Error naming the file at fault, also for a start or goal
-///   outside the arm's joint limits.
-Problem ImportMoveItProblem(const kinematics::Robot& arm, const std::string& scene_path,
+/// grasped one, by options.grasp) in the base frame, start and goal, held
+/// joints, their TCPs and clearances, and its status (refused, with the
+/// reason, when it cannot be planned).
+/// @throws flowplan::Error naming the file and the entry at fault for a file
+///   that is not a MoveIt scene or request.
+Problem ImportMoveItProblem(const collision::BodyModel& body, const std::string& scene_path,
                             const std::string& request_path, const std::string& name,
                             const MoveItImportOptions& options);
 

@@ -3,59 +3,44 @@
 #include <yaml-cpp/yaml.h>
 
 #include <limits>
+#include <memory>
 
+#include "collision/checker.h"
 #include "geometry/scene_rows.h"
 
 namespace flowplan::problems {
 namespace {
 
-/// Removes every mapping entry whose value is an unset number (.nan), recursively.
-YAML::Node WithoutUnset(const YAML::Node& node) {
-  if (node.IsMap()) {
-    YAML::Node out(YAML::NodeType::Map);
-    for (const auto& entry : node) {
-      if (entry.second.IsScalar() && entry.second.Scalar() == ".nan") continue;
-      out[entry.first] = WithoutUnset(entry.second);
-    }
-    out.SetStyle(node.Style());
-    return out;
-  }
-  if (node.IsSequence()) {
-    YAML::Node out(YAML::NodeType::Sequence);
-    for (const auto& element : node) out.push_back(WithoutUnset(element));
-    out.SetStyle(node.Style());
-    return out;
-  }
-  return node;
-}
-
 template <class T>
 std::string Text(const T& value) {
-  YAML::Emitter out;
-  out << WithoutUnset(config::internal::Encode(value));
-  return std::string(out.c_str()) + "\n";
-}
-
-std::vector<double> Row(const torch::Tensor& t) {
-  const torch::Tensor c = t.to(torch::kFloat64).contiguous();
-  return std::vector<double>(c.data_ptr<double>(), c.data_ptr<double>() + c.numel());
+  return config::ToYaml(value, /*skip_unset=*/true);  // a 3-D box has no `angle`
 }
 
 }  // namespace
 
-void DescribeEnds(const kinematics::Robot& arm, Problem& problem) {
-  const torch::Tensor q = torch::stack({torch::tensor(problem.start_q, torch::kFloat64),
-                                        torch::tensor(problem.goal_q, torch::kFloat64)});  // (2, J)
-  const torch::Tensor tcp = arm.Tcp(q);                                                     // (2, W)
-  problem.start_tcp = Row(tcp[0]);
-  problem.goal_tcp = Row(tcp[1]);
-  if (problem.scene.size() == 0) {
-    problem.start_clearance = problem.goal_clearance = std::numeric_limits<double>::infinity();
-    return;
-  }
-  const torch::Tensor clearance = arm.Clearance(q, geometry::Rows(problem.scene, 3, "problem " + problem.name));  // (2, K)
-  problem.start_clearance = clearance[0].min().item<double>();
-  problem.goal_clearance = clearance[1].min().item<double>();
+collision::WorldOptions Problem::World() const {
+  collision::WorldOptions world;
+  world.floor_height = floor_height;
+  for (const HeldJoint& h : held) world.held[h.joint] = h.value;
+  return world;
+}
+
+void DescribeEnds(const collision::BodyModel& body, Problem& problem) {
+  const collision::WorldOptions world_options = problem.World();
+  auto held = world_options.held.empty()
+                  ? std::shared_ptr<const collision::BodyModel>(std::shared_ptr<const collision::BodyModel>(), &body)
+                  : std::make_shared<const collision::BodyModel>(collision::WithHeld(body.description(), world_options.held),
+                                                                 "problem " + problem.name);
+  const int W = held->workspace_dim();
+  problem.start_tcp.assign(static_cast<size_t>(W), 0.0);
+  problem.goal_tcp.assign(static_cast<size_t>(W), 0.0);
+  held->Tcp(problem.start_q.data(), problem.start_tcp.data());
+  held->Tcp(problem.goal_q.data(), problem.goal_tcp.data());
+  auto world = std::make_shared<const collision::World>(problem.scene, W, collision::Floor{}, std::vector<std::string>{},
+                                                        "problem " + problem.name);
+  const collision::Checker checker(held, world, {});
+  problem.start_clearance = checker.Clearance(problem.start_q.data());
+  problem.goal_clearance = checker.Clearance(problem.goal_q.data());
 }
 
 std::string ProblemSetYaml(const ProblemSet& set) { return Text(set); }
@@ -66,7 +51,16 @@ ProblemSet LoadProblemSet(const std::string& path) {
   ProblemSet set;
   config::Apply(config::ParseYamlFile(path), set, path);
   for (size_t i = 0; i < set.problems.size(); ++i) {
-    set.problems[i].scene.Validate(3, path + ": problems[" + std::to_string(i) + "].scene");
+    const Problem& p = set.problems[i];
+    const std::string entry = path + ": problems[" + std::to_string(i) + "]";
+    p.scene.Validate(3, entry + ".scene");
+    if (p.status != "ok" && p.status != "refused") {
+      throw Error(entry + ".status: expected ok or refused, got \"" + p.status + "\"");
+    }
+    if (!p.base_pose.empty() && p.base_pose.size() != 7) {
+      throw Error(entry + ".base_pose: expected 7 values (x y z qw qx qy qz) or none, got " +
+                  std::to_string(p.base_pose.size()));
+    }
   }
   return set;
 }

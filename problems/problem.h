@@ -19,6 +19,13 @@
 //       obstacle_names: [...]    # (K,) in the scene's numbering; may be empty
 //       left_out: [...]          # obstacles of the source not in `scene` (the grasped object)
 //       scene: {boxes: [...], cylinders: [...], spheres: [...]}
+//       floor_height: -.inf      # the floor's z (m), -.inf: no floor
+//       held: [{joint: panda_finger_joint1, value: 0.065}]   # joints not planned, held at a value
+//       base_pose: [x, y, z, qw, qx, qy, qz]   # where the robot's base stood in the source's world; the
+//                                # obstacles above are in the base frame (empty: the source's world is it)
+//       status: ok | refused     # refused: no plan can start or end where this one does
+//       reason: "..."            # why it was refused
+//       notes: ["..."]           # what the import changed (a value within tolerance of a limit, clamped onto it)
 //
 
 #include <cmath>
@@ -26,11 +33,25 @@
 #include <string>
 #include <vector>
 
+#include "collision/body_model.h"
+#include "collision/world.h"
 #include "core/config.h"
 #include "geometry/scene.h"
 #include "kinematics/robot.h"
 
 namespace flowplan::problems {
+
+/// A joint that is not planned, held at a value for a problem (a gripper's fingers).
+struct HeldJoint {
+  std::string joint;
+  double value = 0.0;
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("joint", joint, "the joint's name");
+    v.Field("value", value, "its value (rad or m)");
+  }
+};
 
 struct Problem {
   std::string name;
@@ -41,6 +62,12 @@ struct Problem {
   std::vector<std::string> obstacle_names;  // (K,) or empty
   std::vector<std::string> left_out;
   geometry::Scene scene;
+  double floor_height = -INFINITY;          // m, -inf: no floor
+  std::vector<HeldJoint> held;
+  std::vector<double> base_pose;            // (7) or empty
+  std::string status = "ok";                // "ok" or "refused"
+  std::string reason;                       // why it was refused
+  std::vector<std::string> notes;           // what the import changed
 
   template <class V>
   void Visit(V& v) {
@@ -55,7 +82,19 @@ struct Problem {
     v.Field("obstacle_names", obstacle_names, "names of the obstacles, in the scene's numbering");
     v.Field("left_out", left_out, "obstacles of the source left out of the scene");
     v.Field("scene", scene, "the obstacles");
+    v.Field("floor_height", floor_height, "the floor's height (m), -.inf for none",
+            config::Bounds{-INFINITY, INFINITY, false, false, "a number or -.inf", true});
+    v.Field("held", held, "joints that are not planned, held at a value: [{joint, value}]");
+    v.Field("base_pose", base_pose, "the robot base's pose in the source's world (x y z qw qx qy qz); the obstacles "
+                                    "are given in the base frame");
+    v.Field("status", status, "ok, or refused when no plan can start or end where this problem does");
+    v.Field("reason", reason, "why the problem was refused");
+    v.Field("notes", notes, "what the import changed");
   }
+
+  /// The floor and held joints as a planning call takes them.
+  collision::WorldOptions World() const;
+  bool refused() const { return status == "refused"; }
 };
 
 struct ProblemSet {
@@ -72,8 +111,9 @@ struct ProblemSet {
 };
 
 /// Sets start_tcp, goal_tcp, start_clearance and goal_clearance from start_q,
-/// goal_q and the scene (clearances .inf when there is no obstacle).
-void DescribeEnds(const kinematics::Robot& arm, Problem& problem);
+/// goal_q and the scene (clearances .inf when there is no obstacle), with the
+/// problem's held joints. @throws flowplan::Error for a held joint `body` lacks.
+void DescribeEnds(const collision::BodyModel& body, Problem& problem);
 
 /// The YAML text of a problem set, or of one scene (a `--scene` file). Fields
 /// left unset are left out (a 3-D box has no `angle`), so the text reads back

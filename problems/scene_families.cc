@@ -9,7 +9,7 @@
 #include "core/random.h"
 #include "geometry/scene_rows.h"
 #include "sim/franka_ik.h"
-#include "sim/franka_self_collision.h"
+#include "collision/checker.h"
 #include "sim/mujoco_util.h"
 
 namespace flowplan::problems {
@@ -278,13 +278,14 @@ bool FreePose(const kinematics::Robot& arm, const sim::FrankaModel& model, mjDat
     }
     const sim::IkResult ik = sim::SolveTcpIk(model, d, p, seed, options);
     if (!ik.converged) continue;
-    const torch::Tensor qt = torch::tensor(std::vector<double>(ik.q.data(), ik.q.data() + sim::kFrankaJoints),
-                                           torch::kFloat64)
-                                 .view({1, sim::kFrankaJoints});
-    if (arm.Clearance(qt, rows).min().item<double>() < clearance) continue;
-    // Free of itself and above the floor too, as the plan checker demands of every state of a plan.
-    static const auto self_check = sim::FrankaConfigurationCheck();
-    if (!self_check(std::vector<double>(ik.q.data(), ik.q.data() + sim::kFrankaJoints)).empty()) continue;
+    // Clear of the obstacles by `clearance`, and of itself and the floor, as the plan checker demands of every
+    // state of a plan.
+    const collision::BodyModel body(arm.description(), "family: robot");
+    collision::Floor floor;
+    floor.present = true;
+    const collision::Checker checker(std::shared_ptr<const collision::BodyModel>(std::shared_ptr<const collision::BodyModel>(), &body),
+                                     std::make_shared<const collision::World>(rows, 3, floor), {clearance, 0.001});
+    if (!checker.Valid(ik.q.data())) continue;
     q = ik.q;
     return true;
   }
@@ -326,7 +327,8 @@ Problem MakeFamilyProblem(const kinematics::Robot& arm, const sim::FrankaModel& 
     p.obstacle_names = layout.box_names;  // the scene's numbering: (spheres,) boxes, cylinders
     p.obstacle_names.insert(p.obstacle_names.end(), layout.cylinder_names.begin(), layout.cylinder_names.end());
     p.scene = std::move(layout.scene);
-    DescribeEnds(arm, p);
+    p.floor_height = 0.0;  // the arm and the scene stand on the floor
+    DescribeEnds(collision::BodyModel(arm.description(), "family: robot"), p);
     double travel = 0.0;
     for (size_t k = 0; k < p.start_tcp.size(); ++k) travel += std::pow(p.goal_tcp[k] - p.start_tcp[k], 2);
     if (std::sqrt(travel) < kMinTravel) continue;

@@ -9,6 +9,7 @@ namespace flowplan::sim {
 // Defined in the build folder, generated from sim/assets/franka_panda.xml.
 namespace internal {
 extern const char* const kFrankaPandaXml;
+extern const char* const kFrankaCollisionYaml;
 }  // namespace internal
 
 namespace {
@@ -50,6 +51,23 @@ void AddCapsuleSpheres(const mjModel& m, int geom, int link, std::vector<kinemat
 }
 
 }  // namespace
+
+void DescribeFrankaCollisions(kinematics::RobotDescription& d) {
+  for (kinematics::RobotLink& link : d.links) {
+    if (link.joint >= 0) link.joint_name = "panda_joint" + std::to_string(link.joint + 1);
+    // The fingers slide along their y axes (the right finger's is turned to face the left's), held closed.
+    if (link.name == "left_finger" || link.name == "right_finger") {
+      link.type = kinematics::JointType::kPrismatic;
+      link.axis = {0.0, 1.0, 0.0};
+      link.joint_name = link.name == "left_finger" ? "panda_finger_joint1" : "panda_finger_joint2";
+    }
+  }
+  // The collision body: spheres covering the published collision meshes, and the pairs not checked.
+  const std::string source = "robots/franka_panda/collision.yaml";
+  kinematics::CollisionBody body;
+  config::Apply(config::ParseYamlText(internal::kFrankaCollisionYaml, source), body, source);
+  kinematics::ApplyCollisionBody(body, d, source);
+}
 
 JointVector FrankaReadyPose() {
   JointVector q;
@@ -165,6 +183,7 @@ FrankaModel::FrankaModel(MjModelPtr model, std::string source)
     limits_.torque[j] = m.actuator_ctrlrange[2 * j + 1];
   }
   description_ = DescribeKinematics(m, "franka_panda", "tcp", kCollisionGeomGroup);
+  DescribeFrankaCollisions(description_);
   description_.velocity_limit.assign(limits_.velocity.data(), limits_.velocity.data() + kFrankaJoints);
   const JointVector ready = FrankaReadyPose();  // gripper pointing down
   description_.home.assign(ready.data(), ready.data() + kFrankaJoints);

@@ -58,6 +58,13 @@ struct FrankaLimits {
 kinematics::RobotDescription DescribeKinematics(const mjModel& m, const std::string& tcp_site,
                                         int collision_group);
 
+/// Completes the Franka's description from DescribeKinematics with what the
+/// MJCF does not say: the joints' MoveIt names (panda_joint1..7), the fingers
+/// as prismatic joints held closed (panda_finger_joint1/2, opened by a
+/// problem's held values), the self-collision pairs to ignore and the links
+/// that stand on a floor.
+void DescribeFrankaCollisions(kinematics::RobotDescription& description);
+
 /// The geom group of the collision capsules and spheres in franka_panda.xml.
 inline constexpr int kCollisionGeomGroup = 3;
 

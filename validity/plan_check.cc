@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include <spdlog/fmt/fmt.h>
 
@@ -29,220 +30,157 @@ std::string Num(double v) { return fmt::format("{:.4g}", v); }
 
 }  // namespace
 
-PlanChecker::PlanChecker(std::shared_ptr<const kinematics::Robot> robot, double dt, CheckConfig config,
-                         ConfigurationCheck self_check)
+PlanChecker::PlanChecker(std::shared_ptr<const kinematics::Robot> robot, double dt, CheckConfig config)
     : robot_(std::move(robot)),
+      body_(std::make_shared<const collision::BodyModel>(robot_->description(), "check: robot")),
       dt_(dt),
-      config_(config),
-      self_check_(std::move(self_check)),
-      motion_bound_(robot_->MotionBound()) {
+      config_(config) {
   if (!(dt > 0)) throw Error("check: dt: expected a positive sample spacing, got " + Num(dt));
   if (!(config.joint_tolerance > 0)) throw Error("check.joint_tolerance: expected a positive tolerance");
   if (!(config.max_speed_ratio > 0)) throw Error("check.max_speed_ratio: expected a positive ratio");
   if (!(config.margin >= 0)) throw Error("check.margin: expected a non-negative margin");
   if (!(config.resolution > 0)) throw Error("check.resolution: expected a positive resolution");
-  if (!(config.self_resolution > 0)) throw Error("check.self_resolution: expected a positive resolution");
+  if (!(config.limit_tolerance >= 0)) throw Error("check.limit_tolerance: expected a non-negative tolerance");
+}
+
+collision::Checker PlanChecker::ConfigurationChecker(const geometry::SceneRows& scene,
+                                                     const collision::WorldOptions& options,
+                                                     std::vector<std::string> names) const {
+  const double height = options.floor_height.value_or(config_.floor_height);
+  collision::Floor floor;
+  floor.present = std::isfinite(height);
+  floor.height = floor.present ? height : 0.0;
+  auto world = std::make_shared<const collision::World>(scene, static_cast<int>(robot_->workspace_dim()), floor,
+                                                        std::move(names), "check: scene");
+  auto body = options.held.empty() ? body_
+                                   : std::make_shared<const collision::BodyModel>(
+                                         collision::WithHeld(robot_->description(), options.held), "check: robot");
+  return collision::Checker(std::move(body), std::move(world), {config_.margin, config_.resolution});
+}
+
+std::string PlanChecker::Refusal(const std::string& what, const std::vector<double>& q,
+                                 const collision::Checker& checker) const {
+  const kinematics::RobotDescription& d = robot_->description();
+  for (size_t j = 0; j < q.size(); ++j) {
+    if (!std::isfinite(q[j])) return what + ": " + d.JointName(static_cast<int>(j)) + " is not a finite number";
+    const double below = d.joint_lower[j] - q[j], above = q[j] - d.joint_upper[j];
+    if (below > config_.limit_tolerance || above > config_.limit_tolerance) {
+      const bool low = below > 0;
+      return what + ": " + d.JointName(static_cast<int>(j)) + " = " + fmt::format("{:.7g}", q[j]) + " is " +
+             Num(low ? below : above) + " past its " + (low ? "lower" : "upper") + " limit " +
+             fmt::format("{:.7g}", low ? d.joint_lower[j] : d.joint_upper[j]);
+    }
+  }
+  // Within the tolerance of a limit: judged on the limit.
+  std::vector<double> at = q;
+  for (size_t j = 0; j < q.size(); ++j) at[j] = std::clamp(q[j], d.joint_lower[j], d.joint_upper[j]);
+  const collision::Contact contact = checker.FirstContact(at.data());
+  return contact.found() ? what + ": " + checker.Describe(contact) : std::string();
 }
 
 std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const torch::Tensor& start,
                                             const torch::Tensor& goal, const geometry::SceneRows& scene,
-                                            const torch::Tensor& found) const {
+                                            const torch::Tensor& found, const collision::WorldOptions& world) const {
   const kinematics::RobotDescription& robot = robot_->description();
   const int64_t J = robot_->num_joints();
   if (!plans.defined() || plans.dim() != 3 || plans.size(2) < J) {
     throw Error("check: plans: expected (N, T, D) with D >= " + std::to_string(J) + ", got " +
                 (plans.defined() ? ShapeText(plans.sizes().vec()) : "(undefined)"));
   }
-  const int64_t N = plans.size(0), T = plans.size(1), D = plans.size(2), S = robot_->num_spheres();
+  const int64_t N = plans.size(0), T = plans.size(1), D = plans.size(2);
   if (found.defined() && (found.dim() != 1 || found.size(0) != N)) {
     throw Error("check: found: expected (" + std::to_string(N) + "), got " + ShapeText(found.sizes().vec()));
   }
   const torch::Tensor q = plans.to(torch::kFloat64).slice(2, 0, J).contiguous();  // (N, T, J)
-  const torch::Tensor start_q = Positions(start, N, J, D, "start"), goal_q = Positions(goal, N, J, D, "goal");
-  std::vector<PlanVerdict> verdicts(static_cast<size_t>(N));
-  auto fail = [&](int64_t n, Failure failure, const std::string& reason) {
-    PlanVerdict& v = verdicts[static_cast<size_t>(n)];
-    if (v.failure == Failure::kNone) {
-      v.failure = failure;
-      v.reason = reason;
-    }
-  };
-  auto label = [&](int64_t j) { return "joint " + std::to_string(j + 1); };
-
-  // Start, goal, joint limits, speeds: per plan, the first offence.
-  const torch::Tensor start_error = (q.select(1, 0) - start_q).abs();     // (N, J)
-  const torch::Tensor goal_error = (q.select(1, T - 1) - goal_q).abs();   // (N, J)
-  const torch::Tensor lower = torch::tensor(robot.joint_lower, torch::kFloat64).view({1, 1, J});
-  const torch::Tensor upper = torch::tensor(robot.joint_upper, torch::kFloat64).view({1, 1, J});
-  const torch::Tensor outside = torch::max(lower - q, q - upper);        // (N, T, J) > 0 outside
-  torch::Tensor speed_ratio = torch::zeros({N, std::max<int64_t>(T - 1, 0), J}, torch::kFloat64);
-  if (!robot.velocity_limit.empty() && T > 1) {
-    const torch::Tensor limit = torch::tensor(robot.velocity_limit, torch::kFloat64).view({1, 1, J});
-    speed_ratio = (q.slice(1, 1, T) - q.slice(1, 0, T - 1)).abs() / dt_ / limit;
-  }
-  const auto se = start_error.accessor<double, 2>(), ge = goal_error.accessor<double, 2>();
-  const auto out = outside.accessor<double, 3>(), sr = speed_ratio.accessor<double, 3>();
+  const torch::Tensor start_q = Positions(start, N, J, D, "start").contiguous();
+  const torch::Tensor goal_q = Positions(goal, N, J, D, "goal").contiguous();
   const torch::Tensor finite = torch::isfinite(plans.to(torch::kFloat64)).flatten(1).all(1);  // (N,)
+  const torch::Tensor found_cpu = found.defined() ? found.to(torch::kCPU, torch::kBool).contiguous() : torch::Tensor();
+  const collision::Checker checker = ConfigurationChecker(scene, world);
+  const double* qa = q.data_ptr<double>();
+  const double* sa = start_q.data_ptr<double>();
+  const double* ga = goal_q.data_ptr<double>();
+  const bool* fa = finite.data_ptr<bool>();
+  std::vector<PlanVerdict> verdicts(static_cast<size_t>(N));
+  auto label = [&](int64_t j) { return robot.JointName(static_cast<int>(j)); };
+  const double tolerance = config_.limit_tolerance;
   for (int64_t n = 0; n < N; ++n) {
-    if (found.defined() && !found[n].item<bool>()) fail(n, Failure::kNotFound, "the planner found no plan");
-    if (!finite[n].item<bool>()) fail(n, Failure::kNotFinite, "a state holds NaN or an infinity");
-    for (int64_t j = 0; j < J; ++j) {
-      if (se[n][j] > config_.joint_tolerance) {
-        fail(n, Failure::kStart, "state 0 is " + Num(se[n][j]) + " from the start at " + label(j));
+    PlanVerdict& v = verdicts[static_cast<size_t>(n)];
+    auto fail = [&](Failure failure, const std::string& reason) {
+      if (v.failure == Failure::kNone) {
+        v.failure = failure;
+        v.reason = reason;
       }
+    };
+    const double* plan = qa + n * T * J;
+    auto at = [&](int64_t t, int64_t j) { return plan[t * J + j]; };
+    if (found_cpu.defined() && !found_cpu.data_ptr<bool>()[n]) fail(Failure::kNotFound, "the planner found no plan");
+    if (!fa[n]) fail(Failure::kNotFinite, "a state holds NaN or an infinity");
+    for (int64_t j = 0; j < J; ++j) {
+      const double e = std::abs(at(0, j) - sa[n * J + j]);
+      if (e > config_.joint_tolerance) fail(Failure::kStart, "state 0 is " + Num(e) + " from the start at " + label(j));
     }
     for (int64_t j = 0; j < J; ++j) {
-      if (ge[n][j] > config_.joint_tolerance) {
-        fail(n, Failure::kGoal, "state " + std::to_string(T - 1) + " is " + Num(ge[n][j]) + " from the goal at " +
-                                    label(j));
+      const double e = std::abs(at(T - 1, j) - ga[n * J + j]);
+      if (e > config_.joint_tolerance) {
+        fail(Failure::kGoal, "state " + std::to_string(T - 1) + " is " + Num(e) + " from the goal at " + label(j));
       }
     }
     for (int64_t t = 0; t < T; ++t) {
       for (int64_t j = 0; j < J; ++j) {
-        if (out[n][t][j] > 0) {
-          fail(n, Failure::kJointLimit, "state " + std::to_string(t) + ": " + label(j) + " is " + Num(out[n][t][j]) +
-                                            " outside its limits");
+        const double outside = std::max(robot.joint_lower[j] - at(t, j), at(t, j) - robot.joint_upper[j]);
+        if (outside > tolerance) {
+          fail(Failure::kJointLimit, "state " + std::to_string(t) + ": " + label(j) + " is " + Num(outside) +
+                                         " outside its limits");
         }
       }
     }
-    for (int64_t t = 0; t + 1 < T; ++t) {
-      for (int64_t j = 0; j < J; ++j) {
-        if (sr[n][t][j] > config_.max_speed_ratio) {
-          fail(n, Failure::kSpeedLimit, "states " + std::to_string(t) + "-" + std::to_string(t + 1) + ": " + label(j) +
-                                            " moves at " + Num(sr[n][t][j]) + " x its speed limit");
-        }
-      }
-    }
-  }
-
-  // The configuration check at the states and at samples between them, for plans still valid.
-  if (self_check_) {
-    const auto qa = q.accessor<double, 3>();
-    std::vector<double> c(static_cast<size_t>(J));
-    auto at = [&](int64_t n, int64_t t, double u) {  // u in [0, 1] along segment t
-      for (int64_t j = 0; j < J; ++j) {
-        c[static_cast<size_t>(j)] = u == 0.0 ? qa[n][t][j] : qa[n][t][j] + u * (qa[n][t + 1][j] - qa[n][t][j]);
-      }
-      return self_check_(c);
-    };
-    for (int64_t n = 0; n < N; ++n) {
-      if (!verdicts[static_cast<size_t>(n)].valid()) continue;
-      for (int64_t t = 0; t < T && verdicts[static_cast<size_t>(n)].valid(); ++t) {
-        const std::string objection = at(n, t, 0.0);
-        if (!objection.empty()) {
-          fail(n, Failure::kSelf, "state " + std::to_string(t) + ": " + objection);
-          break;
-        }
-        if (t + 1 == T) break;
-        double widest = 0.0;
-        for (int64_t j = 0; j < J; ++j) widest = std::max(widest, std::abs(qa[n][t + 1][j] - qa[n][t][j]));
-        const int64_t samples = static_cast<int64_t>(std::ceil(widest / config_.self_resolution));
-        for (int64_t k = 1; k < samples; ++k) {
-          const std::string between = at(n, t, static_cast<double>(k) / static_cast<double>(samples));
-          if (!between.empty()) {
-            fail(n, Failure::kSelf, "between states " + std::to_string(t) + " and " + std::to_string(t + 1) + ": " +
-                                        between);
-            break;
+    if (!robot.velocity_limit.empty()) {
+      for (int64_t t = 0; t + 1 < T; ++t) {
+        for (int64_t j = 0; j < J; ++j) {
+          const double ratio = std::abs(at(t + 1, j) - at(t, j)) / dt_ / robot.velocity_limit[j];
+          if (ratio > config_.max_speed_ratio) {
+            fail(Failure::kSpeedLimit, "states " + std::to_string(t) + "-" + std::to_string(t + 1) + ": " + label(j) +
+                                           " moves at " + Num(ratio) + " x its speed limit");
           }
         }
       }
     }
-  }
-
-  // Clearance at the states.
-  const int64_t K = geometry::CountObstacles(scene);
-  const std::vector<std::string> sphere_names = [&] {
-    std::vector<std::string> names;
-    for (int64_t s = 0; s < S; ++s) {
-      names.push_back(robot.kind == kinematics::RobotKind::kPoint ? std::string("the robot")
-                                                                  : "sphere " + std::to_string(s) + " (" +
-                                                                        robot.spheres[static_cast<size_t>(s)].geom + ")");
+    if (!fa[n]) {
+      v.clearance = std::numeric_limits<double>::quiet_NaN();
+      continue;
     }
-    return names;
-  }();
-  if (K == 0) {
-    for (auto& v : verdicts) v.clearance = std::numeric_limits<double>::infinity();
-    return verdicts;
-  }
-  const geometry::SceneRows prepared = geometry::PreparedRows(scene, static_cast<int>(robot_->workspace_dim()));
-  const kinematics::SphereClearance at_states = robot_->NearestObstacles(q.view({N * T, J}), prepared);
-  const torch::Tensor clearance = at_states.clearance.view({N, T, S}), obstacle = at_states.obstacle.view({N, T, S});
-  const auto cl = clearance.accessor<double, 3>();
-  const auto ob = obstacle.accessor<int64_t, 3>();
-  for (int64_t n = 0; n < N; ++n) {
+    // The states, each judged at its nearest point within the limits (a state within limit_tolerance of a
+    // limit is at it), then the motions between them.
+    std::vector<double> states(static_cast<size_t>(T * J));
+    for (int64_t t = 0; t < T; ++t) {
+      for (int64_t j = 0; j < J; ++j) {
+        states[static_cast<size_t>(t * J + j)] = std::clamp(at(t, j), robot.joint_lower[j], robot.joint_upper[j]);
+      }
+    }
     double smallest = std::numeric_limits<double>::infinity();
     for (int64_t t = 0; t < T; ++t) {
-      for (int64_t s = 0; s < S; ++s) {
-        smallest = std::min(smallest, cl[n][t][s]);
-        if (cl[n][t][s] < config_.margin) {
-          fail(n, Failure::kCollision, "state " + std::to_string(t) + ": " + sphere_names[s] + " is " +
-                                           Num(cl[n][t][s]) + " from obstacle " + std::to_string(ob[n][t][s]));
-        }
+      const double* state = &states[static_cast<size_t>(t * J)];
+      smallest = std::min(smallest, checker.Clearance(state));
+      if (!v.valid()) continue;
+      const collision::Contact contact = checker.FirstContact(state);
+      if (contact.found()) {
+        const Failure failure = contact.kind == collision::Contact::Kind::kSelf    ? Failure::kSelf
+                                : contact.kind == collision::Contact::Kind::kFloor ? Failure::kFloor
+                                                                                    : Failure::kCollision;
+        fail(failure, "state " + std::to_string(t) + ": " + checker.Describe(contact));
       }
     }
-    verdicts[static_cast<size_t>(n)].clearance = smallest;
-  }
-
-  // The motion between states, for plans that passed everything else: pieces
-  // (plan, first state, ends, clearances at the ends), halved until certified.
-  std::vector<int64_t> plan_of, segment_of;
-  for (int64_t n = 0; n < N; ++n) {
-    if (!verdicts[static_cast<size_t>(n)].valid()) continue;
-    for (int64_t t = 0; t + 1 < T; ++t) {
-      plan_of.push_back(n);
-      segment_of.push_back(t);
-    }
-  }
-  if (plan_of.empty()) return verdicts;
-  const torch::Tensor plan_index = torch::tensor(plan_of, torch::kInt64), segment_index = torch::tensor(segment_of, torch::kInt64);
-  torch::Tensor piece_plan = plan_index, piece_segment = segment_index;
-  torch::Tensor qa = q.index({plan_index, segment_index}), qb = q.index({plan_index, segment_index + 1});  // (P, J)
-  torch::Tensor da = clearance.index({plan_index, segment_index}), db = clearance.index({plan_index, segment_index + 1});
-  const double margin = config_.margin;
-  while (piece_plan.size(0) > 0) {
-    const torch::Tensor travel = (qb - qa).abs().matmul(motion_bound_);  // (P, S): how far each sphere can move
-    const torch::Tensor settled = ((da + db - travel) >= 2.0 * margin) | (travel < config_.resolution);
-    const torch::Tensor open = ~settled.all(1);
-    if (!open.any().item<bool>()) break;
-    piece_plan = piece_plan.index({open});
-    piece_segment = piece_segment.index({open});
-    qa = qa.index({open});
-    qb = qb.index({open});
-    da = da.index({open});
-    db = db.index({open});
-    const torch::Tensor qm = 0.5 * (qa + qb);
-    const kinematics::SphereClearance at_middle = robot_->NearestObstacles(qm, prepared);
-    const torch::Tensor dm = at_middle.clearance;                          // (P, S)
-    const auto [smallest, sphere] = dm.min(1);                             // (P,)
-    const auto pp = piece_plan.accessor<int64_t, 1>(), ps = piece_segment.accessor<int64_t, 1>();
-    const auto sm = smallest.accessor<double, 1>();
-    const auto sp = sphere.accessor<int64_t, 1>();
-    const auto mo = at_middle.obstacle.accessor<int64_t, 2>();
-    std::vector<uint8_t> keep(static_cast<size_t>(piece_plan.size(0)), 1);
-    for (int64_t p = 0; p < piece_plan.size(0); ++p) {
-      PlanVerdict& v = verdicts[static_cast<size_t>(pp[p])];
-      ++v.motion_checks;
-      if (sm[p] < margin) {
-        fail(pp[p], Failure::kMotion, "between states " + std::to_string(ps[p]) + " and " + std::to_string(ps[p] + 1) +
-                                          ": " + sphere_names[sp[p]] + " passes " + Num(sm[p]) + " from obstacle " +
-                                          std::to_string(mo[p][sp[p]]));
-        v.clearance = std::min(v.clearance, sm[p]);
+    v.clearance = smallest;
+    for (int64_t t = 0; t + 1 < T && v.valid(); ++t) {
+      const collision::MotionVerdict motion =
+          checker.CheckMotion(&states[static_cast<size_t>(t * J)], &states[static_cast<size_t>((t + 1) * J)]);
+      v.motion_checks += motion.checks;
+      if (!motion.valid) {
+        fail(Failure::kMotion, "between states " + std::to_string(t) + " and " + std::to_string(t + 1) + ": " +
+                                   checker.Describe(motion.contact));
       }
     }
-    for (int64_t p = 0; p < piece_plan.size(0); ++p) keep[static_cast<size_t>(p)] = verdicts[static_cast<size_t>(pp[p])].valid();
-    const torch::Tensor alive = torch::tensor(std::vector<int64_t>(keep.begin(), keep.end()), torch::kInt64).to(torch::kBool);
-    auto halves = [&](const torch::Tensor& first, const torch::Tensor& second) {
-      return torch::cat({first.index({alive}), second.index({alive})});
-    };
-    const torch::Tensor qm_alive = qm.index({alive}), dm_alive = dm.index({alive});
-    piece_plan = halves(piece_plan, piece_plan);
-    piece_segment = halves(piece_segment, piece_segment);
-    const torch::Tensor new_qa = torch::cat({qa.index({alive}), qm_alive}), new_qb = torch::cat({qm_alive, qb.index({alive})});
-    const torch::Tensor new_da = torch::cat({da.index({alive}), dm_alive}), new_db = torch::cat({dm_alive, db.index({alive})});
-    qa = new_qa;
-    qb = new_qb;
-    da = new_da;
-    db = new_db;
   }
   return verdicts;
 }

@@ -8,8 +8,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 #include "core/error.h"
+#include "core/random.h"
 #include "kinematics/robot.h"
 #include "sim/franka_execution.h"
 #include "sim/franka_model.h"
@@ -30,8 +32,15 @@ kinematics::TrajectoryInfo Disc(int64_t T) {
 
 geometry::SceneRows Disc05() { return geometry::SphereRows(torch::tensor({{0.5f, 0.5f, 0.2f}})); }
 
+/// Check settings with a margin: the plans below keep 1 cm from every obstacle.
+validity::CheckConfig Margin() {
+  validity::CheckConfig check;
+  check.margin = 0.01;
+  return check;
+}
+
 TEST(RrtConnectTest, ParticleGoesAroundADiscWithConsistentVelocities) {
-  const RrtConnectPlanner planner(Disc(64), RrtConnectConfig{});
+  const RrtConnectPlanner planner(Disc(64), RrtConnectConfig{}, Margin());
   planning::PlanRequest request;
   request.start = torch::tensor({{0.1f, 0.5f, 0.0f, 0.0f}, {0.2f, 0.45f, 0.0f, 0.0f}});
   request.goal = torch::tensor({{0.9f, 0.5f, 0.0f, 0.0f}, {0.8f, 0.55f, 0.0f, 0.0f}});
@@ -51,7 +60,7 @@ TEST(RrtConnectTest, ParticleGoesAroundADiscWithConsistentVelocities) {
     const torch::Tensor s = torch::linspace(0, 1, 21, torch::kFloat64).view({1, -1, 1});
     const torch::Tensor dense = p.slice(0, 0, 63).unsqueeze(1) + s * (p.slice(0, 1) - p.slice(0, 0, 63)).unsqueeze(1);
     const double clearance = (dense - torch::tensor({0.5, 0.5}, torch::kFloat64)).norm(2, -1).min().item<double>();
-    EXPECT_GT(clearance, 0.2 + 0.05);
+    EXPECT_GT(clearance, 0.2 + 0.05 + 0.01 - 0.0005);  // the margin, less half the motion check's resolution
     // The velocities are those of the positions' timing; the plan starts and stops at rest.
     const torch::Tensor central = (p.slice(0, 2) - p.slice(0, 0, 62)) / (2 * kDt);
     const double speed = v.norm(2, 1).max().item<double>();
@@ -76,15 +85,22 @@ TEST(RrtConnectTest, SameSeedSamePlansAndEachPlanIsItsOwnSearch) {
   EXPECT_TRUE(torch::equal(a.slice(0, 0, 1), planner.Plan(first).plans));
 }
 
-TEST(RrtConnectTest, StartInsideAnObstacleIsNotFoundAndFallsBackToTheLine) {
+TEST(RrtConnectTest, AStartInsideAnObstacleOrPastALimitIsRefusedWithItsReason) {
   const RrtConnectPlanner planner(Disc(16), RrtConnectConfig{});
   planning::PlanRequest request;
-  request.start = torch::tensor({{0.5f, 0.5f, 0.0f, 0.0f}});
-  request.goal = torch::tensor({{0.9f, 0.5f, 0.0f, 0.0f}});
+  request.start = torch::tensor({{0.5f, 0.5f, 0.0f, 0.0f}, {1.2f, 0.5f, 0.0f, 0.0f}, {1.0f, 0.5f, 0.0f, 0.0f}});
+  request.goal = torch::tensor({{0.9f, 0.5f, 0.0f, 0.0f}, {0.9f, 0.5f, 0.0f, 0.0f}, {0.9f, 0.9f, 0.0f, 0.0f}});
   request.scene = Disc05();
   const planning::PlanResult result = planner.Plan(request);
   EXPECT_FALSE(result.found[0].item<bool>());
-  EXPECT_LT((result.plans[0].select(1, 1) - 0.5).abs().max().item<float>(), 1e-6);
+  EXPECT_FALSE(result.found[1].item<bool>());
+  EXPECT_EQ(result.refused, (std::vector<bool>{true, true, false}));
+  EXPECT_THAT(result.failure[0], ::testing::HasSubstr("start: the robot is -0.25 from obstacle 0"));
+  EXPECT_THAT(result.failure[1], ::testing::HasSubstr("start: joint 1 = 1.2 is 0.2 past its upper limit 1"));
+  // A start exactly at a limit is planned from it.
+  EXPECT_TRUE(result.found[2].item<bool>());
+  EXPECT_EQ(result.failure[2], "");
+  EXPECT_LT((result.plans[0].select(1, 1) - 0.5).abs().max().item<float>(), 1e-6);  // the line it falls back to
 }
 
 /// The particle's guide of T states along the straight line from (0.1, 0.5) to (0.9, 0.5), bent by `bend` × sin(πs)
@@ -231,7 +247,8 @@ TEST(RrtConnectTest, RobotsWithoutFiniteLimitsOrOddStatesAreRejected) {
 /// obstacles as collision geoms.
 sim::ExecutionResult PlanAndExecute(const geometry::Scene& scene, const torch::Tensor& start_q,
                                     const torch::Tensor& goal_q, const Eigen::Vector3d& goal_tcp) {
-  const RrtConnectPlanner planner(testing::FrankaTrajectory(64), RrtConnectConfig{});
+  // Execution tracks the plan within millimetres: the plan keeps a centimetre.
+  const RrtConnectPlanner planner(testing::FrankaTrajectory(64), RrtConnectConfig{}, Margin());
   planning::PlanRequest request;
   request.start = torch::cat({start_q.view({1, 7}), torch::zeros({1, 7}, torch::kFloat64)}, 1).to(torch::kFloat32);
   request.goal = torch::cat({goal_q.view({1, 7}), torch::zeros({1, 7}, torch::kFloat64)}, 1).to(torch::kFloat32);
@@ -287,6 +304,95 @@ TEST(RrtConnectTest, FrankaOverABoxWallAndPastACylinderBetweenJointGoals) {
   EXPECT_GT(executed.min_distance[0], 0.0);
   EXPECT_GT(executed.min_distance[1], 0.0);
   EXPECT_LT(executed.goal_distance, 0.03);
+}
+
+/// Whether the plan (T, 14) is valid by a check that shares nothing with the planner's: the script kinematics'
+/// clearance from every obstacle at 40 points of every segment, no sphere of a pair of links the robot checks
+/// overlapping there, every joint within its limits and speed limit.
+std::string IndependentCheck(const kinematics::Robot& robot, const torch::Tensor& plan, const geometry::SceneRows& scene,
+                             double margin) {
+  const auto& d = robot.description();
+  const int64_t T = plan.size(0);
+  const torch::Tensor q = plan.slice(1, 0, 7).to(torch::kFloat64);
+  for (int64_t j = 0; j < 7; ++j) {
+    if (q.select(1, j).min().item<double>() < d.joint_lower[j] - 1e-6 ||
+        q.select(1, j).max().item<double>() > d.joint_upper[j] + 1e-6) {
+      return "joint " + std::to_string(j + 1) + " outside its limits";
+    }
+    const double fastest = (q.slice(0, 1).select(1, j) - q.slice(0, 0, T - 1).select(1, j)).abs().max().item<double>();
+    if (fastest / kDt > d.velocity_limit[j] * (1 + 1e-6)) return "joint " + std::to_string(j + 1) + " too fast";
+  }
+  const torch::Tensor u = torch::linspace(0, 1, 40, torch::kFloat64).view({1, -1, 1});
+  const torch::Tensor dense = (q.slice(0, 0, T - 1).unsqueeze(1) + u * (q.slice(0, 1) - q.slice(0, 0, T - 1)).unsqueeze(1))
+                                  .reshape({-1, 7});  // (40 (T - 1), 7)
+  const double clearance = robot.Clearance(dense, scene).min().item<double>();
+  if (clearance < margin - 0.0005) return "clearance " + std::to_string(clearance);
+  // Self-collision: every pair of spheres on links the description does not ignore.
+  std::set<std::pair<int, int>> ignored;
+  for (const auto& pair : d.self_collision_ignore) {
+    const int a = d.FindLink(pair[0]), b = d.FindLink(pair[1]);
+    ignored.insert({std::min(a, b), std::max(a, b)});
+  }
+  const torch::Tensor centres = robot.SphereCentres(dense);  // (M, S, 3)
+  const torch::Tensor gaps = torch::cdist(centres, centres);  // (M, S, S)
+  const torch::Tensor radii = robot.SphereRadii();
+  for (int64_t s = 0; s < robot.num_spheres(); ++s) {
+    for (int64_t t = s + 1; t < robot.num_spheres(); ++t) {
+      const int a = d.spheres[s].link, b = d.spheres[t].link;
+      if (a == b || ignored.count({std::min(a, b), std::max(a, b)})) continue;
+      const double gap = gaps.select(1, s).select(1, t).min().item<double>() - radii[s].item<double>() - radii[t].item<double>();
+      if (gap < -0.0005) return "spheres " + std::to_string(s) + " and " + std::to_string(t) + " overlap";
+    }
+  }
+  return "";
+}
+
+TEST(RrtConnectTest, EveryFrankaPlanItFindsAmongRandomObstaclesPassesAnIndependentCheck) {
+  // Random scenes of boxes and spheres around the arm, random valid start and goal: a property of the planner,
+  // on a budget that finds most plans; a plan it calls found must be valid.
+  const kinematics::TrajectoryInfo info = testing::FrankaTrajectory(64);
+  const RrtConnectPlanner planner(info, RrtConnectConfig{});
+  const kinematics::Robot robot(info.robot);
+  Rng rng(21);
+  const auto& d = info.robot;
+  int found = 0, planned = 0;
+  for (int trial = 0; trial < 40 && planned < 12; ++trial) {
+    geometry::Scene scene;
+    for (int k = 0; k < 3; ++k) {
+      scene.boxes.push_back({{rng.Uniform(0.2, 0.7), rng.Uniform(-0.5, 0.5), rng.Uniform(0.1, 0.8)},
+                             {rng.Uniform(0.05, 0.3), rng.Uniform(0.05, 0.3), rng.Uniform(0.05, 0.3)},
+                             {rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1)}, NAN});
+      scene.spheres.push_back({{rng.Uniform(-0.6, 0.7), rng.Uniform(-0.6, 0.6), rng.Uniform(0.1, 0.9)}, rng.Uniform(0.03, 0.12)});
+    }
+    const geometry::SceneRows rows = geometry::Rows(scene, 3, "random scene");
+    const collision::Checker check = planner.checker().ConfigurationChecker(rows);
+    std::vector<double> ends[2];
+    for (auto& end : ends) {
+      for (int tries = 0; tries < 200 && end.empty(); ++tries) {
+        std::vector<double> q(7);
+        for (int j = 0; j < 7; ++j) q[j] = rng.Uniform(d.joint_lower[j], d.joint_upper[j]);
+        if (check.Valid(q.data())) end = q;
+      }
+    }
+    if (ends[0].empty() || ends[1].empty()) continue;
+    ++planned;
+    planning::PlanRequest request;
+    request.start = torch::zeros({1, 14});
+    request.goal = torch::zeros({1, 14});
+    for (int j = 0; j < 7; ++j) {
+      request.start[0][j] = ends[0][j];
+      request.goal[0][j] = ends[1][j];
+    }
+    request.scene = rows;
+    request.seed = static_cast<uint64_t>(trial);
+    const planning::PlanResult result = planner.Plan(request);
+    if (!result.found[0].item<bool>()) continue;
+    ++found;
+    EXPECT_EQ(IndependentCheck(robot, result.plans[0], rows, 0.0), "") << "trial " << trial;
+    EXPECT_TRUE(planner.checker().Check(result.plans, request.start[0], request.goal[0], rows)[0].valid());
+  }
+  EXPECT_GE(planned, 12);
+  EXPECT_GE(found, 10);
 }
 
 }  // namespace

@@ -14,6 +14,7 @@ import json
 import sys
 
 import h5py
+import yaml
 import numpy as np
 
 # Franka Panda, modified DH (Craig): (a_{i-1}, d_i, alpha_{i-1}); then the flange
@@ -90,7 +91,7 @@ def check(f, group, report, samples):
     tolerance, max_ratio, dt = report["goal_tolerance"], report["max_speed_ratio"], f.attrs["dt"]
     limits = np.array([2.175] * 4 + [2.61] * 3) if env == "franka" else None
     J = 7 if env == "franka" else 2
-    check = {k: float(v) for k, v in (line.split(": ") for line in report["check"].strip().splitlines())}
+    check = {k: float(v) for k, v in yaml.safe_load(report["check"]).items()}
     start, goal_state = g["start"][...], g["goal"][...]
     for i, sample in enumerate(samples):
         goal = np.linalg.norm(mine[i, -1] - goal_tcp)

@@ -57,7 +57,7 @@ std::unique_ptr<planning::LearnedPlanner> Proposer(const torch::Tensor& target, 
 HybridPlanner Hybrid(const torch::Tensor& target, HybridConfig config, guidance::GuidanceConfig guidance = {}) {
   const kinematics::TrajectoryInfo info = Particle();
   return HybridPlanner(Proposer(target, guidance), std::make_unique<classical::RrtConnectPlanner>(info, classical::RrtConnectConfig{}),
-                       validity::PlanChecker(kinematics::MakeRobot(info.robot), kDt, validity::CheckConfig{}, {}),
+                       validity::PlanChecker(kinematics::MakeRobot(info.robot), kDt, validity::CheckConfig{}),
                        config);
 }
 
@@ -95,7 +95,7 @@ TEST(HybridPlannerTest, AProposalThatIsOnlyTooFastIsRetimedAlongItsOwnPath) {
   // A disc far from the line: the dash (proposed as it is, unguided) is clear of it but four times too fast.
   const planning::PlanRequest request = Request(torch::tensor({{0.5f, 0.8f, 0.1f}}));
   const kinematics::TrajectoryInfo info = Particle();
-  const validity::PlanChecker checker(kinematics::MakeRobot(info.robot), kDt, validity::CheckConfig{}, {});
+  const validity::PlanChecker checker(kinematics::MakeRobot(info.robot), kDt, validity::CheckConfig{});
   ASSERT_EQ(checker.Check(Dash().unsqueeze(0), request.start[0], request.goal[0], request.scene, {})[0].failure,
             validity::Failure::kSpeedLimit);
   const planning::PlanResult result = Hybrid(Dash(), OneGuidedProposal(/*seeded=*/true), Unguided()).Plan(request);

@@ -69,92 +69,19 @@ TEST_F(ForwardKinematicsTest, MatchesMujocoInFloat64) {
     for (int i = 0; i < 3; ++i) {
       EXPECT_NEAR(result.tcp_position[b][i].item<double>(), d->site_xpos[3 * model_.tcp_site() + i], 1e-6);
     }
-    // The end spheres of each capsule sit on its segment's end points, as MuJoCo places the geom.
-    for (int g = 0; g < m.ngeom; ++g) {
-      if (m.geom_type[g] != mjGEOM_CAPSULE) continue;
-      const std::string name = mj_id2name(&m, mjOBJ_GEOM, g);
-      int first = -1, last = -1;
-      for (size_t s = 0; s < spheres.size(); ++s) {
-        if (spheres[s].geom != name) continue;
-        if (first < 0) first = static_cast<int>(s);
-        last = static_cast<int>(s);
-      }
-      ASSERT_GE(first, 0) << name;
-      const double h = m.geom_size[3 * g + 1];
+    // Every sphere sits at its link-frame centre as MuJoCo places that link's body.
+    for (size_t s = 0; s < spheres.size(); ++s) {
+      const int body = spheres[s].link + 1;
       for (int i = 0; i < 3; ++i) {
-        const double axis = d->geom_xmat[9 * g + 3 * i + 2];
-        EXPECT_NEAR(result.sphere_centres[b][first][i].item<double>(), d->geom_xpos[3 * g + i] - h * axis, 1e-6);
-        EXPECT_NEAR(result.sphere_centres[b][last][i].item<double>(), d->geom_xpos[3 * g + i] + h * axis, 1e-6);
+        double expected = d->xpos[3 * body + i];
+        for (int k = 0; k < 3; ++k) expected += d->xmat[9 * body + 3 * i + k] * spheres[s].centre[k];
+        EXPECT_NEAR(result.sphere_centres[b][static_cast<int64_t>(s)][i].item<double>(), expected, 1e-6) << s;
       }
     }
   }
   const torch::Tensor radii = fk_.SphereRadii();
   ASSERT_EQ(radii.sizes(), (std::vector<int64_t>{fk_.num_spheres()}));
   for (int64_t s = 0; s < fk_.num_spheres(); ++s) EXPECT_EQ(radii[s].item<double>(), spheres[s].radius);
-}
-
-TEST_F(ForwardKinematicsTest, NativeNearestObstaclesMatchTheScriptsAndAHandComputation) {
-  // NearestObstacles runs the native kernel for an arm among known shapes; the script
-  // (kinematics.py's sphere_nearest_obstacle on the MuJoCo-checked sphere centres) is the reference.
-  const torch::Tensor q = RandomQ(40, 7);
-  const torch::Tensor centres = fk_.SphereCentres(q);  // (40, S, 3)
-  torch::manual_seed(8);
-  auto near_arm = [&](int64_t K, int64_t extra, double spread) {
-    std::vector<torch::Tensor> rows;
-    for (int64_t k = 0; k < K; ++k) {
-      const torch::Tensor c = centres[torch::randint(40, {1}).item<int64_t>()][torch::randint(fk_.num_spheres(), {1}).item<int64_t>()];
-      rows.push_back(torch::cat({c + (torch::rand({3}, torch::kFloat64) - 0.5) * spread,
-                                 torch::rand({extra}, torch::kFloat64) * 0.15 + 0.02}));
-    }
-    return torch::stack(rows);
-  };
-  geometry::SceneRows scene;
-  scene.insert("spheres", near_arm(6, 1, 0.4));
-  torch::Tensor boxes = near_arm(5, 7, 0.4);
-  boxes.slice(1, 6, 10).normal_();  // random orientations
-  scene.insert("boxes", boxes);
-  torch::Tensor cylinders = near_arm(4, 6, 0.4);
-  cylinders.slice(1, 5, 9).normal_();
-  scene.insert("cylinders", cylinders);
-  torch::Tensor capsules = near_arm(3, 4, 0.4);
-  capsules.slice(1, 3, 6) = capsules.slice(1, 0, 3) + (torch::rand({3, 3}, torch::kFloat64) - 0.5) * 0.3;
-  scene.insert("capsules", capsules);
-
-  const SphereClearance native = fk_.NearestObstacles(q, scene);
-  const auto script = jit::CallFunction("sphere_nearest_obstacle", {centres, fk_.SphereRadii(), scene}).toTuple();
-  const torch::Tensor reference = script->elements()[0].toTensor();
-  ASSERT_EQ(native.clearance.sizes(), reference.sizes());
-  EXPECT_EQ(native.clearance.scalar_type(), torch::kFloat64);
-  EXPECT_LT((native.clearance - reference).abs().max().item<double>(), 1e-12);
-  EXPECT_TRUE(torch::equal(native.obstacle, script->elements()[1].toTensor()));
-  EXPECT_GT((reference < 0).sum().item<int64_t>(), 10) << "the test needs spheres inside obstacles";
-  EXPECT_GT((reference > 0.1).sum().item<int64_t>(), 100) << "and spheres far from every obstacle";
-  // Rows already prepared give the same bits.
-  const SphereClearance again = fk_.NearestObstacles(q, geometry::PreparedRows(scene, 3));
-  EXPECT_TRUE(torch::equal(again.clearance, native.clearance));
-  // Spheres alone, by hand: |c - o| - r_o - r_s, the smallest over the obstacles.
-  geometry::SceneRows balls;
-  balls.insert("spheres", scene.at("spheres"));
-  const SphereClearance among_balls = fk_.NearestObstacles(q, balls);
-  const torch::Tensor o = scene.at("spheres");
-  const torch::Tensor by_hand = std::get<0>(
-      ((centres.unsqueeze(2) - o.slice(1, 0, 3).view({1, 1, -1, 3})).norm(2, -1) - o.select(1, 3).view({1, 1, -1})).min(2));
-  EXPECT_LT((among_balls.clearance - (by_hand - fk_.SphereRadii().view({1, -1}))).abs().max().item<double>(), 1e-12);
-  // The same bits for any thread count, with 111 configurations (chunks and the vectorised loops' remainders
-  // split differently).
-  const torch::Tensor many = RandomQ(111, 9);
-  const int threads = at::get_num_threads();
-  at::set_num_threads(1);
-  const SphereClearance one = fk_.NearestObstacles(many, scene);
-  at::set_num_threads(2);
-  const SphereClearance two = fk_.NearestObstacles(many, scene);
-  at::set_num_threads(threads);
-  EXPECT_TRUE(torch::equal(one.clearance, two.clearance));
-  EXPECT_TRUE(torch::equal(one.obstacle, two.obstacle));
-  // No obstacles: +inf and -1.
-  const SphereClearance none = fk_.NearestObstacles(q, geometry::SceneRows());
-  EXPECT_TRUE(torch::all(torch::isinf(none.clearance)).item<bool>());
-  EXPECT_TRUE(torch::all(none.obstacle == -1).item<bool>());
 }
 
 TEST_F(ForwardKinematicsTest, KnownPosesThroughTorch) {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -19,8 +20,10 @@
 namespace flowplan::problems {
 namespace {
 
-const kinematics::Robot& Franka() {
-  static const kinematics::Robot arm(sim::LoadFrankaModel().description());
+using ::testing::HasSubstr;
+
+const collision::BodyModel& Franka() {
+  static const collision::BodyModel arm(sim::LoadFrankaModel().description());
   return arm;
 }
 
@@ -33,6 +36,7 @@ std::string Write(const std::string& name, const std::string& text) {
 MoveItImportOptions Options() {
   MoveItImportOptions options;
   options.joint_names = FrankaJointNames();
+  options.held_names = {"panda_finger_joint1", "panda_finger_joint2"};
   return options;
 }
 
@@ -291,7 +295,8 @@ INSTANTIATE_TEST_SUITE_P(
         Malformed{"OtherFrame", Object("      header: {frame_id: camera}\n"
                                        "      primitives: [{type: sphere, dimensions: [0.1]}]\n"
                                        "      primitive_poses: [{position: [0, 0, 0]}]\n"),
-                  "", "scene: world.collision_objects[0] (thing).header.frame_id: \"camera\" is not the robot's base frame"},
+                  "", "scene: world.collision_objects[0] (thing).header.frame_id: \"camera\" is neither the robot's base, the world "
+                      "nor a fixed frame"},
         Malformed{"NoId", "world:\n  collision_objects:\n    - primitives: []\n", "",
                   "scene: world.collision_objects[0].id: missing"},
         Malformed{"NotAScene", "name: nothing\n", "", "scene: world: missing"},
@@ -309,8 +314,6 @@ INSTANTIATE_TEST_SUITE_P(
                   "panda_joint5, panda_joint6, panda_joint7], position: [0, -0.3, 0, -2.2, 0, 2, 0.8]}}\n"
                   "goal_constraints: [{position_constraints: [{link_name: panda_hand}]}]\n",
                   "request: goal_constraints[0].joint_constraints: missing: only joint-space goals are imported"},
-        Malformed{"OutsideLimits", "", Request(kStart, {0.6, 0.1, 0.0, 0.5, 0.0, 2.1, 0.8}),
-                  "request: goal: panda_joint4 = 0.5 is outside the joint limits"},
         Malformed{"GoalNotAMapping", "",
                   "start_state: {joint_state: {name: [panda_joint1, panda_joint2, panda_joint3, panda_joint4, "
                   "panda_joint5, panda_joint6, panda_joint7], position: [0, -0.3, 0, -2.2, 0, 2, 0.8]}}\n"
@@ -321,13 +324,6 @@ INSTANTIATE_TEST_SUITE_P(
                   "", "scene: world.collision_objects[0] (thing).header: expected a mapping with frame_id"},
         Malformed{"JointStateNotAMapping", "", "start_state: {joint_state: 5}\ngoal_constraints: []\n",
                   "request: start_state.joint_state: expected a mapping with name and position"},
-        Malformed{"VirtualJointMoved",
-                  "robot_state:\n  multi_dof_joint_state:\n    joint_names: [virtual_joint]\n"
-                  "    transforms: [{translation: {x: 0.2, y: 0, z: 0}, rotation: {x: 0, y: 0, z: 0, w: 1}}]\n" +
-                      Object("      primitives: [{type: sphere, dimensions: [0.1]}]\n"
-                             "      primitive_poses: [{position: [0.5, 0, 0.5]}]\n"),
-                  "", "scene: robot_state.multi_dof_joint_state.transforms[0] (virtual_joint): the robot is placed "
-                      "away from the world's origin (translation 0.2, 0.0, 0.0)"},
         Malformed{"NamesPositions", "",
                   "start_state: {joint_state: {name: [panda_joint1, panda_joint2], position: [0]}}\n"
                   "goal_constraints: []\n",
@@ -348,6 +344,107 @@ TEST(MoveItImportTest, AnIdentityVirtualJointIsTheBaseFrame) {
     EXPECT_EQ(placed.scene.size(), plain.scene.size());
     EXPECT_EQ(placed.start_q, plain.start_q);
   }
+}
+
+TEST(MoveItImportTest, AStartOrGoalPastALimitIsMovedOntoItWithinTheToleranceAndRefusedBeyond) {
+  const auto& d = Franka().description();
+  const std::string scene = Write("scene.yaml", kScene);
+  std::vector<double> at = kGoal, just = kGoal, past = kGoal;
+  at[3] = d.joint_upper[3];           // exactly at the limit, as MotionBenchMaker writes many
+  just[3] = d.joint_upper[3] + 0.0014;  // MotionBenchMaker's table_pick goal: 1.4 mrad past it
+  past[3] = d.joint_upper[3] + 0.01;
+  const Problem on = ImportMoveItProblem(Franka(), scene, Write("r1.yaml", Request(kStart, at)), "on", Options());
+  EXPECT_EQ(on.status, "ok");
+  EXPECT_EQ(on.goal_q[3], d.joint_upper[3]);
+  EXPECT_TRUE(on.notes.empty());
+  const Problem moved = ImportMoveItProblem(Franka(), scene, Write("r2.yaml", Request(kStart, just)), "moved", Options());
+  EXPECT_EQ(moved.status, "ok");
+  EXPECT_EQ(moved.goal_q[3], d.joint_upper[3]);
+  ASSERT_EQ(moved.notes.size(), 1u);
+  EXPECT_THAT(moved.notes[0], HasSubstr("goal: panda_joint4 = -0.0684 is 0.0014 past its upper limit -0.0698; moved onto "
+                                        "the limit"));
+  const Problem refused = ImportMoveItProblem(Franka(), scene, Write("r3.yaml", Request(kStart, past)), "past", Options());
+  EXPECT_EQ(refused.status, "refused");
+  EXPECT_THAT(refused.reason, HasSubstr("goal: panda_joint4 = -0.0598 is 0.01 past its upper limit -0.0698 (more than "
+                                        "the tolerance 0.002)"));
+  EXPECT_EQ(refused.goal_q[3], past[3]);  // as the file gives it
+  MoveItImportOptions strict = Options();
+  strict.limit_tolerance = 0.001;
+  EXPECT_EQ(ImportMoveItProblem(Franka(), scene, Write("r4.yaml", Request(kStart, just)), "s", strict).status, "refused");
+}
+
+TEST(MoveItImportTest, AStartInAnObstacleIsRefusedAndTheFingersAreHeldAsTheFileHoldsThem) {
+  // A box around the start's hand; the request holds the fingers 4 cm open (Request writes 0.04 for the first).
+  double tcp[3];
+  Franka().Tcp(kStart.data(), tcp);
+  char text[512];
+  std::snprintf(text, sizeof(text), R"(world:
+  collision_objects:
+    - id: block
+      primitives: [{type: box, dimensions: [0.1, 0.1, 0.1]}]
+      primitive_poses: [{position: [%.9f, %.9f, %.9f], orientation: [0, 0, 0, 1]}]
+)",
+                tcp[0], tcp[1], tcp[2]);
+  MoveItImportOptions keep = Options();
+  keep.grasp = GraspRule::kNone;
+  const Problem p = ImportMoveItProblem(Franka(), Write("scene.yaml", text), Write("request.yaml", Request(kStart, kGoal)),
+                                        "p", keep);
+  EXPECT_EQ(p.status, "refused");
+  EXPECT_THAT(p.reason, HasSubstr("start: sphere"));
+  EXPECT_THAT(p.reason, HasSubstr("from obstacle 0 (block)"));
+  ASSERT_EQ(p.held.size(), 1u);
+  EXPECT_EQ(p.held[0].joint, "panda_finger_joint1");
+  EXPECT_EQ(p.held[0].value, 0.04);
+  EXPECT_EQ(p.floor_height, -INFINITY);  // MoveIt scenes have no floor
+  const Problem fine = ImportMoveItProblem(Franka(), Write("scene2.yaml", kScene),
+                                           Write("request2.yaml", Request(kStart, kGoal)), "fine", keep);
+  EXPECT_EQ(fine.status, "ok");
+  EXPECT_EQ(fine.reason, "");
+}
+
+TEST(MoveItImportTest, TheObstaclesOfARobotPlacedByItsVirtualJointAreMovedIntoItsBaseFrame) {
+  // The base stands at (0.2, -0.1, 0.05) turned 90° about z; a sphere in the world frame, a box in the base frame
+  // (panda_link0) and a cylinder in a fixed frame 1 m up.
+  const std::string scene = Write("scene.yaml", R"(robot_state:
+  multi_dof_joint_state:
+    joint_names: [virtual_joint]
+    transforms: [{translation: [0.2, -0.1, 0.05], rotation: [0, 0, 0.7071067811865476, 0.7071067811865476]}]
+fixed_frame_transforms:
+  - child_frame_id: shelf_frame
+    transform: {translation: [0, 0, 1], rotation: [0, 0, 0, 1]}
+world:
+  collision_objects:
+    - id: ball
+      header: {frame_id: world}
+      primitives: [{type: sphere, dimensions: [0.05]}]
+      primitive_poses: [{position: [0.7, -0.1, 0.55], orientation: [0, 0, 0, 1]}]
+    - id: crate
+      header: {frame_id: panda_link0}
+      primitives: [{type: box, dimensions: [0.1, 0.2, 0.3]}]
+      primitive_poses: [{position: [0.5, 0, 0.1], orientation: [0, 0, 0, 1]}]
+    - id: post
+      header: {frame_id: shelf_frame}
+      primitives: [{type: cylinder, dimensions: [0.2, 0.02]}]
+      primitive_poses: [{position: [0.2, 0.4, 0], orientation: [0, 0, 0, 1]}]
+)");
+  MoveItImportOptions keep = Options();
+  keep.grasp = GraspRule::kNone;
+  const Problem p = ImportMoveItProblem(Franka(), scene, Write("request.yaml", Request(kStart, kGoal)), "p", keep);
+  const Eigen::Isometry3d base = Eigen::Translation3d(0.2, -0.1, 0.05) *
+                                 Eigen::Quaterniond(0.7071067811865476, 0, 0, 0.7071067811865476);
+  ASSERT_EQ(p.scene.spheres.size(), 1u);
+  const Eigen::Vector3d ball = base.inverse() * Eigen::Vector3d(0.7, -0.1, 0.55);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(p.scene.spheres[0].centre[i], ball[i], 1e-12);
+  ASSERT_EQ(p.scene.boxes.size(), 1u);
+  EXPECT_THAT(p.scene.boxes[0].centre, ::testing::ElementsAre(0.5, 0.0, 0.1));
+  ASSERT_EQ(p.scene.cylinders.size(), 1u);
+  const Eigen::Vector3d post = base.inverse() * Eigen::Vector3d(0.2, 0.4, 1.0);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(p.scene.cylinders[0].centre[i], post[i], 1e-12);
+  // The cylinder's axis, world z, is still the base's z (a turn about z).
+  const Eigen::Quaterniond q(p.scene.cylinders[0].quaternion[0], p.scene.cylinders[0].quaternion[1],
+                             p.scene.cylinders[0].quaternion[2], p.scene.cylinders[0].quaternion[3]);
+  EXPECT_LT((q * Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitZ()).norm(), 1e-12);
+  EXPECT_THAT(p.base_pose, ::testing::ElementsAre(0.2, -0.1, 0.05, 0.7071067811865476, 0.0, 0.0, 0.7071067811865476));
 }
 
 TEST(MoveItImportTest, PairsAreFoundByNumber) {

@@ -8,6 +8,8 @@
 #include <random>
 
 #include "core/error.h"
+#include "spheres/cover.h"
+#include "spheres/mesh.h"
 
 namespace flowplan::sim {
 namespace {
@@ -133,40 +135,38 @@ TEST_F(FrankaModelTest, FileAndBuiltInModelAreTheSame) {
   EXPECT_EQ(file.description().spheres.size(), model_.description().spheres.size());
 }
 
-TEST_F(FrankaModelTest, DescriptionHasEveryLinkAndSpheresCoverTheCapsules) {
+TEST_F(FrankaModelTest, CollisionSpheresCoverThePublishedCollisionMeshes) {
   const kinematics::RobotDescription& description = model_.description();
   ASSERT_EQ(description.num_joints, 7);
   ASSERT_EQ(description.links.size(), 11u);  // link0..link7, hand, two fingers
   EXPECT_EQ(description.links[description.tcp_link].name, "hand");
-  for (int l = 0; l < 11; ++l) {
-    int count = 0;
-    for (const auto& s : description.spheres) count += s.link == l;
-    EXPECT_GT(count, 0) << "link " << description.links[l].name << " has no sphere";
+  // Every link's mesh (robots/franka_panda/meshes, in the link's frame) lies inside its spheres, on surface samples
+  // the fit never saw, and no sphere reaches far outside it (fitted for 1 cm; 15 mm on the wrist's housing).
+  const std::string dir = std::string(FLOWPLAN_SOURCE_DIR) + "/robots/franka_panda/meshes/";
+  for (size_t l = 0; l < description.links.size(); ++l) {
+    const std::string& name = description.links[l].name;
+    const std::string file = name == "left_finger" || name == "right_finger" ? "finger.obj" : name + ".obj";
+    std::vector<spheres::Sphere> cover;
+    for (const auto& s : description.spheres) {
+      if (s.link == static_cast<int>(l)) cover.push_back({s.centre, s.radius});
+    }
+    ASSERT_FALSE(cover.empty()) << name;
+    const spheres::CoverReport report = spheres::CheckCover(spheres::LoadMesh(dir + file), cover, 0.004, 101);
+    EXPECT_GT(report.samples, 100) << name;
+    EXPECT_EQ(report.uncovered, 0) << name << ": " << report.largest_uncovered << " m outside every sphere";
+    EXPECT_LT(report.largest_outside, 0.016) << name;
   }
-  // Points inside every collision capsule lie inside one of its spheres.
-  const mjModel& m = model_.mj();
-  std::mt19937_64 gen(3);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  for (int g = 0; g < m.ngeom; ++g) {
-    if (m.geom_type[g] != mjGEOM_CAPSULE) continue;
-    const std::string name = mj_id2name(&m, mjOBJ_GEOM, g);
-    const double r = m.geom_size[3 * g], h = m.geom_size[3 * g + 1];
-    const Eigen::Quaterniond rot(m.geom_quat[4 * g], m.geom_quat[4 * g + 1], m.geom_quat[4 * g + 2],
-                                 m.geom_quat[4 * g + 3]);
-    const Eigen::Vector3d centre(m.geom_pos[3 * g], m.geom_pos[3 * g + 1], m.geom_pos[3 * g + 2]);
-    for (int trial = 0; trial < 2000; ++trial) {
-      Eigen::Vector3d offset(unit(gen), unit(gen), unit(gen));
-      if (offset.norm() > 1.0) continue;
-      const Eigen::Vector3d local = r * offset + Eigen::Vector3d(0, 0, h * unit(gen));
-      const Eigen::Vector3d point = centre + rot * local;
-      bool covered = false;
-      for (const auto& s : description.spheres) {
-        if (s.geom != name) continue;
-        covered |= (point - Eigen::Vector3d(s.centre[0], s.centre[1], s.centre[2])).norm() <= s.radius + 1e-12;
-      }
-      ASSERT_TRUE(covered) << name << " point " << point.transpose();
+}
+
+TEST_F(FrankaModelTest, TheFingersAreHeldPrismaticJointsAndTheArmJointsCarryTheirPublishedNames) {
+  const kinematics::RobotDescription& description = model_.description();
+  for (const auto& link : description.links) {
+    if (link.name == "left_finger" || link.name == "right_finger") {
+      EXPECT_EQ(link.type, kinematics::JointType::kPrismatic) << link.name;
+      EXPECT_EQ(link.joint_name, link.name == "left_finger" ? "panda_finger_joint1" : "panda_finger_joint2");
     }
   }
+  for (int j = 0; j < 7; ++j) EXPECT_EQ(description.JointName(j), "panda_joint" + std::to_string(j + 1));
 }
 
 TEST(FrankaModelErrorsTest, BrokenXmlNamesTheSourceAndReason) {

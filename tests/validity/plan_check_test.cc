@@ -13,7 +13,6 @@
 
 #include "core/error.h"
 #include "sim/franka_model.h"
-#include "sim/franka_self_collision.h"
 #include "validity/plan_quality.h"
 
 namespace flowplan::validity {
@@ -119,32 +118,12 @@ TEST(PlanCheckTest, NonFiniteStatesFailAtOnceWithoutAHang) {
   EXPECT_EQ(checker.Check(plan, plan[0][0], plan[0][2], geometry::SceneRows())[0].failure, Failure::kNotFinite);
 }
 
-TEST(PlanCheckTest, TheConfigurationCheckIsAskedAtTheStatesAndBetweenThem) {
-  CheckConfig config;
-  config.max_speed_ratio = INFINITY;
-  config.self_resolution = 0.01;
-  // Objects to every configuration with x in (0.1, 0.12): only samples between the states can find it.
-  std::atomic<int> calls{0};
-  const ConfigurationCheck strip = [&](const std::vector<double>& q) {
-    ++calls;
-    return q[0] > 0.1 && q[0] < 0.12 ? std::string("in the strip") : std::string();
-  };
-  const PlanChecker checker(Disc(), 0.1, config, strip);
-  const torch::Tensor across = DiscPlan({{0.0, 0.0}, {0.3, 0.0}});
-  const PlanVerdict v = checker.Check(across, across[0][0], across[0][1], geometry::SceneRows())[0];
-  EXPECT_EQ(v.failure, Failure::kSelf);
-  EXPECT_EQ(v.reason, "between states 0 and 1: in the strip");
-  const torch::Tensor in = DiscPlan({{0.0, 0.0}, {0.11, 0.0}, {0.3, 0.0}});
-  EXPECT_EQ(checker.Check(in, in[0][0], in[0][2], geometry::SceneRows())[0].reason, "state 1: in the strip");
-  const torch::Tensor beside = DiscPlan({{0.0, 0.0}, {0.045, 0.0}});
-  calls = 0;
-  EXPECT_TRUE(checker.Check(beside, beside[0][0], beside[0][1], geometry::SceneRows())[0].valid());
-  EXPECT_EQ(calls, 2 + 4);  // the two states and the 4 samples between them, at most 0.01 apart
-}
-
-TEST(PlanCheckTest, TheFrankaCheckFindsTheHandFoldedOntoTheForearmAndTheFloor) {
-  const PlanChecker checker(Franka(), 1.0 / 15.0, CheckConfig{}, sim::FrankaConfigurationCheck());
-  // The ready pose, then joint 2 leaning far forward: the hand goes below the floor on the way.
+TEST(PlanCheckTest, TheFrankaCheckFindsTheFloorAndTheArmFoldedOntoItself) {
+  CheckConfig on_floor;
+  on_floor.floor_height = 0.0;
+  on_floor.max_speed_ratio = INFINITY;
+  const PlanChecker checker(Franka(), 1.0 / 15.0, on_floor);
+  // The ready pose, then joint 2 leaning far forward: the hand goes below the floor.
   torch::Tensor plan = torch::zeros({1, 3, 14});
   const std::vector<double> ready = {0.0, -0.785398, 0.0, -2.356194, 0.0, 1.570796, 0.785398};
   for (int t = 0; t < 3; ++t) {
@@ -153,34 +132,45 @@ TEST(PlanCheckTest, TheFrankaCheckFindsTheHandFoldedOntoTheForearmAndTheFloor) {
   plan[0][1][1] = 0.5f;
   plan[0][2][1] = 1.7f;
   plan[0][2][3] = -0.1f;
-  CheckConfig any_speed;
-  any_speed.max_speed_ratio = INFINITY;
-  const PlanChecker fast(Franka(), 1.0 / 15.0, any_speed, sim::FrankaConfigurationCheck());
-  const PlanVerdict v = fast.Check(plan, plan[0][0], plan[0][2], geometry::SceneRows())[0];
-  EXPECT_EQ(v.failure, Failure::kSelf);
-  EXPECT_THAT(v.reason, HasSubstr("floor-"));
+  const PlanVerdict v = checker.Check(plan, plan[0][0], plan[0][2], geometry::SceneRows())[0];
+  EXPECT_EQ(v.failure, Failure::kFloor);
+  EXPECT_THAT(v.reason, HasSubstr("from the floor"));
+  // Without a floor (the default, and a problem's -inf) the same plan goes below z = 0 unchecked.
+  CheckConfig no_floor = on_floor;
+  no_floor.floor_height = -INFINITY;
+  EXPECT_NE(PlanChecker(Franka(), 1.0 / 15.0, no_floor).Check(plan, plan[0][0], plan[0][2], geometry::SceneRows())[0].failure,
+            Failure::kFloor);
+  collision::WorldOptions world;
+  world.floor_height = -INFINITY;
+  EXPECT_NE(checker.Check(plan, plan[0][0], plan[0][2], geometry::SceneRows(), {}, world)[0].failure, Failure::kFloor);
+  // The hand folded back onto the upper arm.
+  torch::Tensor folded = plan.slice(1, 0, 1).expand({1, 2, 14}).contiguous().clone();
+  const std::vector<double> fold = {0.0, 0.0, 0.0, -3.0, 0.0, 0.2, 0.0};
+  for (int j = 0; j < 7; ++j) folded[0][1][j] = fold[static_cast<size_t>(j)];
+  const PlanVerdict self = checker.Check(folded.slice(1, 1, 2).expand({1, 2, 14}), folded[0][1], folded[0][1],
+                                         geometry::SceneRows())[0];
+  EXPECT_EQ(self.failure, Failure::kSelf);
+  EXPECT_THAT(self.reason, HasSubstr("overlaps"));
   // The ready pose alone is allowed.
   const torch::Tensor still = plan.slice(1, 0, 1).expand({1, 2, 14}).contiguous();
   EXPECT_TRUE(checker.Check(still, still[0][0], still[0][1], geometry::SceneRows())[0].valid());
 }
 
-TEST(PlanCheckTest, MotionBoundHoldsForEverySphereAndJoint) {
-  const auto robot = Franka();
-  const torch::Tensor bound = robot->MotionBound();  // (J, S)
-  ASSERT_EQ(bound.size(0), 7);
-  ASSERT_EQ(bound.size(1), robot->num_spheres());
-  torch::manual_seed(5);
-  const auto& d = robot->description();
-  const torch::Tensor lower = torch::tensor(d.joint_lower, torch::kFloat64), upper = torch::tensor(d.joint_upper, torch::kFloat64);
-  const torch::Tensor q = lower + (upper - lower) * torch::rand({500, 7}, torch::kFloat64);
-  for (int64_t j = 0; j < 7; ++j) {
-    torch::Tensor moved = q.clone();
-    moved.select(1, j) += 1e-4;
-    const torch::Tensor speed = (robot->SphereCentres(moved) - robot->SphereCentres(q)).norm(2, -1) / 1e-4;  // (500, S)
-    EXPECT_TRUE((speed <= bound[j].unsqueeze(0) + 1e-6).all().item<bool>()) << "joint " << j + 1;
-    // A joint the bound says cannot move a sphere does not.
-    EXPECT_TRUE((speed.amax(0).masked_select(bound[j] == 0) == 0).all().item<bool>()) << "joint " << j + 1;
+TEST(PlanCheckTest, AStateAtALimitInFloat32IsAtTheLimit) {
+  // A joint exactly at its limit, rounded to float32, lies up to 1.2e-7 past it: within check.limit_tolerance.
+  const PlanChecker checker(Franka(), 1.0 / 15.0, CheckConfig{});
+  std::vector<double> q = {0.0, -0.785398, 0.0, -2.356194, 0.0, 1.570796, 0.785398};
+  q[3] = Franka()->description().joint_upper[3];  // -0.0698
+  torch::Tensor plan = torch::zeros({1, 2, 14});
+  for (int t = 0; t < 2; ++t) {
+    for (int j = 0; j < 7; ++j) plan[0][t][j] = q[static_cast<size_t>(j)];
   }
+  ASSERT_GT(static_cast<double>(plan[0][0][3].item<float>()), q[3]);  // float32 rounds it past the limit
+  EXPECT_TRUE(checker.Check(plan, plan[0][0], plan[0][1], geometry::SceneRows())[0].valid());
+  plan[0][1][3] = static_cast<float>(q[3] + 1e-4);
+  const PlanVerdict past = checker.Check(plan, plan[0][0], plan[0][0], geometry::SceneRows())[0];
+  EXPECT_EQ(past.failure, Failure::kJointLimit);
+  EXPECT_THAT(past.reason, HasSubstr("state 1: panda_joint4 is"));
 }
 
 /// The reference: clearance at 2,000 points of every segment, interpolated linearly in joint space.
