@@ -32,7 +32,7 @@ std::string Kinematics(const kinematics::RobotDescription& d) {
     text += " | " + link.name + " " + std::to_string(link.parent) + " " + std::to_string(link.joint);
     numbers(link.pos);
     numbers(link.quat);
-    numbers(link.axis);
+    if (link.joint >= 0) numbers(link.axis);  // a link that no planned joint moves has no axis that matters
   }
   numbers(d.tcp_pos);
   numbers(d.tcp_quat);

@@ -310,6 +310,30 @@ TEST(FrankaPlanTest, BoxesAndCylindersBetweenJointGoalsForTheLearnedPlannerAndRr
   EXPECT_EQ(check_rrt.exit_code, 0) << check_rrt.output;
 }
 
+TEST(FrankaPlanTest, AnOlderExportedPlannerPlansProblemsWithHeldFingersAndNoFloorThroughTheHybrid) {
+  // The shipped planner's robot description predates finger joints; it is the built-in Franka, so it plans with the
+  // built-in collision body, whose fingers a problem may hold open. The start reaches below z = 0, legal without a
+  // floor and refused with one.
+  const fs::path dir = flowplan::testing::ScratchDir();
+  auto path = [&](const std::string& name) { return (dir / name).string(); };
+  auto problems = [&](const std::string& floor) {
+    return "source: test\nproblems:\n"
+           "  - {name: low, start_q: [0, 1.5, 0, -1.0, 0, 2.5, 0.785], goal_q: [0.6, 0.3, 0, -1.8, 0, 2.0, 0.785],"
+           " floor_height: " + floor + ", held: [{joint: panda_finger_joint1, value: 0.04},"
+           " {joint: panda_finger_joint2, value: 0.04}], scene: {}}\n";
+  };
+  std::ofstream(path("free.yaml")) << problems("-.inf");
+  std::ofstream(path("floor.yaml")) << problems("0");
+  const std::string common = " --planner " + Source("pretrained/franka_reach_planner.pt") +
+                             " --hybrid -n 1 --no-plot --max-speed-ratio 3 check.max_speed_ratio=3 --log-level warn";
+  ExpectOk(Flowplan("plan" + common + " --problems " + path("free.yaml") + " --out " + path("free")));
+  EXPECT_THAT(ReadText(path("free.json")), HasSubstr("\"planned\": 1, \"refused\": 0"));
+  EXPECT_THAT(ReadText(path("free.json")), HasSubstr("\"success_rate\": 1"));
+  ExpectOk(Flowplan("plan" + common + " --problems " + path("floor.yaml") + " --out " + path("floor")));
+  EXPECT_THAT(ReadText(path("floor.json")), HasSubstr("\"status\": \"refused\", \"reason\": \"start: sphere "));
+  EXPECT_THAT(ReadText(path("floor.json")), HasSubstr("floor"));
+}
+
 TEST(FrankaPlanTest, AProblemFileIsPlannedByOneProcessWithRefusalsAsAStatusAndTheHybridNamesEachPlansRoute) {
   const fs::path dir = flowplan::testing::ScratchDir();
   auto path = [&](const std::string& name) { return (dir / name).string(); };
