@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc)
 FLOWPLAN := $(BUILD)/apps/flowplan/flowplan
 
-.PHONY: deps configure build demo test bench clean
+.PHONY: deps configure build demo test test-long bench clean
 
 deps:
 	./scripts/install_deps.sh
@@ -19,10 +19,14 @@ demo: configure
 	cmake --build $(BUILD) -j $(JOBS) --target flowplan
 	FLOWPLAN=$(FLOWPLAN) ./scripts/demo.sh
 
-# Unit, reference and smoke tests (benchmarks excluded), one per core: each test
-# works in its own scratch folder.
+# Unit, reference and smoke tests (benchmarks and long tests excluded), one per
+# core: each test works in its own scratch folder.
 test: build
-	ctest --test-dir $(BUILD) -LE bench --output-on-failure -j $(JOBS)
+	ctest --test-dir $(BUILD) -LE 'bench|long' --output-on-failure -j $(JOBS)
+
+# The end-to-end tests too long for the default run (label `long`).
+test-long: build
+	ctest --test-dir $(BUILD) -L long --output-on-failure -j $(JOBS)
 
 bench: build
 	ctest --test-dir $(BUILD) -L bench --output-on-failure -V
