@@ -379,7 +379,7 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
           states = planning::StatesOf(timed, J, T, state_dim_).to(torch::kFloat32);
           const validity::PlanVerdict verdict =
               checker_.Check(states.unsqueeze(0), request.start[b], request.goal[b], request.scene, {},
-                             request.world)[0];
+                             request.world, /*measure_clearance=*/false)[0];
           if (verdict.valid()) {
             result.found[b] = true;
             break;

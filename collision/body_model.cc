@@ -352,6 +352,19 @@ double BodyModel::Travel(int l, uint64_t joints, const double* dq, const double*
   return std::min(local, bound);
 }
 
+double BodyModel::StaticTravel(int l, uint64_t joints, const double* dq) const {
+  if (point_) {
+    double total = 0.0;
+    for (int j = 0; j < J_; ++j) total += dq[j];
+    return total;
+  }
+  double bound = 0.0;
+  for (const auto& [j, reach] : chain_[static_cast<size_t>(l)]) {
+    if (joints & (uint64_t{1} << j)) bound += reach * dq[j];
+  }
+  return bound;
+}
+
 void BodyModel::PlaceFrames(const double* q, Frame* frames) const {
   if (point_) return;
   for (int l = 0; l < L_; ++l) {

@@ -106,6 +106,10 @@ class BodyModel {
   double Travel(int l, uint64_t joints, const double* dq, const double* axes, const double* points,
                 const double* centre) const;
 
+  /// The static part of Travel alone, Σ_j reach_j |Δq_j| over the joints of `joints` that move link l: never
+  /// below Travel, and cheaper (no axes), so a screen before it.
+  double StaticTravel(int l, uint64_t joints, const double* dq) const;
+
   /// Whether planned joint j turns (revolute) rather than slides.
   bool revolute(int j) const { return joint_revolute_[static_cast<size_t>(j)] != 0; }
 

@@ -273,11 +273,15 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
     Probe* b;
     double from, to;  // fractions of the whole segment
   };
-  thread_local std::vector<Piece> stack;
-  thread_local std::vector<double> dq, qm, link_travel;
-  stack.assign(1, {&first, &last, 0.0, 1.0});
+  // Pieces are looked at coarse to fine (breadth first): a motion that is not valid is usually found so after a
+  // few configurations, before its valid stretches are certified.
+  thread_local std::vector<Piece> queue;
+  thread_local std::vector<double> dq, qm, link_static, link_travel;
+  queue.assign(1, {&first, &last, 0.0, 1.0});
+  size_t next_piece = 0;
   dq.resize(static_cast<size_t>(J));
   qm.resize(static_cast<size_t>(J));
+  link_static.resize(static_cast<size_t>(L));
   link_travel.resize(static_cast<size_t>(L));
   // Along a piece, every point within link l's bounding sphere moves at most link_travel[l] (BodyModel::Travel,
   // from either end); the distance between a point of link a and one of link b changes by at most what the
@@ -288,30 +292,44 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
     return std::min(b.Travel(l, joints, d, A.axes.data(), A.points.data(), &A.bounds[at]),
                     b.Travel(l, joints, d, B.axes.data(), B.points.data(), &B.bounds[at]));
   };
-  while (!stack.empty()) {
-    const Piece piece = stack.back();
-    stack.pop_back();
+  while (next_piece < queue.size()) {
+    const Piece piece = queue[next_piece++];
     Probe& A = *piece.a;
     Probe& B = *piece.b;
     for (int j = 0; j < J; ++j) dq[static_cast<size_t>(j)] = std::abs(B.q[static_cast<size_t>(j)] - A.q[static_cast<size_t>(j)]);
+    // Each link's static travel bound first (cheap, never below the tight one); the tight bound only for the
+    // links whose distances the static one does not certify (NaN until then).
     for (int l = 0; l < L; ++l) {
-      link_travel[static_cast<size_t>(l)] = b.bound_radius(l) < 0 ? 0.0 : travel(A, B, l, b.ancestor_joints(l));
+      link_static[static_cast<size_t>(l)] = b.bound_radius(l) < 0 ? 0.0 : b.StaticTravel(l, b.ancestor_joints(l), dq.data());
+      link_travel[static_cast<size_t>(l)] = std::numeric_limits<double>::quiet_NaN();
     }
+    auto tight = [&](int l) {
+      double& t = link_travel[static_cast<size_t>(l)];
+      if (std::isnan(t)) t = b.bound_radius(l) < 0 ? 0.0 : travel(A, B, l, b.ancestor_joints(l));
+      return t;
+    };
+    // Whether link l's clearances from obstacle k at the two ends (box bounds first, then the bounding spheres')
+    // add up to `need`.
+    auto link_clear = [&](int l, int k, double need) {
+      double la = LinkClearance(A, l, k, need), lb = LinkClearance(B, l, k, need - la);
+      if (la + lb < need) {  // the box bounds may be loose: the bounding spheres' own clearances
+        la = LinkClearance(A, l, k, kExact);
+        lb = LinkClearance(B, l, k, kExact);
+      }
+      return la + lb >= need;
+    };
     // Whether the piece must be halved: some distance is not certified, and its points move at least
     // `resolution` (pieces whose uncertain points all move less are accepted).
     bool halve = false;
     for (int l = 0; l < L && !halve; ++l) {
       if (b.bound_radius(l) < 0) continue;
-      const double t = link_travel[static_cast<size_t>(l)];
-      const double need = 2.0 * margin + t;  // what the two ends' clearances must add up to
+      const double t_static = link_static[static_cast<size_t>(l)];
       const int s0 = b.first_sphere(l), s1 = b.first_sphere(l + 1);
       for (int k = 0; k < K && !halve; ++k) {
-        double la = LinkClearance(A, l, k, need), lb = LinkClearance(B, l, k, need - la);
-        if (la + lb < need) {  // the box bounds may be loose: the bounding spheres' own clearances
-          la = LinkClearance(A, l, k, kExact);
-          lb = LinkClearance(B, l, k, kExact);
-        }
-        if (la + lb >= need) continue;
+        if (link_clear(l, k, 2.0 * margin + t_static)) continue;
+        const double t = tight(l);
+        const double need = 2.0 * margin + t;  // what the two ends' clearances must add up to
+        if (t < t_static && link_clear(l, k, need)) continue;
         for (int c = b.first_cluster(l); c < b.first_cluster(l + 1) && !halve; ++c) {
           if (ClusterClearance(A, c, k) + ClusterClearance(B, c, k) >= need) continue;
           const int c0 = b.first_in_cluster(c), c1 = b.first_in_cluster(c + 1);
@@ -324,7 +342,10 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
         }
       }
       const size_t l_at = static_cast<size_t>(l);
-      if (!halve && A.link_floor[l_at] + B.link_floor[l_at] < need) {
+      if (!halve && A.link_floor[l_at] + B.link_floor[l_at] < 2.0 * margin + t_static &&
+          A.link_floor[l_at] + B.link_floor[l_at] < 2.0 * margin + tight(l)) {
+        const double t = tight(l);
+        const double need = 2.0 * margin + t;
         for (int c = b.first_cluster(l); c < b.first_cluster(l + 1); ++c) {
           Spheres(A, c);
           Spheres(B, c);
@@ -341,8 +362,10 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
       const auto [la, lb] = b.self_pairs()[static_cast<size_t>(pair)];
       const uint64_t only_a = b.ancestor_joints(la) & ~b.ancestor_joints(lb);
       const uint64_t only_b = b.ancestor_joints(lb) & ~b.ancestor_joints(la);
+      const double gaps = PairGap(A, pair) + PairGap(B, pair);
+      if (gaps >= link_static[static_cast<size_t>(la)] + link_static[static_cast<size_t>(lb)]) continue;
       const double t = travel(A, B, la, only_a) + travel(A, B, lb, only_b);
-      if (PairGap(A, pair) + PairGap(B, pair) >= t) continue;
+      if (gaps >= t) continue;
       for (int ca = b.first_cluster(la); ca < b.first_cluster(la + 1) && !halve; ++ca) {
         for (int cb = b.first_cluster(lb); cb < b.first_cluster(lb + 1) && !halve; ++cb) {
           auto cluster_gap = [&](const Probe& Q) {
@@ -380,10 +403,8 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
       verdict.contact = contact;
       return verdict;
     }
-    // The half nearer q_a is looked at first, so that a contact found is the first along the motion that
-    // the halving reaches.
-    stack.push_back({&M, piece.b, middle, piece.to});
-    stack.push_back({piece.a, &M, piece.from, middle});
+    queue.push_back({piece.a, &M, piece.from, middle});
+    queue.push_back({&M, piece.b, middle, piece.to});
   }
   return verdict;
 }

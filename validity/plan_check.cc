@@ -80,7 +80,8 @@ std::string PlanChecker::Refusal(const std::string& what, const std::vector<doub
 
 std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const torch::Tensor& start,
                                             const torch::Tensor& goal, const geometry::SceneRows& scene,
-                                            const torch::Tensor& found, const collision::WorldOptions& world) const {
+                                            const torch::Tensor& found, const collision::WorldOptions& world,
+                                            bool measure_clearance) const {
   const kinematics::RobotDescription& robot = robot_->description();
   const int64_t J = robot_->num_joints();
   if (!plans.defined() || plans.dim() != 3 || plans.size(2) < J) {
@@ -161,7 +162,7 @@ std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const to
     double smallest = std::numeric_limits<double>::infinity();
     for (int64_t t = 0; t < T; ++t) {
       const double* state = &states[static_cast<size_t>(t * J)];
-      smallest = std::min(smallest, checker.Clearance(state));
+      if (measure_clearance) smallest = std::min(smallest, checker.Clearance(state));
       if (!v.valid()) continue;
       const collision::Contact contact = checker.FirstContact(state);
       if (contact.found()) {
@@ -171,7 +172,7 @@ std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const to
         fail(failure, "state " + std::to_string(t) + ": " + checker.Describe(contact));
       }
     }
-    v.clearance = smallest;
+    v.clearance = measure_clearance ? smallest : std::numeric_limits<double>::quiet_NaN();
     for (int64_t t = 0; t + 1 < T && v.valid(); ++t) {
       const collision::MotionVerdict motion =
           checker.CheckMotion(&states[static_cast<size_t>(t * J)], &states[static_cast<size_t>((t + 1) * J)]);

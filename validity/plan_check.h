@@ -97,10 +97,11 @@ class PlanChecker {
   /// Checks plans (N, T, D) raw (positions first) against the start and goal
   /// (D,) or (N, D) raw states, `found` (N,) bool (undefined: all found), in
   /// `scene`, with the floor and held joints of `world` (what it leaves unset:
-  /// config().floor_height and the robot's own).
+  /// config().floor_height and the robot's own). Without `measure_clearance`
+  /// the verdicts' clearance is NaN (the verdict itself is the same, sooner).
   std::vector<PlanVerdict> Check(const torch::Tensor& plans, const torch::Tensor& start, const torch::Tensor& goal,
                                  const geometry::SceneRows& scene, const torch::Tensor& found = torch::Tensor(),
-                                 const collision::WorldOptions& world = {}) const;
+                                 const collision::WorldOptions& world = {}, bool measure_clearance = true) const;
 
   /// The validity check of configurations and motions in `scene` and `world`
   /// (as in Check), with this checker's settings: what RRT-Connect and the

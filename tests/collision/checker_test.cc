@@ -138,6 +138,44 @@ TEST(BodyModelTest, TravelBoundsHoldAlongRandomSegments) {
   }
 }
 
+TEST(BodyModelTest, TheStaticTravelBoundIsNeverBelowTheTightOneAndHoldsAlongRandomSegments) {
+  // What the motion check screens with first: it must bound every sphere's motion on the link, and never be
+  // tighter than Travel (a piece the static bound certifies, the tight one certifies too).
+  const BodyModel& body = *Franka();
+  const int L = body.num_links(), J = body.num_joints();
+  Rng rng(6);
+  std::vector<Frame> frames(static_cast<size_t>(L));
+  std::vector<double> a(static_cast<size_t>(3 * body.num_spheres())), c(a.size());
+  std::vector<double> axes(static_cast<size_t>(3 * J)), points(axes.size());
+  std::vector<double> bounds(static_cast<size_t>(3 * L)), clusters(static_cast<size_t>(3 * body.num_clusters()));
+  for (int trial = 0; trial < 100; ++trial) {
+    const std::vector<double> qa = RandomQ(rng), qb = RandomQ(rng);
+    std::vector<double> dq(static_cast<size_t>(J));
+    for (int j = 0; j < J; ++j) dq[static_cast<size_t>(j)] = std::abs(qb[j] - qa[j]);
+    body.Place(qa.data(), frames.data(), a.data());
+    body.JointAxes(frames.data(), axes.data(), points.data());
+    body.PlaceBounds(qa.data(), frames.data(), bounds.data(), clusters.data());
+    for (int l = 0; l < L; ++l) {
+      if (body.bound_radius(l) < 0) continue;
+      const uint64_t mask = body.ancestor_joints(l);
+      const double static_bound = body.StaticTravel(l, mask, dq.data());
+      EXPECT_LE(body.Travel(l, mask, dq.data(), axes.data(), points.data(), &bounds[static_cast<size_t>(3 * l)]),
+                static_bound + 1e-12) << "link " << l;
+      for (int k = 1; k <= 20; ++k) {
+        std::vector<double> q(7);
+        for (int j = 0; j < 7; ++j) q[j] = qa[j] + k / 20.0 * (qb[j] - qa[j]);
+        body.Place(q.data(), frames.data(), c.data());
+        for (int s = body.first_sphere(l); s < body.first_sphere(l + 1); ++s) {
+          double moved = 0.0;
+          for (int i = 0; i < 3; ++i) moved += std::pow(c[3 * s + i] - a[3 * s + i], 2);
+          EXPECT_LE(std::sqrt(moved), static_bound + 1e-12) << "link " << l << ", sphere " << s;
+        }
+      }
+      body.Place(qa.data(), frames.data(), a.data());
+    }
+  }
+}
+
 TEST(WorldTest, DistancesAreTheScriptsAndTheBoundsAreBelowThem) {
   const geometry::Scene scene = Clutter();
   const geometry::SceneRows rows = geometry::Rows(scene, 3, "test");
@@ -182,7 +220,9 @@ TEST(CheckerTest, ConfigurationsAgreeWithBruteForceOverEverySphereAndObstacle) {
         EXPECT_NEAR(contact.distance, brute[s][contact.other].item<double>(), 1e-12);
         EXPECT_LT(contact.distance, margin);
       }
-      if (!contact.found()) EXPECT_GE(smallest, margin);
+      if (!contact.found()) {
+        EXPECT_GE(smallest, margin);
+      }
     }
     EXPECT_GT(invalid, 20);  // the scene is in the way of many configurations
   }
