@@ -4,7 +4,8 @@
 // for covers the sphere generator (spheres/cover.h) fits to the meshes at
 // several overshoot settings.
 //
-//   sphere_cover_report MESH_DIR [--overshoot 0.01,0.015,0.02] [--out spheres.yaml] [--spheres FILE]
+//   sphere_cover_report MESH_DIR [--overshoot 0.01,0.015,0.02] [--max-spheres 64] [--out spheres.yaml]
+//                       [--spheres FILE]
 //
 // MESH_DIR holds the built-in Franka's collision meshes by link (link0.obj ..
 // link7.obj, hand.obj, finger.obj), each in its link's frame. With --out, the
@@ -12,6 +13,8 @@
 // robot description (link indices of the built-in Franka). With --spheres, the
 // spheres to report on are read from FILE (lines "link x y z radius", link
 // indices and frames of the built-in Franka) instead of the built-in ones.
+// --max-spheres caps each link's fitted cover (CoverSettings::max_spheres):
+// a link that needs more for the overshoot asked for gets a larger one.
 
 #include <spdlog/fmt/fmt.h>
 
@@ -40,17 +43,20 @@ std::vector<double> Numbers(const std::string& text) {
 
 int Main(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) == "--help") {
-    std::cout << "sphere_cover_report MESH_DIR [--overshoot a,b,c] [--out spheres.yaml]\n";
+    std::cout << "sphere_cover_report MESH_DIR [--overshoot a,b,c] [--max-spheres N] [--out spheres.yaml] "
+                 "[--spheres FILE]\n";
     return argc < 2 ? 1 : 0;
   }
   const std::string dir = argv[1];
   std::vector<double> overshoots = {0.01, 0.015, 0.02};
   std::string out_path, spheres_path;
+  int max_spheres = 64;
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--overshoot") overshoots = Numbers(argv[i + 1]);
     else if (flag == "--out") out_path = argv[i + 1];
     else if (flag == "--spheres") spheres_path = argv[i + 1];
+    else if (flag == "--max-spheres") max_spheres = std::stoi(argv[i + 1]);
     else throw Error("unknown option " + flag);
   }
   kinematics::RobotDescription robot = sim::LoadFrankaModel().description();
@@ -88,7 +94,7 @@ int Main(int argc, char** argv) {
     for (size_t o = 0; o < overshoots.size(); ++o) {
       spheres::CoverSettings settings;
       settings.overshoot = overshoots[o];
-      settings.max_spheres = 64;
+      settings.max_spheres = max_spheres;
       const std::vector<spheres::Sphere> cover = spheres::Cover(mesh, settings);
       const spheres::CoverReport r = spheres::CheckCover(mesh, cover, kSpacing, 7);
       total_fitted[o] += r.spheres;
