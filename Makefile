@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc)
 FLOWPLAN := $(BUILD)/apps/flowplan/flowplan
 
-.PHONY: deps configure build demo test test-long bench clean
+.PHONY: deps configure build demo test test-long bench fuzz clean
 
 deps:
 	./scripts/install_deps.sh
@@ -27,6 +27,17 @@ test: build
 # The end-to-end tests too long for the default run (label `long`).
 test-long: build
 	ctest --test-dir $(BUILD) -L long --output-on-failure -j $(JOBS)
+
+# The fuzz targets (fuzz/) under libFuzzer with ASan and UBSan, each for
+# FUZZ_SECONDS, in their own Clang build folder.
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 600
+fuzz:
+	./scripts/install_deps.sh --fuzz
+	cmake -S . -B $(FUZZ_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+	  -DCMAKE_CXX_COMPILER=clang++ -DFLOWPLAN_FUZZ=ON -DFLOWPLAN_FUZZ_SECONDS=$(FUZZ_SECONDS)
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target flowplan_fuzz_targets
+	ctest --test-dir $(FUZZ_BUILD) -L fuzz --output-on-failure -j $(JOBS)
 
 bench: build
 	ctest --test-dir $(BUILD) -L bench --output-on-failure -V

@@ -26,4 +26,8 @@ std::string JsonNumber(double value);
 /// A JSON string literal, quoted and escaped.
 std::string JsonString(const std::string& text);
 
+/// Comma-separated finite numbers ("0.5,0,0.2"); `option` names them in errors.
+/// @throws flowplan::Error naming the field that is empty or not a finite number.
+std::vector<double> ParseNumbers(const std::string& text, const std::string& option);
+
 }  // namespace flowplan

@@ -42,25 +42,4 @@ std::string RunFolderOf(const std::string& checkpoint) {
   return folder.empty() ? std::string(".") : folder.string();
 }
 
-std::vector<double> ParseNumbers(const std::string& text, const std::string& option) {
-  std::vector<double> values;
-  size_t begin = 0;
-  while (true) {
-    const size_t end = text.find(',', begin);
-    const std::string field = text.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
-    const std::string where = option + " value " + std::to_string(values.size() + 1) + " \"" + field + "\"";
-    char* rest = nullptr;
-    errno = 0;
-    const double value = std::strtod(field.c_str(), &rest);
-    if (field.empty() || rest != field.c_str() + field.size() || field.find_first_of(" \t") != std::string::npos) {
-      throw Error(where + ": not a number (expected comma-separated numbers)");
-    }
-    if (errno == ERANGE || !std::isfinite(value)) throw Error(where + ": not a finite number");
-    values.push_back(value);
-    if (end == std::string::npos) break;
-    begin = end + 1;
-  }
-  return values;
-}
-
 }  // namespace flowplan::experiment

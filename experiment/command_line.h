@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/format.h"
 #include "experiment/experiment_config.h"
 
 namespace flowplan::experiment {
@@ -46,8 +47,6 @@ void EnsureParentFolder(const std::string& path);
 /// The run folder a checkpoint belongs to: RUN/checkpoints/step_N.pt -> RUN.
 std::string RunFolderOf(const std::string& checkpoint);
 
-/// Comma-separated finite numbers; `option` names them in errors.
-/// @throws flowplan::Error naming the field that is empty or not a finite number.
-std::vector<double> ParseNumbers(const std::string& text, const std::string& option);
+using flowplan::ParseNumbers;  // core/format.h
 
 }  // namespace flowplan::experiment

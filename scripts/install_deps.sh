@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages flowplan builds and runs with; installs only
-# what is missing, with sudo when not root.
+# what is missing, with sudo when not root. With --fuzz, also Clang with
+# libFuzzer for the fuzz targets (`make fuzz`).
 set -euo pipefail
 
 packages=(
@@ -10,6 +11,9 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libgloo-dev libosmesa6-dev zlib1g-dev
   python3 python3-torch python3-h5py python3-numpy python3-matplotlib python3-yaml python3-pil
 )
+if [ "${1:-}" = "--fuzz" ]; then
+  packages+=(clang)
+fi
 
 missing=()
 for package in "${packages[@]}"; do
