@@ -179,3 +179,33 @@ TEST(ConfigTest, KeyListingShowsEveryLeafWithDefault) {
 
 }  // namespace
 }  // namespace flowplan
+
+TEST(ErrorTest, AMessageQuotingControlCharactersStaysOneLine) {
+  // What fuzzing found: a bad value holding a newline (or a YAML parser's message about one) made a two-line error.
+  const flowplan::Error error(std::string("file.yaml:3: expected a number, got \"a\nb\tc\r") + '\0' + "\x01\"");
+  EXPECT_EQ(std::string(error.what()), "file.yaml:3: expected a number, got \"a\\nb\\tc\\r\\x00\\x01\"");
+  // Printable text, UTF-8 included, is left as it is.
+  EXPECT_EQ(std::string(flowplan::Error("joint 4 is −0.07 past its limit").what()), "joint 4 is −0.07 past its limit");
+}
+
+struct MarginSection {
+  double margin = 0.0;
+  template <class V>
+  void Visit(V& v) {
+    v.Field("margin", margin, "m");
+  }
+};
+
+TEST(ErrorTest, AnUnknownKeyHoldingANewlineIsNamedOnOneLine) {
+  // What the config fuzz target found first (fuzz/corpus/config holds its input), as a test of its own.
+  MarginSection section;
+  try {
+    flowplan::config::Apply(flowplan::config::ParseYamlText("\"mar\\ngin\": 1\n", "fuzz.yaml"), section, "fuzz.yaml");
+    FAIL() << "an unknown key was accepted";
+  } catch (const flowplan::Error& error) {
+    const std::string message = error.what();
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    EXPECT_NE(message.find("unknown key"), std::string::npos) << message;
+  }
+}
+
