@@ -18,7 +18,10 @@
 //    deepest point's depth. A surface point inside an obstacle shows that the
 //    mesh enters the obstacle, by at least that point's depth.
 // A refusal is shown right when the surface check finds a point inside.
-// Only the Franka (the meshes are its links'); a Franka tool.
+// Only the Franka (the meshes are its links'); a Franka tool. Not looked at:
+// the floor (MotionBenchMaker has none), and MuJoCo's contacts of link0, which
+// MuJoCo welds to the world body with the obstacles and so never collides
+// (the surface check covers link0).
 
 #include <mujoco/mujoco.h>
 #include <unistd.h>
@@ -170,8 +173,9 @@ int Main(int argc, char** argv) {
   std::map<std::string, std::vector<std::array<double, 3>>> samples;  // surface points per mesh file, link frame
   for (const auto& [body, file] : kMeshes) {
     if (samples.count(file)) continue;
-    samples[file] = spheres::internal::RandomSurfacePoints(spheres::LoadMesh(meshes + "/" + file + ".obj"), spacing,
-                                                           7, nullptr);
+    const spheres::Mesh mesh = spheres::LoadMesh(meshes + "/" + file + ".obj");
+    spheres::ValidateMesh(mesh);
+    samples[file] = spheres::internal::RandomSurfacePoints(mesh, spacing, 7, nullptr);
   }
   const fs::path scratch = fs::temp_directory_path() / ("mesh_contacts_" + std::to_string(::getpid()));
   fs::create_directories(scratch);

@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
 
 int main(int argc, char** argv) {
@@ -41,6 +43,12 @@ int main(int argc, char** argv) {
     std::ifstream in(path, std::ios::binary);
     const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     LLVMFuzzerTestOneInput(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
+  }
+  // The files the entry points wrote their inputs to (fuzz_input.h).
+  for (const auto& entry : fs::directory_iterator("/tmp")) {
+    if (entry.path().filename().string().rfind("flowplan_fuzz_" + std::to_string(::getpid()), 0) == 0) {
+      fs::remove(entry.path());
+    }
   }
   std::fprintf(stderr, "%zu inputs, no finding\n", inputs.size());
   return 0;

@@ -1,9 +1,9 @@
 // A scene file (`--scene`, geometry::LoadScene) and the shape arguments of
 // `flowplan plan` (`--sphere/--box/--cylinder/--capsule x,y,...`, parsed by
-// ParseNumbers and added by geometry::AddObstacle). The first byte
-// picks: even, the rest is a scene file; odd, each line of the rest is
-// "KIND VALUES" with KIND one of spheres, boxes, cylinders, capsules, added to
-// a 3-D scene (2-D when the byte is 1 or 3 mod 4).
+// ParseNumbers and added by geometry::AddObstacle). The first byte picks: even,
+// the rest is a scene file; odd, each line of the rest is "KIND VALUES" with
+// KIND one of spheres, boxes, cylinders, capsules. The scene is 2-D when the
+// byte is 1 or 2 mod 4, else 3-D.
 
 #include <sstream>
 
@@ -14,12 +14,12 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
   try {
+    const int W = data[0] % 4 == 1 || data[0] % 4 == 2 ? 2 : 3;
     if (data[0] % 2 == 0) {
       const flowplan::geometry::Scene scene =
           flowplan::geometry::LoadScene(flowplan::fuzz::AsFile(data + 1, size - 1, ".yaml"));
-      scene.Validate(3, "scene");
+      scene.Validate(W, "scene");
     } else {
-      const int W = data[0] % 4 == 1 ? 2 : 3;
       flowplan::geometry::Scene scene;
       std::istringstream lines(std::string(reinterpret_cast<const char*>(data + 1), size - 1));
       for (std::string line; std::getline(lines, line);) {
