@@ -12,7 +12,7 @@ packages=(
   python3 python3-torch python3-h5py python3-numpy python3-matplotlib python3-yaml python3-pil
 )
 if [ "${1:-}" = "--fuzz" ]; then
-  packages+=(clang)
+  packages+=(clang libclang-rt-14-dev)  # libFuzzer and the sanitizer runtimes: only a Recommends of clang
 fi
 
 missing=()
