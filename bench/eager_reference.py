@@ -746,6 +746,10 @@ def main():
         parser.error("--mpd-checkpoint and --mpd-export go together")
 
     torch.set_num_threads(args.threads)
+    if args.check_only:
+        # The graph executor's optimisations off, as flowplan itself plans: with them on, the first calls of the
+        # exported file's methods profile their graphs for seconds each, which the checks need not wait for.
+        torch._C._set_graph_executor_optimize(False)
     torch.set_flush_denormal(True)  # as bench/speed_bench.cc does for the C++ side
 
     checkpoint = torch.jit.load(args.checkpoint, map_location="cpu")

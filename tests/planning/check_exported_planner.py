@@ -23,6 +23,10 @@ import torch
 COLUMNS = {"spheres": lambda W: W + 1, "boxes": lambda W: 10 if W == 3 else 5,
            "cylinders": lambda W: 9 if W == 3 else 5, "capsules": lambda W: 2 * W + 1}
 
+# The graph executor's optimisations off, as flowplan itself plans and docs/export.md advises: with them on,
+# the first calls of every method and setting below profile their graphs, seconds each.
+torch._C._set_graph_executor_optimize(False)
+
 path, folder, batch, schedule, kinds, mode = sys.argv[1:7]
 batch = int(batch)
 if len(sys.argv) > 7:
