@@ -79,6 +79,11 @@ PlanSubject FromCheckpoint(const PlanArgs& args) {
 /// RRT-Connect needs a robot and the trajectories to time its paths to: those
 /// the config's data generator makes (generate.*), no data file.
 PlanSubject FromRrtConnect(const PlanArgs& args) {
+  if (args.overlay_path.empty()) {
+    // Without one the config's defaults would plan for the 2-D particle, which is never what was meant.
+    throw Error("plan --rrt-connect: expected --config FILE, whose generate.* names the robot and the trajectories "
+                "to time the paths to (e.g. --config configs/franka_joint.yaml)");
+  }
   PlanSubject subject;
   subject.config = LoadExperiment(args.overlay_path, args.overrides);
   subject.trajectory = datasets::MakeTask(subject.config.generate)->Layout().info;
