@@ -27,8 +27,16 @@ namespace {
 using namespace flowplan;
 
 int Main(int argc, char** argv) {
+  const char* usage =
+      "usage: collision_bench PROBLEMS.yaml [--robot ROBOT.yaml] [--length 0.5] [--count 20000]\n"
+      "Times the configuration and motion checks on each problem's scene: COUNT random configurations and\n"
+      "COUNT random motions of LENGTH (joint-space norm, rad) for the Franka or ROBOT.yaml.\n";
+  if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::cout << usage;
+    return 0;
+  }
   if (argc < 2) {
-    std::cout << "collision_bench PROBLEMS.yaml [--robot ROBOT.yaml] [--length 0.5] [--count 20000]\n";
+    std::cerr << usage;
     return 1;
   }
   std::string robot_path;

@@ -155,8 +155,16 @@ double SignedDistance(const mjModel& m, const mjData& d, int g, const double* p)
 }
 
 int Main(int argc, char** argv) {
+  const char* usage =
+      "usage: mesh_contacts PROBLEMS.yaml [--meshes DIR] [--all] [--spacing 0.002]\n"
+      "At each refused start and goal (every one with --all), MuJoCo's contacts between the Panda's collision\n"
+      "meshes (DIR) and the problem's obstacles, and the nearest mesh surface point (samples SPACING m apart).\n";
+  if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::cout << usage;
+    return 0;
+  }
   if (argc < 2) {
-    std::cout << "mesh_contacts PROBLEMS.yaml [--meshes DIR] [--all] [--spacing 0.002]\n";
+    std::cerr << usage;
     return 1;
   }
   std::string meshes = std::string(FLOWPLAN_SOURCE_DIR) + "/robots/franka_panda/meshes";

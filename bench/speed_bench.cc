@@ -143,7 +143,16 @@ int Main(int argc, char** argv) {
     else if (arg == "--out") out = value();
     else if (arg == "--python") python = value();
     else if (arg == "--no-eager") eager = false;
-    else throw Error("unknown argument " + arg + " (see the comment at the top of bench/speed_bench.cc)");
+    else if (arg == "--help" || arg == "-h") {
+      std::printf(
+          "usage: speed_bench [--checkpoint CKPT] [--threads N] [--repeats R] [--out DIR] [--python PY] [--no-eager]\n"
+          "flowplan beside PyTorch eager on the same weights: the Franka UNet's forward pass, a training step, and\n"
+          "plans in-process and from the exported file, each the median of R timed repeats on N threads; then\n"
+          "bench/eager_reference.py (run by PY, skipped with --no-eager) times the same work in plain PyTorch and\n"
+          "checks its plans. Without --checkpoint, freshly initialised weights of configs/franka_reach.yaml's\n"
+          "network. Writes DIR/flowplan.json and DIR/eager.json (default build/speed_bench).\n");
+      return 0;
+    } else throw Error("unknown argument " + arg + " (speed_bench --help lists them)");
   }
   fs::create_directories(out);
   at::globalContext().setFlushDenormal(true);
