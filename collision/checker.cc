@@ -86,7 +86,8 @@ void Checker::Fill(Probe& p, const double* q) const {
   for (int l = 0; l < L; ++l) {
     const double R = b.bound_radius(l);
     const double* c = &p.bounds[static_cast<size_t>(l * W)];
-    w.LowerBounds(c, R, &p.link_obstacle[static_cast<size_t>(l * K)]);
+    // data() + offset, not &v[offset]: with no obstacles (K = 0) the vector is empty and has no element to refer to.
+    w.LowerBounds(c, R, p.link_obstacle.data() + static_cast<size_t>(l * K));
     p.link_floor[static_cast<size_t>(l)] =
         b.floor_checked(l) && w.floor().present ? w.FloorDistance(c) - R : std::numeric_limits<double>::infinity();
   }
