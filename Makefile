@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc)
 FLOWPLAN := $(BUILD)/apps/flowplan/flowplan
 
-.PHONY: deps configure build demo test test-long bench fuzz clean
+.PHONY: deps configure build demo test test-long bench fuzz sanitize sanitize-thread clean
 
 deps:
 	./scripts/install_deps.sh
@@ -38,6 +38,20 @@ fuzz:
 	  -DCMAKE_CXX_COMPILER=clang++ -DFLOWPLAN_FUZZ=ON -DFLOWPLAN_FUZZ_SECONDS=$(FUZZ_SECONDS)
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target flowplan_fuzz_targets
 	ctest --test-dir $(FUZZ_BUILD) -L fuzz --output-on-failure -j $(JOBS)
+
+# The default test suite built with AddressSanitizer, LeakSanitizer and
+# UndefinedBehaviorSanitizer; the threaded parts' tests with ThreadSanitizer.
+ASAN_BUILD ?= build-asan
+TSAN_BUILD ?= build-tsan
+sanitize: deps
+	cmake -S . -B $(ASAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFLOWPLAN_SANITIZE=address
+	cmake --build $(ASAN_BUILD) -j $(JOBS)
+	./scripts/sanitize.sh address $(ASAN_BUILD) -j $(JOBS)
+
+sanitize-thread: deps
+	cmake -S . -B $(TSAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFLOWPLAN_SANITIZE=thread
+	cmake --build $(TSAN_BUILD) -j $(JOBS)
+	./scripts/sanitize.sh thread $(TSAN_BUILD) -j $(JOBS)
 
 bench: build
 	ctest --test-dir $(BUILD) -L bench --output-on-failure -V
