@@ -10,7 +10,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     const std::string path = flowplan::fuzz::AsFile(data, size, ".h5");
     const flowplan::datasets::TrajectoryDataset dataset = flowplan::datasets::ReadDataset(path);
-    if (dataset.num_episodes > 0) flowplan::datasets::ReadDatasetEpisodes(path, {0, dataset.num_episodes - 1});
+    // The first and the last episode (ascending, as the reader requires; one index for a one-episode file).
+    const int64_t n = dataset.num_episodes;
+    if (n == 1) flowplan::datasets::ReadDatasetEpisodes(path, {0});
+    if (n > 1) flowplan::datasets::ReadDatasetEpisodes(path, {0, n - 1});
   } catch (const flowplan::Error& error) {
     flowplan::fuzz::ExpectOneLine(error);
   }

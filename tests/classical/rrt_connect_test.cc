@@ -336,7 +336,7 @@ std::string IndependentCheck(const kinematics::Robot& robot, const torch::Tensor
   }
   const int64_t S = robot.num_spheres();
   const torch::Tensor radii = robot.SphereRadii();  // (S,)
-  torch::Tensor reach = radii.view({S, 1}) + radii.view({1, S});  // (S, S), +inf for the pairs not checked
+  torch::Tensor reach = radii.view({S, 1}) + radii.view({1, S});  // (S, S); -inf for the pairs not checked: gap +inf
   auto r = reach.accessor<double, 2>();
   for (int64_t s = 0; s < S; ++s) {
     for (int64_t t = 0; t < S; ++t) {
