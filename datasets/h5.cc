@@ -1,5 +1,6 @@
 #include "datasets/h5.h"
 
+#include <limits>
 #include <mutex>
 #include <numeric>
 
@@ -139,6 +140,23 @@ std::vector<int64_t> File::Shape(const std::string& name) const {
   if (rank < 0) Fail(name, "cannot read dataset shape");
   std::vector<hsize_t> dims(rank);
   H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  // The shape is only a header: a corrupt one must not become an allocation of terabytes. Without filters
+  // (compression) a dataset stores every element, so its bytes bound what its shape may claim.
+  Handle type(H5Dget_type(set.get()), H5Tclose);
+  Handle properties(H5Dget_create_plist(set.get()), H5Pclose);
+  if (!type.valid() || !properties.valid()) Fail(name, "cannot read dataset type");
+  uint64_t bytes = H5Tget_size(type.get());
+  for (const hsize_t d : dims) {
+    if (d > static_cast<hsize_t>(std::numeric_limits<int64_t>::max()) || __builtin_mul_overflow(bytes, d, &bytes)) {
+      Fail(name, "dataset shape too large (corrupt file)");
+    }
+  }
+  const int filters = H5Pget_nfilters(properties.get());
+  const hsize_t stored = H5Dget_storage_size(set.get());
+  if (filters == 0 && bytes > stored) {
+    Fail(name, "dataset shape needs " + std::to_string(bytes) + " bytes but the file stores " + std::to_string(stored) +
+                   " (truncated or corrupt file)");
+  }
   return std::vector<int64_t>(dims.begin(), dims.end());
 }
 
