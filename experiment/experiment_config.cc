@@ -53,7 +53,7 @@ ExperimentConfig LoadExperimentText(const std::string& yaml, const std::string& 
   return result;
 }
 
-std::string ToYaml(const ExperimentConfig& config) { return config::ToYaml(config); }
+std::string ToYaml(const ExperimentConfig& config) { return config::ToYaml(config, /*skip_unset=*/true); }
 
 std::string DatasetConfigYaml(const ExperimentConfig& config) {
   YAML::Node node = config::internal::Encode(config);

@@ -86,7 +86,7 @@ ExperimentConfig LoadExperiment(const std::string& path, const std::vector<std::
 ExperimentConfig LoadExperimentText(const std::string& yaml, const std::string& source,
                                     const std::string& overlay_path, const std::vector<std::string>& overrides);
 
-/// The resolved config as YAML.
+/// The resolved config as YAML; it reads back to the same config (an unset number, NaN, is left out).
 std::string ToYaml(const ExperimentConfig& config);
 
 /// The resolved config as stored in a dataset: without `threads` and
