@@ -9,19 +9,25 @@
 
 #include "experiment/commands.h"
 #include "experiment/trained_planner.h"
+#include "geometry/scene.h"
 #include "trainer/run_dir.h"
 
 namespace flowplan::experiment {
 
 Command AddExportCommand(CLI::App& app) {
   struct Args {
-    std::string ckpt, out, kernels = "portable";
+    std::string ckpt, out, scene, kernels = "portable";
     ConfigArgs overlay;
   };
   auto args = std::make_shared<Args>();
   CLI::App* command = app.add_subcommand("export", "write the self-contained TorchScript planner");
   command->add_option("--ckpt", args->ckpt, "checkpoint file, or a run folder")->required();
   command->add_option("--out", args->out, "output file (default: RUN_DIR/planner.pt)");
+  command
+      ->add_option("--scene", args->scene,
+                   "a scene file baked into the file: `flowplan plan --planner FILE` plans around it unless given "
+                   "--scene or obstacles of its own (default: none; the training config's scene is not kept)")
+      ->check(CLI::ExistingFile);
   command
       ->add_option("--kernels", args->kernels,
                    "the code in the file of the network and of the collision cost's distances: portable (PyTorch "
@@ -35,7 +41,9 @@ Command AddExportCommand(CLI::App& app) {
             overrides.push_back("device=cpu");
             overrides.push_back("sampler.network_kernels=" + args->kernels);
             overrides.push_back("guidance.distance_kernels=" + args->kernels);
-            const TrainedPlanner loaded = LoadTrainedPlanner(args->ckpt, args->overlay.path, overrides);
+            // The file carries no obstacle its user did not ask for.
+            const geometry::Scene scene = args->scene.empty() ? geometry::Scene{} : geometry::LoadScene(args->scene);
+            const TrainedPlanner loaded = LoadTrainedPlanner(args->ckpt, args->overlay.path, overrides, scene);
             const std::string out =
                 args->out.empty() ? trainer::RunDir(RunFolderOf(loaded.checkpoint)).planner() : args->out;
             EnsureParentFolder(out);
@@ -49,8 +57,10 @@ Command AddExportCommand(CLI::App& app) {
             };
             const std::string renoise =
                 planner.renoise_shape().empty() ? "" : ", renoise " + batch_shape(planner.renoise_shape());
-            spdlog::info("exported {} (step {}) to {}: plan(start (B, {}), goal (B, {}), noise {}{}, scene...) -> (B, {}, {})",
-                         loaded.checkpoint, loaded.step, out, D, D, batch_shape(planner.noise_shape()), renoise, T, D);
+            spdlog::info("exported {} (step {}) to {}: plan(start (B, {}), goal (B, {}), noise {}{}, scene...) -> (B, {}, {}); "
+                         "baked scene: {}",
+                         loaded.checkpoint, loaded.step, out, D, D, batch_shape(planner.noise_shape()), renoise, T, D,
+                         args->scene.empty() ? std::string("none") : args->scene);
           }};
 }
 

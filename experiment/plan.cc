@@ -11,6 +11,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "experiment/commands.h"
 
 namespace flowplan::experiment {
@@ -25,6 +26,21 @@ void CheckOutputsFree(const std::string& prefix, bool force) {
 }
 
 namespace {
+
+/// ": spheres[0] [0.5, 0, 0.2, 0.1], … (SOURCE)": every obstacle planned around, by name and row, and where the
+/// scene came from; empty without obstacles.
+std::string DescribeObstacles(const PlanInputs& inputs) {
+  std::string out;
+  for (const auto& entry : inputs.rows) {
+    const torch::Tensor rows = entry.value().to(torch::kFloat64).contiguous();
+    for (int64_t k = 0; k < rows.size(0); ++k) {
+      std::string values;
+      for (int64_t p = 0; p < rows.size(1); ++p) values += (p ? ", " : "") + JsonNumber(rows[k][p].item<double>());
+      out += (out.empty() ? ": " : ", ") + entry.key() + "[" + std::to_string(k) + "] [" + values + "]";
+    }
+  }
+  return out.empty() ? out : out + " from " + inputs.scene_source;
+}
 
 void RunPlan(const PlanArgs& args) {
   if (args.num_samples < 1) throw Error("-n: expected at least one plan, got " + std::to_string(args.num_samples));
@@ -42,7 +58,7 @@ void RunPlan(const PlanArgs& args) {
     throw Error("--execute: execution in MuJoCo needs the Franka; this planner's robot is \"" +
                 subject.robot->description().name + "\"");
   }
-  const std::string prefix = args.out.empty() ? subject.run_folder + "/plan" : args.out;
+  const std::string prefix = args.out.empty() ? "plan" : args.out;
   CheckOutputsFree(prefix, args.force);
   EnsureParentFolder(prefix);
   AtomicFile h5_file(prefix + ".h5");  // fails before any work if the output cannot be written
@@ -55,8 +71,8 @@ void RunPlan(const PlanArgs& args) {
   request.seed = static_cast<uint64_t>(args.seed);
   request.settings = subject.settings;
   const int64_t K = inputs.scene.size();
-  spdlog::info("planning {} samples with {} around {} obstacle{} ({})", args.num_samples, subject.source, K,
-               K == 1 ? "" : "s",
+  spdlog::info("planning {} samples with {} around {} obstacle{}{} ({})", args.num_samples, subject.source, K,
+               K == 1 ? "" : "s", DescribeObstacles(inputs),
                args.rrt_connect ? fmt::format("check.margin {}, {} iterations", subject.config.check.margin,
                                               subject.config.rrt_connect.max_iterations)
                                 : fmt::format("guidance scale {}, splitting {}", subject.config.guidance.scale,
@@ -139,7 +155,7 @@ Command AddPlanCommand(CLI::App& app) {
   repeatable("--radius", a.radii, "set every sphere's radius (R) or sphere K's (K=R); repeatable");
   plan->add_option("-n,--num-samples", a.num_samples, "number of plans")->check(CLI::PositiveNumber);
   plan->add_option("--seed", a.seed, "seed of the plans' noise")->check(CLI::NonNegativeNumber);
-  plan->add_option("--out", a.out, "output prefix: PREFIX.h5, PREFIX.json, PREFIX.png (default RUN_DIR/plan)");
+  plan->add_option("--out", a.out, "output prefix: PREFIX.h5, PREFIX.json, PREFIX.png (default: plan, or plan_problems with --problems, in the working folder)");
   plan->add_flag("--execute", a.execute, "also track every plan in MuJoCo and report contacts");
   plan->add_flag("!--no-plot", a.plot, "do not draw PREFIX.png");
   plan->add_flag("--force", a.force, "replace PREFIX.h5, PREFIX.json and PREFIX.png if they exist");

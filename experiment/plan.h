@@ -44,7 +44,7 @@ struct PlanArgs {
   std::string problems;                // --problems: a problem file; plans every problem in its own scene
   int64_t limit = 0;                   // --limit: the first N problems (0: all)
   int64_t batch = 16;                  // --batch: plans per planning call
-  std::string out;                     // --out: output prefix (default: RUN_DIR/plan)
+  std::string out;                     // --out: output prefix (default: ./plan, ./plan_problems)
   bool execute = false;                // --execute: track the plans in MuJoCo
   bool plot = true;                    // --no-plot clears it
   bool force = false;                  // --force: replace existing outputs
@@ -60,7 +60,6 @@ struct PlanSubject {
   std::shared_ptr<const kinematics::Robot> robot;
   planning::PlanSettings settings;        // the call's settings (a learned planner's)
   std::string source;                     // what was loaded, for the report
-  std::string run_folder;                 // default output folder
 };
 
 /// What was planned, and where.

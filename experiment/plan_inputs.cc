@@ -18,11 +18,13 @@ namespace {
 /// --radius applied.
 geometry::Scene ResolveScene(const PlanArgs& args, const PlanSubject& subject, std::string* where) {
   geometry::Scene scene = subject.config.scene;
-  *where = "scene (config)";
+  *where = args.planner_file.empty() ? "scene (config)" : "the scene baked into " + args.planner_file;
   if (!args.scene.empty()) {
     scene = geometry::LoadScene(args.scene);
     *where = args.scene;
   }
+  const bool shapes = !args.spheres.empty() || !args.boxes.empty() || !args.cylinders.empty() || !args.capsules.empty();
+  if (shapes) *where = scene.size() == 0 ? std::string("the command line") : *where + " and the command line";
   const int W = static_cast<int>(subject.robot->workspace_dim());
   const std::tuple<const char*, const char*, const std::vector<std::string>*> options[] = {
       {"spheres", "--sphere", &args.spheres},

@@ -76,7 +76,7 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
   const problems::ProblemSet set = problems::LoadProblemSet(args.problems);
   const int64_t count = args.limit > 0 ? std::min<int64_t>(args.limit, static_cast<int64_t>(set.problems.size()))
                                        : static_cast<int64_t>(set.problems.size());
-  const std::string prefix = args.out.empty() ? subject.run_folder + "/plan_problems" : args.out;
+  const std::string prefix = args.out.empty() ? "plan_problems" : args.out;
   CheckOutputsFree(prefix, args.force);
   EnsureParentFolder(prefix);
   AtomicFile h5_file(prefix + ".h5");

@@ -59,8 +59,6 @@ PlanSubject FromFile(const PlanArgs& args) {
   subject.settings = CallSettings(*planner, subject.config);
   subject.trajectory = planner->info();
   subject.source = args.planner_file;
-  const fs::path parent = fs::path(args.planner_file).parent_path();
-  subject.run_folder = parent.empty() ? "." : parent.string();
   subject.planner = std::move(planner);
   return subject;
 }
@@ -71,7 +69,6 @@ PlanSubject FromCheckpoint(const PlanArgs& args) {
   subject.config = loaded.config;
   subject.trajectory = loaded.planner->info();
   subject.source = loaded.checkpoint;
-  subject.run_folder = RunFolderOf(loaded.checkpoint);
   subject.planner = std::move(loaded.planner);
   return subject;
 }
@@ -88,7 +85,6 @@ PlanSubject FromRrtConnect(const PlanArgs& args) {
   subject.config = LoadExperiment(args.overlay_path, args.overrides);
   subject.trajectory = datasets::MakeTask(subject.config.generate)->Layout().info;
   subject.source = "rrt_connect";
-  subject.run_folder = subject.config.run_dir;
   return subject;
 }
 

@@ -23,13 +23,15 @@ void CheckSameNetwork(const ExperimentConfig& trained, const ExperimentConfig& c
 }
 
 TrainedPlanner LoadTrainedPlanner(const std::string& ckpt, const std::string& overlay_path,
-                                  const std::vector<std::string>& overrides) {
+                                  const std::vector<std::string>& overrides,
+                                  const std::optional<geometry::Scene>& scene) {
   TrainedPlanner loaded;
   loaded.checkpoint = trainer::ResolveCheckpoint(ckpt);
   const checkpoints::CheckpointHeader header = checkpoints::ReadCheckpointHeader(loaded.checkpoint);
   const std::string where = loaded.checkpoint + " (stored config)";
   loaded.config = LoadExperimentText(header.config_yaml, where, overlay_path, overrides);
   CheckSameNetwork(LoadExperimentText(header.config_yaml, where, "", {}), loaded.config, loaded.checkpoint);
+  if (scene) loaded.config.scene = *scene;
   loaded.step = header.step;
   const int64_t D = header.normalizer.dim();
   const models::NetworkPtr net =

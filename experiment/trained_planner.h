@@ -4,6 +4,7 @@
 // assembled with the run's config, overlaid with a call's settings.
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,10 +23,13 @@ struct TrainedPlanner {
 /// Loads `ckpt` (a checkpoint file or a run folder = its newest checkpoint); the
 /// checkpoint's config is overlaid with `overlay_path` and `overrides` (e.g.
 /// sampler.steps=20), which may change how it plans but not the network.
+/// `scene`, when given, replaces the config's scene section in the config the
+/// planner carries (an exported file keeps only the scene it is given).
 /// @throws flowplan::Error for missing, corrupt or foreign checkpoints, and
 ///   for overrides of what shapes the network.
 TrainedPlanner LoadTrainedPlanner(const std::string& ckpt, const std::string& overlay_path,
-                                  const std::vector<std::string>& overrides);
+                                  const std::vector<std::string>& overrides,
+                                  const std::optional<geometry::Scene>& scene = std::nullopt);
 
 /// Throws, naming the key, if `changed` differs from `trained` in anything that
 /// shapes the trained network (model.*, objective.name, objective.conditioning).

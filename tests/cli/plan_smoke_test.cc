@@ -112,6 +112,32 @@ TEST_F(ParticlePlanTest, AnExportedFileTakesEveryGuidanceSettingPerCall) {
   EXPECT_EQ(std::system(compare.c_str()), 0);
 }
 
+TEST_F(ParticlePlanTest, AnExportedFileCarriesOnlyTheSceneItIsGivenAndOutputsGoToTheWorkingFolder) {
+  // The training config's scene (a disc here) is not an obstacle of the exported file; a scene given to export is.
+  const std::string config_scene = " \"scene.spheres=[{centre: [0.5, 0.3], radius: 0.1}]\" --log-level warn";
+  ExpectOk(Flowplan("export --ckpt " + Path("run") + config_scene + " --out " + Path("plain.pt")));
+  std::ofstream(Path("baked.yaml")) << "boxes: [{centre: [0.5, 0.6], size: [0.1, 0.1]}]\n";
+  ExpectOk(Flowplan("export --ckpt " + Path("run") + config_scene + " --scene " + Path("baked.yaml") + " --out " +
+                    Path("baked.pt")));
+  // Planned from the suite's folder as the working folder, with no --out: PREFIX is ./plan.
+  const std::string plan = "cd " + Path("") + " && " + FLOWPLAN_BINARY + " plan --start 0,0 --goal 1,0 -n 2 --no-plot ";
+  const Outcome plain = RunCommand(plan + "--planner plain.pt");
+  ExpectOk(plain);
+  EXPECT_THAT(plain.output, HasSubstr("around 0 obstacles ("));
+  EXPECT_THAT(ReadText(Path("plan.json")), HasSubstr("\"obstacles\": []"));
+  ExpectCleanFailure(RunCommand(plan + "--planner plain.pt"), "plan.json: exists; give --force to replace it");
+  const Outcome baked = RunCommand(plan + "--planner baked.pt --force");
+  ExpectOk(baked);
+  EXPECT_THAT(baked.output,
+              HasSubstr("around 1 obstacle: boxes[0] [0.5, 0.6, 0.1, 0.1, 0] from the scene baked into baked.pt ("));
+  EXPECT_THAT(ReadText(Path("plan.json")), HasSubstr("\"obstacles\": [\"boxes[0]\"]"));
+  // Obstacles of the command line are added to the baked scene, and the log says so.
+  const Outcome both = RunCommand(plan + "--planner baked.pt --sphere 0.3,0.7,0.05 --force");
+  ExpectOk(both);
+  EXPECT_THAT(both.output, HasSubstr("around 2 obstacles: spheres[0] [0.3, 0.7, 0.05], boxes[0] [0.5, 0.6, 0.1, 0.1, "
+                                     "0] from the scene baked into baked.pt and the command line ("));
+}
+
 TEST_F(ParticlePlanTest, AUserCostFileChangesThePlansInProcessAndFromTheExportedFile) {
   // Keep the disc above y = 0.2 between start and goal (both at y = 0).
   std::ofstream(Path("above.py")) << "def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
