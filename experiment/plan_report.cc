@@ -112,6 +112,9 @@ void WritePlansH5(datasets::h5::File& file, const std::string& group, const Plan
   const torch::Tensor plans = result.plans.contiguous(), tcp = scores.tcp.to(torch::kFloat32).contiguous();
   file.WriteFloat32(group + "plans", {N, T, D}, plans.data_ptr<float>());
   file.WriteFloat32(group + "tcp", {N, T, W}, tcp.data_ptr<float>());
+  std::vector<int32_t> valid;
+  for (const validity::PlanVerdict& verdict : scores.verdicts) valid.push_back(verdict.valid() ? 1 : 0);
+  file.WriteInt32(group + "valid", {N}, valid.data());
   file.CreateGroup(group + "scene");
   for (const auto& entry : inputs.rows) {
     const torch::Tensor rows = entry.value().to(torch::kFloat64).contiguous();

@@ -8,8 +8,9 @@
   plot.py scene PLAN.h5 --out plan.png [--data DATA.h5] [--compare OTHER.h5]
       the TCP paths of `flowplan plan` with the obstacles (spheres, boxes,
       cylinders, capsules: their outlines projected; particle: the unit
-      square; Franka: the two planes in which the paths spread most), executed
-      paths dashed; --compare draws another plan file's paths in grey (e.g. unguided)
+      square; Franka: seen from above and from the front), valid plans solid
+      and plans that failed the plan check dotted, executed paths dashed;
+      --compare draws another plan file's paths in grey (e.g. unguided)
   plot.py problems P1.yaml [P2.yaml ...] --out scenes.png [--index 0] [--planner FILE.pt]
       one 3-D panel per problem file (problem --index of each): its boxes,
       cylinders and spheres, the start and goal TCP, and with --planner (an
@@ -183,6 +184,8 @@ def read_scene(f):
 def command_scene(args):
     with h5py.File(args.plans, "r") as f:
         tcp, goal_tcp = f["tcp"][...], f["goal_tcp"][...]
+        # Files written before /valid: every plan drawn as one kind.
+        valid = f["valid"][...].astype(bool) if "valid" in f else None
         obstacles = read_scene(f)
         executed = f["executed/tcp"][...] if "executed" in f else None
         env, scale = f.attrs["env"], float(f.attrs["guidance_scale"])
@@ -193,13 +196,12 @@ def command_scene(args):
                 other = g["tcp"][...]
         W = tcp.shape[-1]
         if W == 2:
-            planes, names = [(0, 1)], ("x", "y")
+            planes, names, views = [(0, 1)], ("x", "y"), [""]
         else:
-            spread = np.concatenate([tcp.reshape(-1, 3)] + [row[None, :3] for _, row in obstacles]).std(0)
-            order = np.argsort(-spread)
-            planes, names = [(order[0], order[1]), (order[0], order[2])], ("x (m)", "y (m)", "z (m)")
+            # The same two views for every plan: from above, and from the front (looking along the base's x).
+            planes, names, views = [(0, 1), (1, 2)], ("x (m)", "y (m)", "z (m)"), ["from above", "from the front"]
         fig, axes = plt.subplots(1, len(planes), figsize=(6 * len(planes), 6), squeeze=False)
-        for ax, (a, b) in zip(axes[0], planes):
+        for ax, (a, b), view in zip(axes[0], planes, views):
             if W == 2 and args.data:
                 with h5py.File(args.data, "r") as data:
                     draw_dataset(ax, data, args.episodes, faint=True)
@@ -207,9 +209,19 @@ def command_scene(args):
                 for i in range(len(other)):
                     ax.plot(other[i, :, a], other[i, :, b], color="0.6", lw=0.8, alpha=0.6,
                             label=args.compare_label if i == 0 else None)
-            for i in range(len(tcp)):
-                ax.plot(tcp[i, :, a], tcp[i, :, b], color="tab:blue", lw=0.9, alpha=0.7,
-                        label=(args.label or f"plans (scale {scale:g})") if i == 0 else None)
+            name = args.label or f"plans (scale {scale:g})"
+            if valid is None:
+                for i in range(len(tcp)):
+                    ax.plot(tcp[i, :, a], tcp[i, :, b], color="tab:blue", lw=0.9, alpha=0.7,
+                            label=name if i == 0 else None)
+            else:
+                # Valid plans (passed the plan checker) solid blue; failed ones dotted purple, drawn on top.
+                for kind, chosen, style in (("valid", np.nonzero(valid)[0], dict(color="tab:blue", lw=0.9, alpha=0.7)),
+                                            ("failed the plan check", np.nonzero(~valid)[0],
+                                             dict(color="tab:purple", lw=1.1, ls=":", alpha=0.9))):
+                    for n, i in enumerate(chosen):
+                        ax.plot(tcp[i, :, a], tcp[i, :, b], **style,
+                                label=f"{name}: {len(chosen)} {kind}" if n == 0 else None)
             if executed is not None:
                 for i in range(len(executed)):
                     ax.plot(executed[i, :, a], executed[i, :, b], color="tab:orange", lw=0.8, ls="--", alpha=0.8,
@@ -226,13 +238,17 @@ def command_scene(args):
             ax.set_xlabel(names[a] if W == 3 else names[0])
             ax.set_ylabel(names[b] if W == 3 else names[1])
             ax.set_aspect("equal", adjustable="datalim")
+            if view:
+                ax.set_title(view, fontsize=10)
             if W == 2:
                 ax.set_xlim(-0.05, 1.05)
                 ax.set_ylim(-0.05, 1.05)
-        axes[0][0].legend(loc="best", fontsize=8)
+        # Below the panels, where it hides no path.
+        handles, labels = axes[0][0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 3), fontsize=8, frameon=False)
         what = "TCP paths" if env == "franka" else "paths"
         fig.suptitle(args.title or f"{env}: {len(tcp)} {what} around {len(obstacles)} obstacle(s)", fontsize=11)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
     save(fig, args.out, args.dpi)
     print(f"wrote {args.out}")
 

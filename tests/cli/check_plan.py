@@ -93,7 +93,10 @@ def check(f, group, report, samples):
     J = 7 if env == "franka" else 2
     check = {k: float(v) for k, v in yaml.safe_load(report["check"]).items()}
     start, goal_state = g["start"][...], g["goal"][...]
+    valid = g["valid"][...]
+    assert valid.shape == (len(samples),) and valid.dtype == np.int32, (valid.shape, valid.dtype)
     for i, sample in enumerate(samples):
+        assert valid[i] == int(sample["success"]), (i, valid[i], sample["success"])
         goal = np.linalg.norm(mine[i, -1] - goal_tcp)
         assert abs(goal - sample["goal_distance"]) < 1e-4, (goal, sample["goal_distance"])
         clearance = [np.min(distance(kind, row, mine[i])) for kind, row in obstacles]
