@@ -48,11 +48,8 @@ inline const config::EnumNames<HybridOrder>& EnumEntries(HybridOrder) {
 
 /// The `hybrid` section of an experiment config.
 struct HybridConfig {
-  // The defaults: one guided proposal, RRT-Connect seeded by it when it is not valid. On the scene families'
-  // validation problems (docs/results.md, "Scene families: every planner"; 20 per family, 2 plans each) that made
-  // 98.5 % of 200 plans valid at 6.4 ms median, against 97.0 % at 9.5 ms for one unguided proposal first and an
-  // unseeded fallback (the earlier default); the benchmark's hybrid also runs its proposer with 5 sampler steps and
-  // 10 end-game steps (98.5 %, 4.3 ms), which are the learned planner's settings, not the hybrid's.
+  // The defaults (one guided proposal, RRT-Connect seeded by it when it is not valid) are those the scene families'
+  // validation problems chose (docs/results.md, "Scene families: every planner").
   int64_t proposals = 1;         // N: plans the learned planner proposes per request, in one call
   bool seeded_fallback = true;   // RRT-Connect starts from the proposal of least guidance cost (PlanAlong)
   bool unguided_first = false;  // propose without guidance first; the guided proposals only when none is valid
