@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/format.h"
 
 namespace flowplan::config {
 
@@ -389,7 +390,68 @@ void Emit(YAML::Emitter& out, const T& value, bool skip_unset) {
   }
 }
 
+/// Appends `value` as JSON to `out`: a struct as an object of its fields, a list as an array, a number in the
+/// shortest form that reads back to it (null when not finite: YAML's .inf and .nan have no JSON form), an enum as
+/// its name.
+template <class T>
+void EmitJson(std::string& out, const T& value);
+
+/// The visitor of EmitJson: one key and value per field.
+class JsonWriter {
+ public:
+  explicit JsonWriter(std::string& out) : out_(out) {}
+  template <class T>
+  void Field(const char* name, const T& value, const char* /*help*/, Bounds /*bounds*/ = {}) {
+    out_ += (first_ ? "" : ", ") + JsonString(name) + ": ";
+    first_ = false;
+    EmitJson(out_, value);
+  }
+
+ private:
+  std::string& out_;
+  bool first_ = true;
+};
+
+template <class T>
+void EmitJson(std::string& out, const T& value) {
+  if constexpr (IsConfigStruct<T>::value) {
+    out += "{";
+    JsonWriter writer(out);
+    const_cast<T&>(value).Visit(writer);
+    out += "}";
+  } else if constexpr (IsVector<T>::value || IsArray<T>::value) {
+    out += "[";
+    bool first = true;
+    for (const auto& element : value) {
+      if (!first) out += ", ";
+      first = false;
+      EmitJson(out, element);
+    }
+    out += "]";
+  } else if constexpr (std::is_same_v<T, bool>) {
+    out += value ? "true" : "false";
+  } else if constexpr (std::is_integral_v<T>) {
+    out += std::to_string(value);
+  } else if constexpr (std::is_floating_point_v<T>) {
+    out += std::isfinite(value) ? FormatDouble(static_cast<double>(value)) : "null";
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    out += JsonString(value);
+  } else if constexpr (std::is_enum_v<T>) {
+    out += JsonString(std::string(EnumName(value)));
+  } else {
+    static_assert(sizeof(T) == 0, "unsupported config field type");
+  }
+}
+
 }  // namespace internal
+
+/// A config struct as one JSON object (for reports: settings as data, not as YAML text).
+template <class T>
+std::string ToJson(const T& config) {
+  std::string out;
+  internal::EmitJson(out, config);
+  return out;
+}
 
 /// Applies the keys present in `node` onto `config` (keys absent keep their values).
 /// @throws flowplan::Error on unknown keys, wrong types and out-of-bounds values.

@@ -124,6 +124,10 @@ struct PlanCounts {
 std::string SamplesJson(const PlanArgs& args, const planning::PlanResult& result, const PlanScores& scores,
                         const std::vector<sim::ExecutionResult>& executed, PlanCounts* counts);
 
+/// plan_report.cc: the planner's settings as report fields ("guidance": {…}, "splitting": …, "rrt_connect": {…},
+/// "hybrid": {…}, as far as the planner has them, and "check": {…}), JSON objects of the config sections.
+std::string SettingsJson(const PlanArgs& args, const PlanSubject& subject);
+
 /// plan_report.cc: {"median": …, "p95": …} of the planning time per plan (s) of results.
 std::string TimingJson(const std::vector<const planning::PlanResult*>& results);
 

@@ -175,7 +175,7 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
       ", \"num_samples\": " + std::to_string(N) + ", \"seed\": " + std::to_string(args.seed) +
       ", \"goal_tolerance\": " + JsonNumber(args.goal_tolerance) +
       ", \"max_speed_ratio\": " + JsonNumber(args.max_speed_ratio) +
-      ",\n \"check\": " + JsonString(config::ToYaml(subject.config.check)) +
+      ",\n " + SettingsJson(args, subject) +
       ",\n \"success_rate\": " + rate(total.success) +
       ", \"problems_solved\": " + JsonNumber(count > 0 ? static_cast<double>(solved) / static_cast<double>(count) : 0.0) +
       (args.execute ? ", \"success_rate_executed\": " + rate(total.executed) : std::string()) +

@@ -33,17 +33,19 @@ std::string Numbers(const torch::Tensor& values) {
 
 std::string Bool(bool value) { return value ? "true" : "false"; }
 
-/// The planner's settings for the report: RRT-Connect's, or the guidance and splitting of a learned planner (a hybrid
-/// has both, and its own).
+}  // namespace
+
 std::string SettingsJson(const PlanArgs& args, const PlanSubject& subject) {
-  const std::string rrt = "\"rrt_connect\": " + JsonString(config::ToYaml(subject.config.rrt_connect));
-  const std::string learned = "\"guidance\": " + JsonString(config::ToYaml(subject.config.guidance)) +
+  const std::string rrt = "\"rrt_connect\": " + config::ToJson(subject.config.rrt_connect);
+  const std::string learned = "\"guidance\": " + config::ToJson(subject.config.guidance) +
                               ", \"splitting\": " + JsonString(config::EnumName(subject.config.sampler.splitting));
-  const std::string check = "\"check\": " + JsonString(config::ToYaml(subject.config.check));
+  const std::string check = "\"check\": " + config::ToJson(subject.config.check);
   if (args.rrt_connect) return rrt + ", " + check;
-  if (args.hybrid) return learned + ", " + rrt + ", \"hybrid\": " + JsonString(config::ToYaml(subject.config.hybrid)) + ", " + check;
+  if (args.hybrid) return learned + ", " + rrt + ", \"hybrid\": " + config::ToJson(subject.config.hybrid) + ", " + check;
   return learned + ", " + check;
 }
+
+namespace {
 
 /// {"spheres": [[…], …], …}: the scene's rows.
 std::string SceneJson(const geometry::SceneRows& rows) {

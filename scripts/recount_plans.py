@@ -112,10 +112,13 @@ def read_obstacles(g):
 
 
 def check_limits(report):
-    """The plan checker's speed ratio and margin of a report (`check`, YAML text); None before reports had it."""
+    """The plan checker's speed ratio and margin of a report (`check`: an object; YAML text in older reports);
+    None before reports had it."""
     if "check" not in report:
         return None
-    check = yaml.safe_load(report["check"])
+    check = report["check"]
+    if isinstance(check, str):
+        check = yaml.safe_load(check)
     return float(check["max_speed_ratio"]), float(check["margin"])
 
 

@@ -88,7 +88,7 @@ TEST_F(ParticlePlanTest, EveryShapeFromTheCommandLineAndFromAFileIsPlannedAround
   const std::string report = ReadText(Path("shapes.json"));
   EXPECT_THAT(report, HasSubstr("\"obstacles\": [\"spheres[0]\", \"boxes[0]\", \"cylinders[0]\", \"capsules[0]\"]"));
   EXPECT_THAT(report, HasSubstr("\"boxes\": [[0.5, 0.25, 0.1, 0.2, 0.3]]"));
-  EXPECT_THAT(report, HasSubstr("scale: 2")) << "an override right after a shape's numbers is an override";
+  EXPECT_THAT(report, HasSubstr("\"scale\": 2.0,")) << "an override right after a shape's numbers is an override";
   const Outcome check = RunCommand(CheckPlan(Path("shapes")));
   EXPECT_EQ(check.exit_code, 0) << check.output;
   ExpectCleanFailure(Flowplan("plan --ckpt " + Path("run") + " --start 0,0 --goal 1,0 --box 0.5,0.3,0.1"),

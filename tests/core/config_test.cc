@@ -83,6 +83,21 @@ TEST(ConfigTest, YamlRoundTripIsExact) {
   EXPECT_EQ(config::ToYaml(back), config::ToYaml(c));
 }
 
+TEST(ConfigTest, JsonIsOneObjectOfEveryFieldAndReadsBackAsYaml) {
+  Outer c;
+  c.trainer.lr = 0.1 + 0.2;
+  c.name = "say \"hi\"\n";
+  c.point = {1e-300, -INFINITY, 7.0};
+  EXPECT_EQ(config::ToJson(c),
+            "{\"steps\": 10, \"mode\": \"fast\", \"name\": \"say \\\"hi\\\"\\n\", \"verbose\": false, "
+            "\"point\": [1e-300, null, 7.0], \"trainer\": {\"dims\": [32, 64], \"lr\": 0.30000000000000004}}");
+  // JSON is YAML: with finite numbers it reads back to the same config.
+  c.point[1] = -3.5;
+  Outer back;
+  config::Apply(config::ParseYamlText(config::ToJson(c), "json"), back, "json");
+  EXPECT_EQ(config::ToYaml(back), config::ToYaml(c));
+}
+
 TEST(ConfigTest, NumbersAreWrittenShortAndExact) {
   EXPECT_EQ(config::internal::FormatDouble(10.0), "10.0");
   EXPECT_EQ(config::internal::FormatDouble(2e-4), "0.0002");
