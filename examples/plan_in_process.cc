@@ -22,6 +22,11 @@
 
 int main(int argc, char** argv) {
   using namespace flowplan;
+  if (argc > 1 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::printf("usage: plan_in_process [PLANNER.pt]\nplans 16 motions of an exported Franka planner (default: the "
+                "shipped reach planner) around a sphere and checks each with the plan checker\n");
+    return 0;
+  }
   try {
     const std::string file = argc > 1 ? argv[1] : FLOWPLAN_SOURCE_DIR "/pretrained/franka_reach_planner.pt";
     at::set_num_threads(2);
