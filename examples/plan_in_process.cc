@@ -4,19 +4,21 @@
 //
 //   build/examples/plan_in_process [PLANNER.pt]   (default: the shipped reach planner)
 //
-// Link against flowplan_experiment (or, without the command-line layer,
-// flowplan_planning and flowplan_validity; ResolveRobot then becomes
-// kinematics::MakeRobot of the file's own robot description).
+// It links against flowplan_experiment, for ResolveRobot (the robot a file
+// carries, with the built-in Franka's collision body) and the file's config.
 #include <torch/script.h>
 
 #include <cstdio>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "core/error.h"
 #include "experiment/experiment_config.h"
 #include "experiment/plan.h"
 #include "geometry/scene.h"
 #include "geometry/scene_rows.h"
+#include "kinematics/robot.h"
 #include "planning/learned_planner.h"
 #include "validity/plan_check.h"
 
@@ -40,6 +42,7 @@ int main(int argc, char** argv) {
     // Start and goal: TCP points 0.6 m apart, reached by the robot's IK with the gripper pointing down; at rest.
     const kinematics::IkSolution ik = robot->InverseTcp(torch::tensor({0.5, -0.3, 0.2, 0.5, 0.3, 0.2},
                                                                       torch::kFloat64).view({2, 3}));
+    if (!ik.converged.all().item<bool>()) throw Error("the start or goal TCP point is out of the robot's reach");
     torch::Tensor ends = torch::zeros({2, D});  // (2, D): positions, then velocities
     ends.slice(1, 0, J).copy_(ik.q);
 
