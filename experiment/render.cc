@@ -2,7 +2,7 @@
 // of `flowplan plan --problems`) executed in MuJoCo among its scene's shapes
 // and drawn by MuJoCo's renderer, offscreen: PREFIX.gif, the execution frame by
 // frame at the plan's rate with the TCP's trail, and PREFIX.png, the arm at
-// eight states of the plan at once with the planned TCP path.
+// four states of the plan, one picture each, with the planned TCP path.
 
 #include <spdlog/spdlog.h>
 
@@ -94,15 +94,17 @@ void RunRender(const RenderArgs& args) {
   const torch::Tensor tcp = kinematics.Tcp(q);
   std::vector<Eigen::Vector3d> path;
   for (int64_t t = 0; t < T; ++t) path.emplace_back(tcp[t][0].item<double>(), tcp[t][1].item<double>(), tcp[t][2].item<double>());
-  std::vector<sim::JointVector> poses;
-  constexpr int kPoses = 8;
+  // Four pictures of one arm each (start, a third, two thirds, goal), two to a row, with the whole planned path:
+  // arms drawn over each other at once hide each other.
+  std::vector<render::Image> stills;
+  constexpr int kPoses = 4;
   for (int k = 0; k < kPoses; ++k) {
     const int64_t t = k * (T - 1) / (kPoses - 1);
-    poses.push_back(joints(&plan[static_cast<size_t>(t * D)]));
+    stills.push_back(renderer.Render(joints(&plan[static_cast<size_t>(t * D)]), path));
   }
-  render::WritePng(prefix + ".png", renderer.RenderPoses(poses, path));
+  render::WritePng(prefix + ".png", render::Tile(stills, 2));
   spdlog::info("wrote {}.gif ({} frames of {} x {}, the plan executed in MuJoCo: {} contact{}, goal {:.3g} m away) "
-               "and {}.png (the plan at {} states)",
+               "and {}.png (the plan at {} states, two to a row)",
                prefix, frames.size(), config.render.width, config.render.height, executed.contacts.size(),
                executed.contacts.size() == 1 ? "" : "s", executed.goal_distance, prefix, kPoses);
 }
@@ -113,7 +115,7 @@ Command AddRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* command = app.add_subcommand(
       "render", "draw one plan of a plan file executed in MuJoCo among its scene's shapes: PREFIX.gif (a video, "
-                "offscreen through OSMesa) and PREFIX.png (the plan at eight states) (render.*, execute.*)");
+                "offscreen through OSMesa) and PREFIX.png (the plan at four states, two to a row) (render.*, execute.*)");
   command->add_option("plans", args->plans, "a plan file of `flowplan plan` (PREFIX.h5)")->required()->check(CLI::ExistingFile);
   command->add_option("--problem", args->problem, "the problem, in a file of `flowplan plan --problems`");
   command->add_option("--index", args->index, "which plan of the file (or of the problem)")->capture_default_str();

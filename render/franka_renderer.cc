@@ -89,34 +89,13 @@ FrankaRenderer::FrankaRenderer(const geometry::Scene& scene, const RenderConfig&
 FrankaRenderer::~FrankaRenderer() = default;
 
 Image FrankaRenderer::Render(const sim::JointVector& q, const std::vector<Eigen::Vector3d>& trail) {
-  return Draw({q}, trail);
-}
-
-Image FrankaRenderer::RenderPoses(const std::vector<sim::JointVector>& poses,
-                                  const std::vector<Eigen::Vector3d>& trail) {
-  return Draw(poses, trail);
-}
-
-Image FrankaRenderer::Draw(const std::vector<sim::JointVector>& poses, const std::vector<Eigen::Vector3d>& trail) {
-  FLOWPLAN_DEMAND(!poses.empty());
   const mjModel& m = *model_;
   mjData& d = *data_;
   mjvScene& scene = gl_->scene;
   OSMesaMakeCurrent(gl_->context, gl_->buffer.data(), GL_UNSIGNED_BYTE, config_.width, config_.height);
-  // The last pose is the scene's own (static geoms, lights, camera); earlier ones are added, fainter.
-  auto pose = [&](const sim::JointVector& q) {
-    for (int j = 0; j < sim::kFrankaJoints; ++j) d.qpos[j] = q[j];
-    mj_kinematics(&m, &d);
-  };
-  pose(poses.back());
+  for (int j = 0; j < sim::kFrankaJoints; ++j) d.qpos[j] = q[j];
+  mj_kinematics(&m, &d);
   mjv_updateScene(&m, &d, &gl_->option, nullptr, &gl_->camera, mjCAT_ALL, &scene);
-  for (size_t i = 0; i + 1 < poses.size(); ++i) {
-    const int before = scene.ngeom;
-    pose(poses[i]);
-    mjv_addGeoms(&m, &d, &gl_->option, nullptr, mjCAT_DYNAMIC, &scene);
-    const float alpha = 0.15f + 0.45f * static_cast<float>(i + 1) / static_cast<float>(poses.size());
-    for (int g = before; g < scene.ngeom; ++g) scene.geoms[g].rgba[3] = alpha;
-  }
   auto add = [&](int type, const mjtNum size[3], const mjtNum pos[3], const std::array<float, 4>& rgba) {
     if (scene.ngeom >= scene.maxgeom) return;
     const float colour[4] = {rgba[0], rgba[1], rgba[2], rgba[3]};

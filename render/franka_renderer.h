@@ -63,15 +63,11 @@ class FrankaRenderer {
   /// The arm at q (rad), with an optional trail of points (m, e.g. the TCP path so far).
   Image Render(const sim::JointVector& q, const std::vector<Eigen::Vector3d>& trail = {});
 
-  /// The arm at every configuration of `poses` at once, the earlier ones fainter, with the trail.
-  Image RenderPoses(const std::vector<sim::JointVector>& poses, const std::vector<Eigen::Vector3d>& trail);
-
   /// The camera of the last picture.
   const CameraView& camera() const { return camera_; }
 
  private:
   struct Gl;  // the OSMesa context, its buffer and MuJoCo's render context
-  Image Draw(const std::vector<sim::JointVector>& poses, const std::vector<Eigen::Vector3d>& trail);
 
   RenderConfig config_;
   sim::MjModelPtr model_;  // the scene's model, recoloured for pictures

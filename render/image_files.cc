@@ -116,6 +116,26 @@ class LzwWriter {
 
 }  // namespace
 
+Image Tile(const std::vector<Image>& images, int columns) {
+  FLOWPLAN_DEMAND(!images.empty() && columns > 0);
+  const int w = images[0].width, h = images[0].height;
+  const int n = static_cast<int>(images.size()), cols = std::min(columns, n), rows = (n + cols - 1) / cols;
+  Image out;
+  out.width = w * cols;
+  out.height = h * rows;
+  out.rgb.assign(3 * static_cast<size_t>(out.width) * out.height, 255);
+  for (int i = 0; i < n; ++i) {
+    const Image& image = images[static_cast<size_t>(i)];
+    FLOWPLAN_DEMAND(image.width == w && image.height == h && image.rgb.size() == 3 * static_cast<size_t>(w) * h);
+    const int x0 = (i % cols) * w, y0 = (i / cols) * h;
+    for (int y = 0; y < h; ++y) {
+      std::copy_n(image.At(0, y), 3 * static_cast<size_t>(w),
+                  &out.rgb[3 * (static_cast<size_t>(y0 + y) * out.width + x0)]);
+    }
+  }
+  return out;
+}
+
 void WritePng(const std::string& path, const Image& image) {
   CheckImage(image, path);
   std::string raw;

@@ -18,6 +18,10 @@ struct Image {
   const uint8_t* At(int x, int y) const { return &rgb[3 * (static_cast<size_t>(y) * width + x)]; }
 };
 
+/// `images` (all of one size, at least one) side by side, `columns` to a row, left to right then top to bottom;
+/// a last row that is not full is filled with white. @throws flowplan::InternalError for sizes that differ.
+Image Tile(const std::vector<Image>& images, int columns);
+
 /// Writes `image` as a PNG file, atomically. @throws flowplan::Error naming the file.
 void WritePng(const std::string& path, const Image& image);
 

@@ -395,7 +395,7 @@ TEST(FrankaPlanTest, AProblemFileIsPlannedByOneProcessWithRefusalsAsAStatusAndTh
   const Outcome frames = RunCommand(std::string(FLOWPLAN_PYTHON) + " -c \"from PIL import Image; g = Image.open('" +
                                     path("board.gif") + "'); p = Image.open('" + path("board.png") +
                                     "'); print(g.n_frames, g.size, p.size)\"");
-  EXPECT_EQ(frames.output, "31 (160, 120) (160, 120)\n");  // 16 states and 1 s held at 15 Hz
+  EXPECT_EQ(frames.output, "31 (160, 120) (320, 240)\n");  // 16 states and 1 s held at 15 Hz; 2 x 2 stills
   ExpectCleanFailure(Flowplan("render " + path("rrt.h5") + " --log-level warn"),
                      "no plans; this is a --problems file: give --problem NAME, one of board, free");
 

@@ -38,6 +38,28 @@ geometry::Scene OneSphere(const Eigen::Vector3d& centre, double radius) {
   return scene;
 }
 
+TEST(ImageFilesTest, TileLaysImagesOutInRowsAndFillsTheLastRowWithWhite) {
+  auto solid = [](uint8_t value) {
+    Image image;
+    image.width = 2;
+    image.height = 1;
+    image.rgb.assign(6, value);
+    image.rgb[3] = static_cast<uint8_t>(value + 1);  // pixel (1, 0) differs, so a swapped column shows
+    return image;
+  };
+  const Image tiled = Tile({solid(10), solid(20), solid(30)}, 2);
+  ASSERT_EQ(tiled.width, 4);
+  ASSERT_EQ(tiled.height, 2);
+  EXPECT_EQ(tiled.At(0, 0)[0], 10);
+  EXPECT_EQ(tiled.At(1, 0)[0], 11);
+  EXPECT_EQ(tiled.At(2, 0)[0], 20);
+  EXPECT_EQ(tiled.At(3, 0)[0], 21);
+  EXPECT_EQ(tiled.At(0, 1)[0], 30);
+  EXPECT_EQ(tiled.At(1, 1)[2], 30);
+  EXPECT_EQ(tiled.At(2, 1)[1], 255);  // no fourth image: white
+  EXPECT_EQ(tiled.At(3, 1)[2], 255);
+}
+
 TEST(FrankaRendererTest, TheObstacleAndTheArmAreWhereAProjectionPutsThem) {
   const Eigen::Vector3d sphere(0.45, 0.45, 0.3);
   RenderConfig config;
