@@ -5,7 +5,7 @@ paper's sphere with the graph executor's optimisations off.
     T=THREADS /usr/bin/python3 bench/python_plan_latency.py [PLANNER.pt]
 
 (T: intra-op threads, default 2; default planner: the shipped reach planner).
-Run two at once to see a shared machine (docs/export.md, "Threads").
+Run two at once to see a shared machine (docs/export.md, "Threads on a shared machine").
 """
 import os
 import sys
