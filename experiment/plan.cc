@@ -11,7 +11,6 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "core/format.h"
 #include "experiment/commands.h"
 
 namespace flowplan::experiment {
@@ -26,21 +25,6 @@ void CheckOutputsFree(const std::string& prefix, bool force) {
 }
 
 namespace {
-
-/// ": spheres[0] [0.5, 0, 0.2, 0.1], … (SOURCE)": every obstacle planned around, by name and row, and where the
-/// scene came from; empty without obstacles.
-std::string DescribeObstacles(const PlanInputs& inputs) {
-  std::string out;
-  for (const auto& entry : inputs.rows) {
-    const torch::Tensor rows = entry.value().to(torch::kFloat64).contiguous();
-    for (int64_t k = 0; k < rows.size(0); ++k) {
-      std::string values;
-      for (int64_t p = 0; p < rows.size(1); ++p) values += (p ? ", " : "") + JsonNumber(rows[k][p].item<double>());
-      out += (out.empty() ? ": " : ", ") + entry.key() + "[" + std::to_string(k) + "] [" + values + "]";
-    }
-  }
-  return out.empty() ? out : out + " from " + inputs.scene_source;
-}
 
 void RunPlan(const PlanArgs& args) {
   if (args.num_samples < 1) throw Error("-n: expected at least one plan, got " + std::to_string(args.num_samples));

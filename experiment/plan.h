@@ -124,6 +124,10 @@ struct PlanCounts {
 std::string SamplesJson(const PlanArgs& args, const planning::PlanResult& result, const PlanScores& scores,
                         const std::vector<sim::ExecutionResult>& executed, PlanCounts* counts);
 
+/// plan_report.cc: ": spheres[0] [0.5, 0, 0.2, 0.1], … from SOURCE": every obstacle planned around, by name and
+/// row, and where the scene came from; empty without obstacles.
+std::string DescribeObstacles(const PlanInputs& inputs);
+
 /// plan_report.cc: the planner's settings as report fields ("guidance": {…}, "splitting": …, "rrt_connect": {…},
 /// "hybrid": {…}, as far as the planner has them, and "check": {…}), JSON objects of the config sections.
 std::string SettingsJson(const PlanArgs& args, const PlanSubject& subject);

@@ -35,6 +35,18 @@ std::string Bool(bool value) { return value ? "true" : "false"; }
 
 }  // namespace
 
+std::string DescribeObstacles(const PlanInputs& inputs) {
+  const std::vector<std::string> names = inputs.scene.Names();  // the rows' order
+  std::string out;
+  size_t n = 0;
+  for (const auto& entry : inputs.rows) {
+    for (int64_t k = 0; k < entry.value().size(0); ++k) {
+      out += (out.empty() ? ": " : ", ") + names[n++] + " " + Numbers(entry.value()[k]);
+    }
+  }
+  return out.empty() ? out : out + " from " + inputs.scene_source;
+}
+
 std::string SettingsJson(const PlanArgs& args, const PlanSubject& subject) {
   const std::string rrt = "\"rrt_connect\": " + config::ToJson(subject.config.rrt_connect);
   const std::string learned = "\"guidance\": " + config::ToJson(subject.config.guidance) +
