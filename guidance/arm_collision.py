@@ -21,8 +21,10 @@ def autograd_source(self, opts: Dict[str, float]) -> str:
 
 def native(self, q: Tensor, scene: Dict[str, Tensor]) -> bool:
     """Whether the operator takes these tensors: float32 or float64 q on the
-    CPU, nothing that needs autograd, only kinds it knows."""
+    CPU, nothing that needs autograd, only kinds it knows, an arm of hinges only."""
     if q.get_device() >= 0 or not q.is_floating_point() or q.element_size() < 4 or q.requires_grad:
+        return False
+    if self.robot.has_slides:  # the operator turns hinges only
         return False
     for kind, params in scene.items():
         if kind not in self.native_kinds or params.requires_grad:

@@ -14,6 +14,8 @@ def native_gradient(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, f
     """The guidance gradient (B, T, D) of normalized plans x (B, T, D) in one
     native call, or None where the operator does not take them."""
     normalizer = self.normalizer
+    if self.robot.has_slides:  # the operator turns hinges only
+        return None
     if x.get_device() >= 0 or not x.is_floating_point() or x.element_size() < 4 or x.requires_grad:
         return None
     # Statistics on another device, or wider than x (float64 with float32 x: the chain's result is float64).

@@ -1,5 +1,5 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): the class
-# Arm, batched kinematics of a tree of hinge joints (the Franka), built by
+# Arm, batched kinematics of a tree of hinge and prismatic joints, built by
 # kinematics/robot.cc from a RobotDescription. Shapes: M configurations,
 # J joints, S collision spheres, W = 3 (a link count is written "links"). The dtype and device of the
 # results follow q; the tables are float64 buffers.
@@ -15,7 +15,10 @@
 # (S), the unit hinge axes (J, directions, w = 0) and a point on each hinge (J);
 # sphere_radii (S,); ancestors
 # (J, S) 1 where joint j moves sphere s; tcp_ancestors (J,); home, lower,
-# upper (J,). Attributes: parents, joints (List[int], per link), tcp_link,
+# upper (J,); link_slides (links,) 1 for a slid link, fixed_slide (links, 4, 4)
+# its pose times [0 a; 0 0], joint_slides, joint_turns (J,) 1 for a prismatic
+# (revolute) joint, used when the attribute has_slides is set ("hinge" below
+# then also means a slide's axis). Attributes: parents, joints (List[int], per link), tcp_link,
 # num_links, num_joints, workspace_dim, num_spheres, ik_* solver settings.
 
 
@@ -29,6 +32,10 @@ def link_frames(self, q: Tensor) -> List[Tensor]:
     # root outwards.
     local = self.fixed.to(q.dtype) + torch.sin(angles) * self.fixed_cross.to(q.dtype) + \
         (1.0 - torch.cos(angles)) * self.fixed_cross_sq.to(q.dtype)  # (M, links, 4, 4)
+    if self.has_slides:
+        # A prismatic link slides along its axis: F Trans(v a) = F + v F [0 a; 0 0] (link_turns is 0 for it).
+        slides = (q.index_select(1, self.link_joint.to(q.device)) * self.link_slides.to(q.dtype)).view(M, -1, 1, 1)
+        local = local + slides * self.fixed_slide.to(q.dtype)
     frames: List[Tensor] = []
     for link in range(self.num_links):
         parent = self.parents[link]
@@ -93,7 +100,12 @@ def spheres_vjp(self, centres: Tensor, axes: Tensor, origins: Tensor, rows: Tens
     weights = self.ancestors.to(g.dtype).t().index_select(0, torch.remainder(rows, S))  # (n, J): A[j, s_i]
     summed = torch.zeros([M, J, 6], dtype=g.dtype, device=g.device).index_add_(
         0, torch.div(rows, S, rounding_mode="floor"), weights.unsqueeze(2) * both.unsqueeze(1))  # (M, J, 6)
-    return (axes * (summed[:, :, 0:3] - torch.cross(origins, summed[:, :, 3:6], -1))).sum(-1)
+    turned = (axes * (summed[:, :, 0:3] - torch.cross(origins, summed[:, :, 3:6], -1))).sum(-1)
+    if not self.has_slides:
+        return turned
+    # A prismatic joint j moves every point below it along a_j: dc_s/dq_j = A[j, s] a_j.
+    slid = (axes * summed[:, :, 3:6]).sum(-1)
+    return turned * self.joint_turns.to(g.dtype) + slid * self.joint_slides.to(g.dtype)
 
 
 def tcp_vjp(self, q: Tensor, g: Tensor) -> Tensor:
@@ -103,7 +115,10 @@ def tcp_vjp(self, q: Tensor, g: Tensor) -> Tensor:
     position = self.tcp_frame(frames)[:, 0:3, 3]
     axes, origins = self.hinges(torch.stack(frames, 1))
     arm = position.unsqueeze(1) - origins
-    return (axes * torch.cross(arm, g.unsqueeze(1).expand_as(arm), -1)).sum(-1) * self.tcp_ancestors.to(q.dtype).unsqueeze(0)
+    product = (axes * torch.cross(arm, g.unsqueeze(1).expand_as(arm), -1)).sum(-1)
+    if self.has_slides:  # dp/dq_j = a_j for a prismatic joint
+        product = product * self.joint_turns.to(q.dtype) + (axes * g.unsqueeze(1)).sum(-1) * self.joint_slides.to(q.dtype)
+    return product * self.tcp_ancestors.to(q.dtype).unsqueeze(0)
 
 
 def sphere_centres(self, q: Tensor) -> Tensor:
@@ -156,7 +171,13 @@ def ik_solve(self, targets: Tensor, seed: Tensor) -> Tuple[Tensor, Tensor, Tenso
         # Geometric Jacobian (M, 6, J): a_j x (p - o_j) and a_j for the joints that move the TCP.
         axes, origins = self.hinges(torch.stack(frames, 1))
         axes = axes * moves_tcp
-        jacobian = torch.cat([torch.cross(axes, position.unsqueeze(1) - origins, -1), axes], 2).transpose(1, 2)
+        linear = torch.cross(axes, position.unsqueeze(1) - origins, -1)
+        angular = axes
+        if self.has_slides:  # a prismatic joint's column: (a_j, 0)
+            slides = self.joint_slides.view(1, J, 1)
+            linear = linear * (1.0 - slides) + axes * slides
+            angular = axes * (1.0 - slides)
+        jacobian = torch.cat([linear, angular], 2).transpose(1, 2)
         jt = jacobian.transpose(1, 2)
         step = torch.matmul(jt, torch.linalg_solve(torch.matmul(jacobian, jt) + damping, error.unsqueeze(-1))).squeeze(-1)
         null_space = identity - torch.matmul(torch.linalg_pinv(jacobian), jacobian)

@@ -66,15 +66,15 @@ torch::jit::Module BuildArm(const RobotDescription& d) {
   std::vector<torch::Tensor> cross, cross_sq;
   c10::List<int64_t> parents, joints;
   torch::Tensor link_joint = torch::zeros({L}, torch::kInt64), link_turns = torch::zeros({L}, torch::kFloat64);
+  // Prismatic joints: a link slid by v along its unit axis a is F · Trans(v a) = F + v F [0 a; 0 0].
+  torch::Tensor link_slides = torch::zeros({L}, torch::kFloat64), slide_axes = torch::zeros({L, 4, 4}, torch::kFloat64);
+  torch::Tensor joint_slides = torch::zeros({J}, torch::kFloat64);
+  bool has_slides = false;
   // Points fixed in the links, in homogeneous coordinates in the rows of their link's block: the collision
   // spheres' centres (S), the hinge axes (J, directions) and a point on each hinge (J, its link's origin).
   torch::Tensor frame_points = torch::zeros({4 * L, S + 2 * J}, torch::kFloat64);
   for (int64_t l = 0; l < L; ++l) {
     const RobotLink& link = d.links[static_cast<size_t>(l)];
-    if (link.joint >= 0 && link.type != JointType::kRevolute) {
-      throw Error("kinematics: robot \"" + d.name + "\": link \"" + link.name +
-                  "\": the guidance kinematics plan revolute joints only");
-    }
     std::array<double, 3> pos;
     std::array<double, 4> quat;
     FixedPose(link, pos, quat);  // a held link welded at its offset
@@ -87,8 +87,15 @@ torch::jit::Module BuildArm(const RobotDescription& d) {
     joints.push_back(link.joint);
     if (link.joint >= 0) {
       link_joint[l] = static_cast<int64_t>(link.joint);
-      link_turns[l] = 1.0;
       const torch::Tensor axis = UnitAxis(link.axis);
+      if (link.type == JointType::kPrismatic) {
+        link_slides[l] = 1.0;
+        joint_slides[link.joint] = 1.0;
+        has_slides = true;
+        for (int i = 0; i < 3; ++i) slide_axes[l][i][3] = axis[i];
+      } else {
+        link_turns[l] = 1.0;
+      }
       for (int i = 0; i < 3; ++i) frame_points[4 * l + i][S + link.joint] = axis[i];
       frame_points[4 * l + 3][S + J + link.joint] = 1.0;
     }
@@ -117,6 +124,11 @@ torch::jit::Module BuildArm(const RobotDescription& d) {
       .Buffer("fixed_cross_sq", torch::matmul(fixed, torch::stack(cross_sq)))
       .Buffer("link_joint", link_joint)
       .Buffer("link_turns", link_turns)
+      .Buffer("link_slides", link_slides)
+      .Buffer("fixed_slide", torch::matmul(fixed, slide_axes))
+      .Buffer("joint_slides", joint_slides)
+      .Buffer("joint_turns", 1.0 - joint_slides)
+      .Attribute("has_slides", has_slides)
       .Buffer("tcp_pose", poses[L])
       .Buffer("frame_points", frame_points)
       .Buffer("ancestors", ancestors)
