@@ -21,6 +21,7 @@ Command AddProblemsCommand(CLI::App& app);  // problems.cc: random blocked plann
 Command AddScenesCommand(CLI::App& app);    // scenes.cc: import MoveIt scenes and requests
 Command AddConfigCommand(CLI::App& app);    // config.cc: the resolved config, every key
 Command AddRenderCommand(CLI::App& app);    // render.cc: a plan executed in MuJoCo, as a video and a picture
+Command AddRobotCommand(CLI::App& app);     // robot.cc: robots as data, imported from a URDF
 Command AddFkCommand(CLI::App& app);        // fk.cc: the Franka's TCP through MuJoCo and the kinematics
 
 /// Every subcommand, in the order `flowplan --help` lists them.

@@ -29,6 +29,7 @@ struct PlanArgs {
   std::string planner_file;            // --planner: an exported planner file (instead of --ckpt)
   bool rrt_connect = false;            // --rrt-connect: RRT-Connect for the robot of generate.*
   bool hybrid = false;                 // --hybrid: the learned planner proposes, RRT-Connect falls back
+  std::string robot;                   // --robot: with --rrt-connect, a robot folder (robotfiles/robot_folder.h)
   std::string overlay_path;            // --config: YAML applied over the planner's config
   std::vector<std::string> overrides;  // key=value, e.g. guidance.scale=2
   std::string start, goal;             // --start/--goal: J positions (at rest) or D state values

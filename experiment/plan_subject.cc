@@ -11,6 +11,7 @@
 #include "experiment/trained_planner.h"
 #include "hybrid/hybrid_planner.h"
 #include "planning/learned_planner.h"
+#include "robotfiles/robot_folder.h"
 
 namespace flowplan::experiment {
 namespace fs = std::filesystem;
@@ -85,6 +86,16 @@ PlanSubject FromRrtConnect(const PlanArgs& args) {
   subject.config = LoadExperiment(args.overlay_path, args.overrides);
   subject.trajectory = datasets::MakeTask(subject.config.generate)->Layout().info;
   subject.source = "rrt_connect";
+  if (!args.robot.empty()) {
+    // The folder's robot, planned over the config's horizon and time step, with velocities when its data has them.
+    kinematics::TrajectoryInfo& t = subject.trajectory;
+    const bool velocities = t.state_dim() == 2 * t.robot.num_joints;
+    t.robot = robotfiles::LoadRobot(args.robot);
+    t.env = "robot folder " + args.robot;
+    t.state_labels.clear();
+    for (int j = 0; j < t.robot.num_joints; ++j) t.state_labels.push_back("q" + std::to_string(j + 1));
+    for (int j = 0; velocities && j < t.robot.num_joints; ++j) t.state_labels.push_back("dq" + std::to_string(j + 1));
+  }
   return subject;
 }
 
@@ -105,6 +116,9 @@ void MakeHybrid(PlanSubject& subject) {
 PlanSubject LoadPlanSubject(const PlanArgs& args) {
   const int given = !args.ckpt.empty() + !args.planner_file.empty() + args.rrt_connect;
   if (given != 1) throw Error("plan: expected one of --ckpt RUN_DIR, --planner FILE or --rrt-connect");
+  if (!args.robot.empty() && !args.rrt_connect) {
+    throw Error("--robot: only with --rrt-connect; a learned planner plans for the robot it was trained for");
+  }
   if (args.hybrid && args.rrt_connect) {
     throw Error("--hybrid: a learned planner (--ckpt or --planner) proposes; RRT-Connect is the fallback");
   }

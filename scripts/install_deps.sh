@@ -8,7 +8,7 @@ packages=(
   build-essential cmake ninja-build git
   libtorch-dev libopenblas0-openmp
   libmujoco-dev libhdf5-dev libspdlog-dev libcli11-dev libeigen3-dev libyaml-cpp-dev
-  libgtest-dev libgmock-dev libbenchmark-dev libgloo-dev libosmesa6-dev zlib1g-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libgloo-dev libosmesa6-dev zlib1g-dev liburdfdom-dev
   python3 python3-torch python3-h5py python3-numpy python3-matplotlib python3-yaml python3-pil
 )
 if [ "${1:-}" = "--fuzz" ]; then

@@ -1,0 +1,421 @@
+#include "robotfiles/urdf_import.h"
+
+#include <console_bridge/console.h>
+#include <tinyxml.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "collision/self_pairs.h"
+#include "core/error.h"
+#include "core/random.h"
+#include "kinematics/robot.h"
+#include "spheres/cover.h"
+#include "spheres/mesh.h"
+
+namespace flowplan::robotfiles {
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Collects what liburdfdom reports while it parses, so that its error becomes the one error of the import.
+class Collector : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) errors.push_back(text);
+  }
+  std::vector<std::string> errors;
+};
+
+std::array<double, 4> Quat(const urdf::Rotation& r) {
+  double x, y, z, w;
+  r.getQuaternion(x, y, z, w);
+  return {w, x, y, z};
+}
+
+std::array<double, 3> Vec(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
+
+std::string Lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+bool Movable(const urdf::Joint& joint) {
+  return joint.type == urdf::Joint::REVOLUTE || joint.type == urdf::Joint::CONTINUOUS ||
+         joint.type == urdf::Joint::PRISMATIC;
+}
+
+/// A mesh reference of the URDF as a file on this machine.
+std::string ResolveMesh(const std::string& filename, const fs::path& urdf_dir, const std::string& package_dir,
+                        const std::string& where) {
+  const std::string package = "package://", file = "file://";
+  std::vector<fs::path> tried;
+  if (filename.rfind(package, 0) == 0) {
+    const std::string rest = filename.substr(package.size());
+    if (package_dir.empty()) {
+      throw Error(where + ": mesh \"" + filename + "\": a package:// path needs --package-dir DIR (the folder holding the package)");
+    }
+    tried.push_back(fs::path(package_dir) / rest);
+    const size_t slash = rest.find('/');
+    if (slash != std::string::npos) tried.push_back(fs::path(package_dir) / rest.substr(slash + 1));
+  } else if (filename.rfind(file, 0) == 0) {
+    tried.push_back(fs::path(filename.substr(file.size())));
+  } else {
+    const fs::path p(filename);
+    tried.push_back(p.is_absolute() ? p : urdf_dir / p);
+  }
+  for (const fs::path& p : tried) {
+    if (fs::is_regular_file(p)) return p.string();
+  }
+  std::string list;
+  for (const fs::path& p : tried) list += (list.empty() ? "" : ", ") + p.string();
+  throw Error(where + ": mesh \"" + filename + "\": no such file (looked for " + list + ")");
+}
+
+/// The SRDF's disable_collisions pairs between links of the robot.
+std::vector<kinematics::IgnoredLinkPair> ReadSrdf(const std::string& path, const kinematics::RobotDescription& robot,
+                                                  std::vector<std::string>& notes) {
+  TiXmlDocument doc;
+  if (!doc.LoadFile(path)) {
+    throw Error(path + ":" + std::to_string(doc.ErrorRow()) + ": not a readable SRDF: " + doc.ErrorDesc());
+  }
+  const TiXmlElement* root = doc.RootElement();
+  if (root == nullptr || std::string(root->Value()) != "robot") throw Error(path + ": expected a <robot> element at the root");
+  std::vector<kinematics::IgnoredLinkPair> pairs;
+  int skipped = 0;
+  for (const TiXmlElement* e = root->FirstChildElement("disable_collisions"); e != nullptr;
+       e = e->NextSiblingElement("disable_collisions")) {
+    const char* a = e->Attribute("link1");
+    const char* b = e->Attribute("link2");
+    if (a == nullptr || b == nullptr) {
+      throw Error(path + ":" + std::to_string(e->Row()) + ": disable_collisions: expected link1 and link2");
+    }
+    if (robot.FindLink(a) < 0 || robot.FindLink(b) < 0) {
+      ++skipped;
+      continue;
+    }
+    const char* reason = e->Attribute("reason");
+    pairs.push_back({{a, b}, std::string("srdf: ") + (reason != nullptr ? reason : "")});
+  }
+  notes.push_back(path + ": " + std::to_string(pairs.size()) + " disable_collisions pairs between the robot's links" +
+                  (skipped > 0 ? ", " + std::to_string(skipped) + " naming links outside it skipped" : ""));
+  return pairs;
+}
+
+}  // namespace
+
+ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& options) {
+  ImportResult result;
+  if (!fs::is_regular_file(urdf_path)) throw Error(urdf_path + ": no such file");
+  const std::string extension = Lower(fs::path(urdf_path).extension().string());
+  if (extension != ".urdf") {
+    throw Error(urdf_path + ": expected a URDF file (.urdf); an MJCF is not read by `robot import` yet");
+  }
+  std::ifstream in(urdf_path);
+  std::stringstream text;
+  text << in.rdbuf();
+  Collector collector;
+  console_bridge::useOutputHandler(&collector);
+  const urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(text.str());
+  console_bridge::restorePreviousOutputHandler();
+  if (!model) {
+    std::string why = collector.errors.empty() ? "not a valid URDF" : collector.errors.front();
+    for (size_t i = 1; i < collector.errors.size(); ++i) why += "; " + collector.errors[i];
+    throw Error(urdf_path + ": " + why);
+  }
+  const fs::path urdf_dir = fs::absolute(urdf_path).parent_path();
+  const std::string base_name = options.base.empty() ? model->getRoot()->name : options.base;
+  const urdf::LinkConstSharedPtr base = model->getLink(base_name);
+  if (!base) throw Error(urdf_path + ": --base: no link \"" + base_name + "\"");
+  if (!options.tip.empty() && !model->getLink(options.tip)) throw Error(urdf_path + ": --tip: no link \"" + options.tip + "\"");
+
+  // The links below the base, parents first (children in the order of their joints' names: liburdfdom's).
+  std::vector<urdf::LinkConstSharedPtr> links = {base};
+  for (size_t i = 0; i < links.size(); ++i) {
+    for (const urdf::JointSharedPtr& joint : links[i]->child_joints) links.push_back(model->getLink(joint->child_link_name));
+  }
+  std::map<std::string, int> link_index;
+  for (size_t i = 0; i < links.size(); ++i) link_index[links[i]->name] = static_cast<int>(i);
+  for (const auto& [name, value] : options.hold) {
+    const urdf::JointConstSharedPtr joint = model->getJoint(name);
+    if (!joint || !link_index.count(joint->child_link_name) || joint->child_link_name == base_name) {
+      throw Error(urdf_path + ": --hold: no joint \"" + name + "\" below the base link \"" + base_name + "\"");
+    }
+  }
+  auto joint_of = [&](const urdf::LinkConstSharedPtr& link) -> urdf::JointConstSharedPtr {
+    return link->name == base_name ? nullptr : link->parent_joint;
+  };
+  for (const auto& link : links) {
+    const auto joint = joint_of(link);
+    if (joint && (joint->type == urdf::Joint::FLOATING || joint->type == urdf::Joint::PLANAR)) {
+      throw Error(urdf_path + ": joint \"" + joint->name + "\": a " +
+                  (joint->type == urdf::Joint::FLOATING ? "floating" : "planar") +
+                  " joint below the base; a robot folder is an arm on a fixed base (choose --base below it)");
+    }
+  }
+
+  // The planned joints, in order.
+  std::vector<std::string> planned = options.joints;
+  if (planned.empty()) {
+    if (!options.tip.empty()) {
+      if (!link_index.count(options.tip)) throw Error(urdf_path + ": --tip: link \"" + options.tip + "\" is not below the base \"" + base_name + "\"");
+      for (urdf::LinkConstSharedPtr l = model->getLink(options.tip); l && l->name != base_name; l = l->getParent()) {
+        const auto joint = l->parent_joint;
+        if (Movable(*joint) && !joint->mimic && !options.hold.count(joint->name)) planned.insert(planned.begin(), joint->name);
+      }
+    } else {
+      for (const auto& link : links) {
+        const auto joint = joint_of(link);
+        if (joint && Movable(*joint) && !joint->mimic && !options.hold.count(joint->name)) planned.push_back(joint->name);
+      }
+    }
+  }
+  if (planned.empty()) throw Error(urdf_path + ": no movable joint to plan below the base link \"" + base_name + "\"");
+  std::map<std::string, int> planned_index;
+  for (size_t j = 0; j < planned.size(); ++j) {
+    const urdf::JointConstSharedPtr joint = model->getJoint(planned[j]);
+    if (!joint || !link_index.count(joint->child_link_name) || joint->child_link_name == base_name) {
+      throw Error(urdf_path + ": --joints: no joint \"" + planned[j] + "\" below the base link \"" + base_name + "\"");
+    }
+    if (!Movable(*joint)) throw Error(urdf_path + ": --joints: joint \"" + planned[j] + "\" is fixed");
+    if (joint->mimic) {
+      throw Error(urdf_path + ": --joints: joint \"" + planned[j] + "\" mimics \"" + joint->mimic->joint_name +
+                  "\"; plan its leader instead");
+    }
+    if (options.hold.count(planned[j])) throw Error(urdf_path + ": joint \"" + planned[j] + "\" is both planned and held");
+    if (!planned_index.emplace(planned[j], static_cast<int>(j)).second) {
+      throw Error(urdf_path + ": --joints: joint \"" + planned[j] + "\" named twice");
+    }
+  }
+
+  kinematics::RobotDescription& d = result.file.robot;
+  d.name = model->getName();
+  d.kind = kinematics::RobotKind::kArm;
+  d.workspace_dim = 3;
+  const int J = static_cast<int>(planned.size());
+  d.num_joints = J;
+  d.joint_lower.assign(J, 0.0);
+  d.joint_upper.assign(J, 0.0);
+  d.velocity_limit.assign(J, 0.0);
+  result.file.effort_limit.assign(J, 0.0);
+  // Limits of a movable joint: (lower, upper), continuous joints turning within ±π.
+  auto limits_of = [&](const urdf::Joint& joint) -> std::pair<double, double> {
+    if (joint.type == urdf::Joint::CONTINUOUS) return {-M_PI, M_PI};
+    if (!joint.limits) throw Error(urdf_path + ": joint \"" + joint.name + "\": no <limit>");
+    if (!(joint.limits->lower < joint.limits->upper)) {
+      throw Error(urdf_path + ": joint \"" + joint.name + "\": <limit lower=\"" + config::internal::FormatDouble(joint.limits->lower) +
+                  "\" upper=\"" + config::internal::FormatDouble(joint.limits->upper) + "\">: expected lower < upper");
+    }
+    return {joint.limits->lower, joint.limits->upper};
+  };
+  std::map<std::string, double> held;  // held joints' values, for their mimics
+  for (const auto& link : links) {
+    kinematics::RobotLink out;
+    out.name = link->name;
+    const auto joint = joint_of(link);
+    if (joint) {
+      out.parent = link_index.at(joint->parent_link_name);
+      out.pos = Vec(joint->parent_to_joint_origin_transform.position);
+      out.quat = Quat(joint->parent_to_joint_origin_transform.rotation);
+      out.joint_name = joint->name;
+      if (Movable(*joint)) {
+        const double n = std::sqrt(joint->axis.x * joint->axis.x + joint->axis.y * joint->axis.y + joint->axis.z * joint->axis.z);
+        if (!(n > 0.0) || !std::isfinite(n)) throw Error(urdf_path + ": joint \"" + joint->name + "\": <axis> is zero");
+        out.axis = {joint->axis.x / n, joint->axis.y / n, joint->axis.z / n};
+        out.type = joint->type == urdf::Joint::PRISMATIC ? kinematics::JointType::kPrismatic : kinematics::JointType::kRevolute;
+        const auto found = planned_index.find(joint->name);
+        if (found != planned_index.end()) {
+          const int j = found->second;
+          out.joint = j;
+          const auto [lo, hi] = limits_of(*joint);
+          d.joint_lower[j] = lo;
+          d.joint_upper[j] = hi;
+          if (joint->type == urdf::Joint::CONTINUOUS) {
+            result.notes.push_back("joint \"" + joint->name + "\" is continuous: planned within [-pi, pi] (edit its limits to widen)");
+          }
+          if (!joint->limits || !(joint->limits->velocity > 0.0)) {
+            throw Error(urdf_path + ": joint \"" + joint->name + "\": <limit velocity> missing or not positive; plans are timed by it");
+          }
+          d.velocity_limit[j] = joint->limits->velocity;
+          if (!(joint->limits->effort > 0.0)) {
+            throw Error(urdf_path + ": joint \"" + joint->name + "\": <limit effort> missing or not positive");
+          }
+          result.file.effort_limit[j] = joint->limits->effort;
+        } else {
+          double value;
+          if (options.hold.count(joint->name)) {
+            value = options.hold.at(joint->name);
+          } else if (joint->mimic) {
+            const auto leader = held.find(joint->mimic->joint_name);
+            if (leader == held.end()) {
+              throw Error(urdf_path + ": joint \"" + joint->name + "\" mimics \"" + joint->mimic->joint_name +
+                          "\", which is planned; a mimic joint can only follow a held joint (hold both, or plan neither)");
+            }
+            value = joint->mimic->multiplier * leader->second + joint->mimic->offset;
+          } else {
+            const auto [lo, hi] = limits_of(*joint);
+            value = std::clamp(0.0, lo, hi);
+          }
+          held[joint->name] = value;
+          out.offset = value;
+          result.notes.push_back("joint \"" + joint->name + "\" is held at " + config::internal::FormatDouble(value));
+        }
+      }
+    }
+    d.links.push_back(out);
+  }
+  d.home.assign(J, 0.0);
+  for (int j = 0; j < J; ++j) d.home[j] = std::clamp(0.0, d.joint_lower[j], d.joint_upper[j]);
+
+  // The TCP.
+  std::string tip = options.tip;
+  if (tip.empty()) tip = model->getJoint(planned.back())->child_link_name;
+  d.tcp_link = link_index.at(tip);
+  d.tcp_pos = options.tcp_offset;
+  result.notes.push_back("TCP on link \"" + tip + "\" at " + config::internal::FormatDouble(d.tcp_pos[0]) + ", " +
+                         config::internal::FormatDouble(d.tcp_pos[1]) + ", " + config::internal::FormatDouble(d.tcp_pos[2]));
+
+  // Collision geometry, link by link, and the spheres covering it.
+  spheres::CoverSettings cover;
+  cover.overshoot = options.overshoot;
+  cover.max_spheres = options.max_spheres;
+  cover.seed = options.seed;
+  constexpr double kCheckSpacing = 0.002;
+  struct LinkGeometry {
+    std::string link;
+    std::vector<spheres::Mesh> pieces;   // in the link frame
+    std::vector<spheres::Sphere> exact;  // the URDF's own spheres
+  };
+  std::vector<LinkGeometry> gathered;
+  for (const auto& link : links) {
+    std::vector<spheres::Mesh> pieces;
+    std::vector<spheres::Sphere> exact;  // the URDF's own spheres
+    for (size_t c = 0; c < link->collision_array.size(); ++c) {
+      const urdf::Collision& element = *link->collision_array[c];
+      const std::string where = urdf_path + ": link \"" + link->name + "\" collision " + std::to_string(c);
+      if (!element.geometry) throw Error(where + ": no geometry");
+      CollisionGeometry g;
+      g.link = link->name;
+      g.pos = Vec(element.origin.position);
+      g.quat = Quat(element.origin.rotation);
+      spheres::Mesh mesh;
+      switch (element.geometry->type) {
+        case urdf::Geometry::SPHERE: {
+          const double r = static_cast<const urdf::Sphere&>(*element.geometry).radius;
+          if (!(r > 0.0)) throw Error(where + ": sphere radius " + config::internal::FormatDouble(r) + ": expected > 0");
+          g.shape = "sphere";
+          g.size = {r, 0.0, 0.0};
+          exact.push_back({g.pos, r});
+          break;
+        }
+        case urdf::Geometry::BOX: {
+          const urdf::Vector3 dim = static_cast<const urdf::Box&>(*element.geometry).dim;
+          g.shape = "box";
+          g.size = Vec(dim);
+          mesh = spheres::Transformed(spheres::BoxMesh(dim.x, dim.y, dim.z), g.pos, g.quat);
+          break;
+        }
+        case urdf::Geometry::CYLINDER: {
+          const auto& cylinder = static_cast<const urdf::Cylinder&>(*element.geometry);
+          g.shape = "cylinder";
+          g.size = {cylinder.radius, cylinder.length, 0.0};
+          mesh = spheres::Transformed(spheres::CylinderMesh(cylinder.radius, cylinder.length), g.pos, g.quat);
+          break;
+        }
+        case urdf::Geometry::MESH: {
+          const auto& m = static_cast<const urdf::Mesh&>(*element.geometry);
+          const std::string path = ResolveMesh(m.filename, urdf_dir, options.package_dir, where);
+          const std::string ext = Lower(fs::path(path).extension().string());
+          if (ext != ".stl" && ext != ".obj") {
+            throw Error(where + ": mesh \"" + m.filename + "\": a " + ext +
+                        " collision mesh cannot be read (STL or OBJ only; convert it, e.g. with meshlab or assimp)");
+          }
+          g.shape = "mesh";
+          g.scale = Vec(m.scale);
+          g.mesh = "meshes/" + link->name + "_" + std::to_string(c) + ext;
+          result.meshes.push_back({path, g.mesh});
+          try {
+            mesh = spheres::Transformed(spheres::LoadMesh(path), g.pos, g.quat, g.scale);
+          } catch (const Error& e) {
+            throw Error(where + ": " + e.what());
+          }
+          break;
+        }
+      }
+      if (!mesh.triangles.empty()) pieces.push_back(std::move(mesh));
+      result.file.geometry.push_back(g);
+    }
+    if (!pieces.empty() || !exact.empty()) gathered.push_back({link->name, std::move(pieces), std::move(exact)});
+  }
+  // Every file is read before any cover is fitted: a missing mesh is reported at once.
+  for (auto& [name, pieces, exact] : gathered) {
+    std::vector<spheres::Sphere> fitted = exact;
+    if (!pieces.empty()) {
+      const spheres::Mesh merged = spheres::Merged(pieces);
+      const std::vector<spheres::Sphere> covering = spheres::Cover(merged, cover);
+      fitted.insert(fitted.end(), covering.begin(), covering.end());
+      const spheres::CoverReport report = spheres::CheckCover(merged, covering, kCheckSpacing, StreamSeed(options.seed, 1));
+      result.file.cover.push_back({name, static_cast<int>(fitted.size()), report.samples, report.largest_uncovered,
+                                   report.largest_outside, report.overshoot_ratio});
+    } else {
+      result.file.cover.push_back({name, static_cast<int>(fitted.size()), 0, 0.0, 0.0, 0.0});
+    }
+    for (const spheres::Sphere& s : fitted) result.file.collision.spheres.push_back({name, s.centre, s.radius});
+  }
+  if (result.file.collision.spheres.empty()) {
+    throw Error(urdf_path + ": no link below \"" + base_name + "\" has collision geometry; nothing to check plans with");
+  }
+
+  // Self-collision pairs and the links standing on the floor.
+  kinematics::RobotDescription with_spheres = d;
+  kinematics::ApplyCollisionBody(result.file.collision, with_spheres, urdf_path);
+  if (!options.srdf.empty()) {
+    result.file.collision.self_collision_ignore = ReadSrdf(options.srdf, with_spheres, result.notes);
+  } else {
+    collision::SelfPairSettings pair_settings;
+    pair_settings.samples = options.pair_samples;
+    pair_settings.seed = options.seed;
+    const collision::SelfPairStudy study = collision::StudySelfPairs(with_spheres, pair_settings);
+    for (const auto& pair : study.ignored) {
+      result.file.collision.self_collision_ignore.push_back(
+          {pair.links, pair.reason + " (" + std::to_string(pair.overlapping) + " of " + std::to_string(study.samples) +
+                           " random configurations overlap)"});
+    }
+    result.notes.push_back(std::to_string(study.ignored.size()) + " of " + std::to_string(study.pairs) +
+                           " link pairs not checked for self-collision (adjacent, touching at home, or at more than 95 % of " +
+                           std::to_string(study.samples) + " random configurations)");
+  }
+  result.file.collision.self_collision = true;
+  {
+    const kinematics::Robot robot(with_spheres);
+    const torch::Tensor home = torch::tensor(with_spheres.home, torch::kFloat64).unsqueeze(0);
+    const torch::Tensor centres = robot.SphereCentres(home)[0];  // (S, 3)
+    std::set<std::string> exempt;
+    for (int s = 0; s < with_spheres.num_spheres(); ++s) {
+      const double bottom = centres[s][2].item<double>() - with_spheres.spheres[s].radius;
+      if (bottom < 0.0) exempt.insert(with_spheres.links[with_spheres.spheres[s].link].name);
+    }
+    for (const auto& link : with_spheres.links) {
+      if (exempt.count(link.name)) result.file.collision.floor_exempt.push_back(link.name);
+    }
+  }
+  result.file.source = fs::path(urdf_path).filename().string();
+  result.file.Description(urdf_path);  // validates
+  return result;
+}
+
+ImportResult ImportRobot(const std::string& urdf_path, const ImportOptions& options, const std::string& dir) {
+  ImportResult result = ImportUrdf(urdf_path, options);
+  // The meshes first, the robot file last: a folder with robot.yaml is whole.
+  fs::create_directories(fs::path(dir) / "meshes");
+  for (const auto& [from, to] : result.meshes) fs::copy_file(from, fs::path(dir) / to, fs::copy_options::overwrite_existing);
+  WriteRobotFile(result.file, dir);
+  return result;
+}
+
+}  // namespace flowplan::robotfiles

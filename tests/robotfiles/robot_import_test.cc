@@ -1,0 +1,354 @@
+// `flowplan robot import` on a URDF the test writes: a 4-joint arm on a
+// vertical lift (one prismatic joint), a mesh link (binary STL behind a
+// package:// path), primitives, a fixed tool link. The imported kinematics
+// against MuJoCo's own reading of the same URDF, the written-out Jacobian
+// products against autograd, the sphere cover against the geometry sampled in
+// closed form, RRT-Connect's plans for it, and the errors a user meets.
+
+#include "robotfiles/urdf_import.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "classical/rrt_connect.h"
+#include "core/error.h"
+#include "jit/library.h"
+#include "kinematics/robot.h"
+#include "sim/mujoco_util.h"
+#include "tests/support/scratch_dir.h"
+
+namespace flowplan::robotfiles {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+
+/// An octagonal prism of radius r and height h along z, from z = 0, as a binary STL.
+void WritePrismStl(const fs::path& path, double r, double h) {
+  std::vector<std::array<std::array<float, 3>, 3>> triangles;
+  const int n = 8;
+  for (int k = 0; k < n; ++k) {
+    const double a0 = 2 * M_PI * k / n, a1 = 2 * M_PI * (k + 1) / n;
+    const float x0 = static_cast<float>(r * std::cos(a0)), y0 = static_cast<float>(r * std::sin(a0));
+    const float x1 = static_cast<float>(r * std::cos(a1)), y1 = static_cast<float>(r * std::sin(a1));
+    const float H = static_cast<float>(h);
+    triangles.push_back({{{0, 0, 0}, {x1, y1, 0}, {x0, y0, 0}}});
+    triangles.push_back({{{0, 0, H}, {x0, y0, H}, {x1, y1, H}}});
+    triangles.push_back({{{x0, y0, 0}, {x1, y1, 0}, {x1, y1, H}}});
+    triangles.push_back({{{x0, y0, 0}, {x1, y1, H}, {x0, y0, H}}});
+  }
+  fs::create_directories(path.parent_path());
+  std::ofstream out(path, std::ios::binary);
+  const char header[80] = {};
+  out.write(header, 80);
+  const uint32_t count = static_cast<uint32_t>(triangles.size());
+  out.write(reinterpret_cast<const char*>(&count), 4);
+  for (const auto& t : triangles) {
+    const float normal[3] = {0, 0, 0};
+    out.write(reinterpret_cast<const char*>(normal), 12);
+    for (const auto& v : t) out.write(reinterpret_cast<const char*>(v.data()), 12);
+    const uint16_t attribute = 0;
+    out.write(reinterpret_cast<const char*>(&attribute), 2);
+  }
+}
+
+const char* kInertial = R"(<inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>)";
+
+/// The URDF: base (box) - lift (prismatic, z) - column (cylinder) - shoulder (z) - upper (cylinder along x) -
+/// elbow (y) - fore (cylinder along x) - wrist (about the hand's z) - hand (STL) - fixed - tool. `extra` goes
+/// inside <robot>; `wrist_limit` is the wrist's <limit> element.
+std::string LiftArmUrdf(const std::string& hand_mesh, const std::string& extra = "",
+                        const std::string& wrist_limit = R"(<limit lower="-3.0" upper="3.0" velocity="2.0" effort="20"/>)") {
+  const std::string I = kInertial;
+  return R"(<?xml version="1.0"?>
+<robot name="lift_arm">)" + extra + R"(
+  <link name="base">)" + I + R"(<collision><origin xyz="0 0 0.05"/><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link>
+  <link name="column">)" + I + R"(<collision><origin xyz="0 0 0.2"/><geometry><cylinder radius="0.05" length="0.4"/></geometry></collision></link>
+  <link name="upper">)" + I + R"(<collision><origin xyz="0.15 0 0" rpy="0 1.5707963267948966 0"/><geometry><cylinder radius="0.04" length="0.3"/></geometry></collision></link>
+  <link name="fore">)" + I + R"(<collision><origin xyz="0.125 0 0" rpy="0 1.5707963267948966 0"/><geometry><cylinder radius="0.035" length="0.25"/></geometry></collision></link>
+  <link name="hand">)" + I + R"(<collision><geometry><mesh filename=")" + hand_mesh + R"("/></geometry></collision></link>
+  <link name="tool">)" + I + R"(</link>
+  <joint name="lift" type="prismatic"><parent link="base"/><child link="column"/><origin xyz="0 0 0.1"/><axis xyz="0 0 1"/>
+    <limit lower="0" upper="0.3" velocity="0.2" effort="500"/></joint>
+  <joint name="shoulder" type="revolute"><parent link="column"/><child link="upper"/><origin xyz="0 0 0.45" rpy="0 0 0.3"/><axis xyz="0 0 1"/>
+    <limit lower="-2.8" upper="2.8" velocity="1.5" effort="80"/></joint>
+  <joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/><origin xyz="0.3 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2.0" upper="2.0" velocity="1.5" effort="60"/></joint>
+  <joint name="wrist" type="revolute"><parent link="fore"/><child link="hand"/><origin xyz="0.25 0 0" rpy="0 1.5707963267948966 0"/><axis xyz="0 0 1"/>
+    )" + wrist_limit + R"(</joint>
+  <joint name="tool_joint" type="fixed"><parent link="hand"/><child link="tool"/><origin xyz="0 0 0.12"/></joint>
+</robot>
+)";
+}
+
+void WriteText(const fs::path& path, const std::string& text) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path) << text;
+}
+
+class RobotImportTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = new fs::path(fs::temp_directory_path() / ("flowplan_robot_import_" + std::to_string(::getpid())));
+    fs::remove_all(*root_);
+    WritePrismStl(*root_ / "packages" / "lift_arm_description" / "meshes" / "hand.stl", 0.04, 0.1);
+    WriteText(*root_ / "urdf" / "lift_arm.urdf", LiftArmUrdf("package://lift_arm_description/meshes/hand.stl"));
+    ImportOptions options;
+    options.package_dir = (*root_ / "packages").string();
+    options.tip = "tool";
+    options.overshoot = 0.015;
+    options.pair_samples = 2000;
+    ImportRobot((*root_ / "urdf" / "lift_arm.urdf").string(), options, (*root_ / "robot").string());
+    file_ = new RobotFile(LoadRobotFile((*root_ / "robot").string()));
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*root_);
+    delete file_;
+    delete root_;
+  }
+  static fs::path* root_;
+  static RobotFile* file_;
+};
+fs::path* RobotImportTest::root_ = nullptr;
+RobotFile* RobotImportTest::file_ = nullptr;
+
+TEST_F(RobotImportTest, WritesTheJointsLimitsTcpAndMeshesOfTheUrdf) {
+  const kinematics::RobotDescription d = file_->Description("robot.yaml");
+  ASSERT_EQ(d.num_joints, 4);
+  EXPECT_EQ(d.JointName(0), "lift");
+  EXPECT_EQ(d.JointName(3), "wrist");
+  EXPECT_EQ(d.joint_lower, (std::vector<double>{0.0, -2.8, -2.0, -3.0}));
+  EXPECT_EQ(d.joint_upper, (std::vector<double>{0.3, 2.8, 2.0, 3.0}));
+  EXPECT_EQ(d.velocity_limit, (std::vector<double>{0.2, 1.5, 1.5, 2.0}));
+  EXPECT_EQ(file_->effort_limit, (std::vector<double>{500, 80, 60, 20}));
+  EXPECT_EQ(d.links[static_cast<size_t>(d.FindLink("column"))].type, kinematics::JointType::kPrismatic);
+  EXPECT_EQ(d.links[static_cast<size_t>(d.tcp_link)].name, "tool");
+  EXPECT_TRUE(fs::is_regular_file(*root_ / "robot" / "meshes" / "hand_0.stl"));
+  EXPECT_FALSE(fs::exists(*root_ / "robot" / "robot.yaml.partial"));
+  // The base stands on the floor; the moving links do not.
+  EXPECT_THAT(d.floor_exempt, ::testing::Contains("base"));
+  EXPECT_THAT(d.floor_exempt, ::testing::Not(::testing::Contains("hand")));
+  // Neighbours are never checked against each other; the base and the forearm are.
+  auto ignored = [&](const std::string& a, const std::string& b) {
+    for (const auto& pair : d.self_collision_ignore) {
+      if ((pair[0] == a && pair[1] == b) || (pair[0] == b && pair[1] == a)) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(ignored("base", "column"));
+  EXPECT_TRUE(ignored("fore", "hand"));
+  EXPECT_FALSE(ignored("base", "fore"));
+}
+
+TEST_F(RobotImportTest, KinematicsMatchMujocosReadingOfTheSameUrdf) {
+  // MuJoCo reads the URDF itself (links joined by fixed joints kept apart, the mesh by its absolute path).
+  const fs::path for_mujoco = *root_ / "mujoco" / "lift_arm.urdf";
+  fs::create_directories(for_mujoco.parent_path());
+  fs::copy_file(*root_ / "packages" / "lift_arm_description" / "meshes" / "hand.stl", for_mujoco.parent_path() / "hand.stl",
+                fs::copy_options::overwrite_existing);
+  WriteText(for_mujoco, LiftArmUrdf((for_mujoco.parent_path() / "hand.stl").string(),
+                                    R"(<mujoco><compiler fusestatic="false" strippath="false" discardvisual="true"/></mujoco>)"));
+  const sim::MjModelPtr model = sim::LoadModelFromFile(for_mujoco.string());
+  const mjModel& m = *model;
+  sim::MjDataPtr data = sim::MakeData(m);
+  const kinematics::RobotDescription d = file_->Description("robot.yaml");
+  const kinematics::Robot robot(d);
+  torch::manual_seed(3);
+  const int64_t B = 16;
+  const torch::Tensor lower = torch::tensor(d.joint_lower, torch::kFloat64), upper = torch::tensor(d.joint_upper, torch::kFloat64);
+  const torch::Tensor q = lower + (upper - lower) * torch::rand({B, 4}, torch::kFloat64);
+  const auto frames = jit::Call(robot.module(), "link_frames", {q}).toTensorVector();
+  const torch::Tensor tcp = robot.Tcp(q), centres = robot.SphereCentres(q);
+  for (int64_t b = 0; b < B; ++b) {
+    for (int j = 0; j < 4; ++j) {
+      const int joint = mj_name2id(&m, mjOBJ_JOINT, d.JointName(j).c_str());
+      ASSERT_GE(joint, 0) << d.JointName(j);
+      data->qpos[m.jnt_qposadr[joint]] = q[b][j].item<double>();
+    }
+    mj_kinematics(&m, data.get());
+    for (size_t l = 0; l < d.links.size(); ++l) {
+      const int body = mj_name2id(&m, mjOBJ_BODY, d.links[l].name.c_str());
+      ASSERT_GE(body, 0) << d.links[l].name;
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(frames[l][b][i][3].item<double>(), data->xpos[3 * body + i], 1e-9) << d.links[l].name;
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(frames[l][b][i][k].item<double>(), data->xmat[9 * body + 3 * i + k], 1e-9);
+      }
+    }
+    const int tool = mj_name2id(&m, mjOBJ_BODY, "tool");
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(tcp[b][i].item<double>(), data->xpos[3 * tool + i], 1e-9);
+    for (size_t s = 0; s < d.spheres.size(); s += 7) {
+      const int body = mj_name2id(&m, mjOBJ_BODY, d.links[static_cast<size_t>(d.spheres[s].link)].name.c_str());
+      for (int i = 0; i < 3; ++i) {
+        double expected = data->xpos[3 * body + i];
+        for (int k = 0; k < 3; ++k) expected += data->xmat[9 * body + 3 * i + k] * d.spheres[s].centre[k];
+        EXPECT_NEAR(centres[b][static_cast<int64_t>(s)][i].item<double>(), expected, 1e-9);
+      }
+    }
+  }
+}
+
+TEST_F(RobotImportTest, WrittenOutJacobianProductsOfTheSlideMatchAutograd) {
+  const kinematics::Robot robot(file_->Description("robot.yaml"));
+  torch::manual_seed(5);
+  const torch::Tensor q0 = torch::rand({6, 4}, torch::kFloat64) * torch::tensor({0.3, 2.0, 2.0, 2.0}, torch::kFloat64);
+  const torch::Tensor g = torch::randn({6, 3}, torch::kFloat64);
+  const torch::Tensor q = q0.clone().requires_grad_(true);
+  const torch::Tensor expected = torch::autograd::grad({(robot.Tcp(q) * g).sum()}, {q})[0];
+  const torch::Tensor written = jit::Call(robot.module(), "tcp_vjp", {q0, g}).toTensor();
+  EXPECT_LT((written - expected).abs().max().item<double>(), 1e-12);
+  EXPECT_GT(expected.select(1, 0).abs().max().item<double>(), 0.1);  // the lift moves the TCP
+  // Autograd itself against central differences on the lift.
+  const double h = 1e-6;
+  torch::Tensor plus = q0.clone(), minus = q0.clone();
+  plus.select(1, 0) += h;
+  minus.select(1, 0) -= h;
+  const torch::Tensor numeric = ((robot.Tcp(plus) - robot.Tcp(minus)) * g).sum(1) / (2 * h);
+  EXPECT_LT((numeric - expected.select(1, 0)).abs().max().item<double>(), 1e-7);
+  const int64_t S = robot.num_spheres();
+  const torch::Tensor rows = torch::randperm(6 * S, torch::kInt64).slice(0, 0, S);
+  const torch::Tensor gs = torch::randn({S, 3}, torch::kFloat64);
+  const torch::Tensor dense = torch::zeros({6 * S, 3}, torch::kFloat64).index_copy(0, rows, gs).view({6, S, 3});
+  const torch::Tensor sphere_expected = torch::autograd::grad({(robot.SphereCentres(q) * dense).sum()}, {q})[0];
+  const auto poses = jit::Call(robot.module(), "spheres", {q0}).toTuple()->elements();
+  const torch::Tensor sphere_written =
+      jit::Call(robot.module(), "spheres_vjp", {poses[0], poses[1], poses[2], rows, gs}).toTensor();
+  EXPECT_LT((sphere_written - sphere_expected).abs().max().item<double>(), 1e-12);
+}
+
+TEST_F(RobotImportTest, SpheresCoverTheCollisionGeometrySampledInClosedForm) {
+  const kinematics::RobotDescription d = file_->Description("robot.yaml");
+  // Points on the surfaces, in their link frames: the base's box (centre z 0.05, sides 0.2 0.2 0.1), the column's
+  // cylinder (r 0.05, z 0..0.4), the upper arm's (r 0.04 along x, 0..0.3), the hand's prism's corners (r 0.04, z
+  // 0..0.1).
+  std::vector<std::pair<std::string, std::array<double, 3>>> points;
+  for (int i = 0; i <= 20; ++i) {
+    for (int k = 0; k <= 20; ++k) {
+      const double u = -0.1 + 0.2 * i / 20, v = -0.1 + 0.2 * k / 20, w = 0.1 * k / 20;
+      points.push_back({"base", {u, v, 0.1}});
+      points.push_back({"base", {u, v, 0.0}});
+      points.push_back({"base", {u, 0.1, w}});
+      points.push_back({"base", {-0.1, u, w}});
+    }
+  }
+  for (int i = 0; i < 72; ++i) {
+    const double a = 2 * M_PI * i / 72;
+    for (int k = 0; k <= 40; ++k) {
+      points.push_back({"column", {0.05 * std::cos(a), 0.05 * std::sin(a), 0.4 * k / 40}});
+      points.push_back({"upper", {0.3 * k / 40, 0.04 * std::cos(a), 0.04 * std::sin(a)}});
+    }
+    points.push_back({"column", {0.05 * std::cos(a) * (i % 5) / 4, 0.05 * std::sin(a) * (i % 5) / 4, 0.4}});
+  }
+  for (int k = 0; k < 8; ++k) {
+    const double a = 2 * M_PI * k / 8;
+    points.push_back({"hand", {0.04 * std::cos(a), 0.04 * std::sin(a), 0.0}});
+    points.push_back({"hand", {0.04 * std::cos(a), 0.04 * std::sin(a), 0.1}});
+  }
+  for (const auto& [link, p] : points) {
+    const int l = d.FindLink(link);
+    double nearest = INFINITY;
+    for (const auto& s : d.spheres) {
+      if (s.link != l) continue;
+      const double gap = std::sqrt(std::pow(p[0] - s.centre[0], 2) + std::pow(p[1] - s.centre[1], 2) +
+                                   std::pow(p[2] - s.centre[2], 2)) - s.radius;
+      nearest = std::min(nearest, gap);
+    }
+    EXPECT_LE(nearest, 1e-9) << link << " point " << p[0] << " " << p[1] << " " << p[2];
+  }
+  // Tightness: no sphere centre lies farther outside its geometry than the spheres may reach.
+  for (const LinkCover& cover : file_->cover) {
+    EXPECT_EQ(cover.largest_uncovered, 0.0) << cover.link;
+    EXPECT_LT(cover.largest_outside, 0.03) << cover.link;
+  }
+}
+
+TEST_F(RobotImportTest, RrtConnectPlansForTheImportedArmPassThePlanChecker) {
+  kinematics::TrajectoryInfo info;
+  info.env = "robot folder";
+  info.dt = 0.1;
+  info.horizon = 32;
+  info.robot = file_->Description("robot.yaml");
+  for (int j = 1; j <= 4; ++j) info.state_labels.push_back("q" + std::to_string(j));
+  for (int j = 1; j <= 4; ++j) info.state_labels.push_back("dq" + std::to_string(j));
+  const classical::RrtConnectPlanner planner(info, classical::RrtConnectConfig{});
+  planning::PlanRequest request;
+  // From reaching out on one side, low, to the other side, high, around a ball in the way.
+  request.start = torch::tensor({{0.0, -1.5, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0}, {0.05, -1.2, 0.3, 1.0, 0.0, 0.0, 0.0, 0.0}}, torch::kFloat32);
+  request.goal = torch::tensor({{0.25, 1.5, 0.5, 1.0, 0.0, 0.0, 0.0, 0.0}, {0.28, 1.3, 0.7, -1.0, 0.0, 0.0, 0.0, 0.0}}, torch::kFloat32);
+  request.scene = geometry::SphereRows(torch::tensor({{0.35, 0.35, 0.5, 0.12}}, torch::kFloat64));
+  request.seed = 1;
+  const planning::PlanResult result = planner.Plan(request);
+  ASSERT_EQ(result.plans.sizes(), (std::vector<int64_t>{2, 32, 8}));
+  for (int64_t b = 0; b < 2; ++b) {
+    ASSERT_TRUE(result.found[b].item<bool>()) << result.failure[static_cast<size_t>(b)];
+    const auto verdict = planner.checker().Check(result.plans[b].unsqueeze(0), request.start[b], request.goal[b],
+                                                 request.scene, torch::Tensor(), {}, false)[0];
+    EXPECT_TRUE(verdict.valid()) << verdict.reason;
+    // The lift moved: the plans use the prismatic joint, within its limits.
+    const torch::Tensor lift = result.plans[b].select(1, 0);
+    EXPECT_GE(lift.min().item<float>(), -1e-6);
+    EXPECT_LE(lift.max().item<float>(), 0.3 + 1e-6);
+    EXPECT_GT((lift[-1] - lift[0]).item<float>(), 0.15);
+  }
+  // A start inside the ball is refused with the reason, not "no plan found".
+  request.start = torch::tensor({{0.0, 0.78, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}}, torch::kFloat32);
+  request.goal = request.goal.slice(0, 0, 1);
+  const planning::PlanResult refused = planner.Plan(request);
+  EXPECT_TRUE(refused.refused[0]) << refused.failure[0];
+  EXPECT_THAT(refused.failure[0], HasSubstr("start"));
+}
+
+class RobotImportErrorTest : public ::testing::Test {
+ protected:
+  std::string ImportError(const std::string& urdf_text, ImportOptions options = {}) {
+    const fs::path dir = testing::ScratchDir();
+    WritePrismStl(dir / "hand.stl", 0.04, 0.1);
+    const fs::path path = dir / "arm.urdf";
+    WriteText(path, urdf_text);
+    options.pair_samples = 100;
+    options.overshoot = 0.03;
+    try {
+      ImportRobot(path.string(), options, (dir / "robot").string());
+    } catch (const Error& e) {
+      EXPECT_FALSE(fs::exists(dir / "robot" / "robot.yaml"));
+      return e.what();
+    }
+    ADD_FAILURE() << "the import did not fail";
+    return "";
+  }
+};
+
+TEST_F(RobotImportErrorTest, AMalformedUrdfNamesTheFile) {
+  std::string text = LiftArmUrdf("hand.stl");
+  text.resize(text.size() / 2);
+  EXPECT_THAT(ImportError(text), HasSubstr("arm.urdf: "));
+}
+
+TEST_F(RobotImportErrorTest, AJointWithoutLimitsIsNamed) {
+  EXPECT_THAT(ImportError(LiftArmUrdf("hand.stl", "", "")), AllOf(HasSubstr("arm.urdf: "), HasSubstr("wrist")));
+}
+
+TEST_F(RobotImportErrorTest, AMissingTipLinkIsNamed) {
+  ImportOptions options;
+  options.tip = "gripper";
+  EXPECT_THAT(ImportError(LiftArmUrdf("hand.stl"), options), AllOf(HasSubstr("arm.urdf: "), HasSubstr("\"gripper\"")));
+}
+
+TEST_F(RobotImportErrorTest, AMissingCollisionMeshNamesTheLinkAndTheFile) {
+  EXPECT_THAT(ImportError(LiftArmUrdf("meshes/nowhere.stl")),
+              AllOf(HasSubstr("arm.urdf: link \"hand\" collision 0"), HasSubstr("meshes/nowhere.stl"), HasSubstr("no such file")));
+}
+
+TEST_F(RobotImportErrorTest, AColladaCollisionMeshIsRefusedByName) {
+  const fs::path dir = testing::ScratchDir();
+  WriteText(dir / "hand.dae", "<COLLADA/>");
+  EXPECT_THAT(ImportError(LiftArmUrdf("hand.dae")), AllOf(HasSubstr("link \"hand\""), HasSubstr(".dae")));
+}
+
+}  // namespace
+}  // namespace flowplan::robotfiles
