@@ -5,6 +5,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <memory>
@@ -66,10 +67,12 @@ void RunPlan(const PlanArgs& args) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   const int64_t lost = args.num_samples - result.found.sum().item<int64_t>();
   if (lost > 0) {
+    const int64_t refused = std::count(result.refused.begin(), result.refused.end(), true);
     for (size_t b = 0; b < result.failure.size(); ++b) {
       if (!result.failure[b].empty()) {
-        spdlog::warn("{} of {} plans not found, each written as the straight line from start to goal (plan {}: {})",
-                     lost, args.num_samples, b, result.failure[b]);
+        spdlog::warn("{} of {} plans not found ({} refused: a start or goal the plan checker does not accept), each "
+                     "written as the straight line from start to goal (plan {}: {})",
+                     lost, args.num_samples, refused, b, result.failure[b]);
         break;
       }
     }

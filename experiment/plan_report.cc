@@ -193,9 +193,11 @@ std::string SamplesJson(const PlanArgs& args, const planning::PlanResult& result
     counts->executed += executed_ok;
     counts->tcp_clear += o.tcp_clear;
     counts->arm_clear += o.arm_clear;
+    // A plan the planner refused to search for (its start or goal is not valid) fails as "refused", for that reason.
+    const bool refused = !result.refused.empty() && result.refused[n];
     std::string s = "{\"index\": " + std::to_string(i) + ", \"success\": " + Bool(verdict.valid()) +
-                    ", \"failure\": " + JsonString(config::EnumName(verdict.failure)) +
-                    ", \"reason\": " + JsonString(verdict.reason) + ", \"clearance\": " + JsonNumber(verdict.clearance) +
+                    ", \"failure\": " + JsonString(refused ? "refused" : config::EnumName(verdict.failure)) +
+                    ", \"reason\": " + JsonString(refused ? result.failure[n] : verdict.reason) + ", \"clearance\": " + JsonNumber(verdict.clearance) +
                     ", \"motion_checks\": " + std::to_string(verdict.motion_checks) +
                     ", \"planning_time_s\": " + JsonNumber(result.call_seconds[n] / static_cast<double>(result.call_plans[n])) +
                     ", \"call_seconds\": " + JsonNumber(result.call_seconds[n]) +

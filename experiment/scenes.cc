@@ -12,6 +12,7 @@
 #include "experiment/commands.h"
 #include "collision/body_model.h"
 #include "problems/moveit_import.h"
+#include "robotfiles/robot_folder.h"
 #include "sim/franka_model.h"
 
 namespace flowplan::experiment {
@@ -26,6 +27,7 @@ struct ImportArgs {
   std::string grasp = "touching-tcp";
   double grasp_margin = 0.01;
   double limit_tolerance = 0.002;
+  std::string robot;  // --robot: a robot folder (default: the built-in Franka)
 };
 
 std::string Stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
@@ -42,9 +44,17 @@ void RunImport(const ImportArgs& args) {
     }
     for (size_t i = 0; i < args.files.size(); i += 2) pairs.emplace_back(args.files[i], args.files[i + 1]);
   }
-  const collision::BodyModel body(sim::LoadFrankaModel().description(), "the Franka");
+  const kinematics::RobotDescription robot =
+      args.robot.empty() ? sim::LoadFrankaModel().description() : robotfiles::LoadRobot(args.robot);
+  const collision::BodyModel body(robot, args.robot.empty() ? "the Franka" : args.robot);
   problems::MoveItImportOptions options;
-  options.joint_names = problems::FrankaJointNames();
+  if (args.robot.empty()) {
+    options.joint_names = problems::FrankaJointNames();
+  } else {
+    // A robot folder's joints by their names in its URDF, which MoveIt uses; its base is its root link.
+    for (int j = 0; j < robot.num_joints; ++j) options.joint_names.push_back({robot.JointName(j)});
+    options.base_frames = {robot.links.front().name};
+  }
   for (const kinematics::RobotLink& link : body.description().links) {
     if (link.joint < 0 && !link.joint_name.empty()) options.held_names.push_back(link.joint_name);
   }
@@ -115,7 +125,13 @@ Command AddScenesCommand(CLI::App& app) {
   import->add_option("--dir", args->folder, "a folder of sceneNNNN.yaml / requestNNNN.yaml pairs (MotionBenchMaker)");
   import->add_option("--out", args->out, "problem file to write (YAML)")->required();
   import->add_option("--scenes-dir", args->scenes_dir, "also write each problem's scene as DIR/NAME.yaml");
-  import->add_option("--frame", args->frames, "frame ids that are the robot's base (default: panda_link0, base_link)");
+  import->add_option("--robot", args->robot,
+                     "robot folder (`flowplan robot import`) whose joints, by name, the requests set (default: the "
+                     "built-in Franka)")
+      ->check(CLI::ExistingPath);
+  import->add_option("--frame", args->frames,
+                     "frame ids that are the robot's base (default: panda_link0 and base_link for the Franka, a robot "
+                     "folder's root link)");
   import->add_option("--grasped", args->grasp,
                      "obstacles a goal grasps, left out: touching-tcp (the goal's TCP is in or near it) or none");
   import->add_option("--grasp-margin", args->grasp_margin, "m: how near the goal's TCP counts as touching")

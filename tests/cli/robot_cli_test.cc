@@ -1,0 +1,109 @@
+// A user's own robot through the command line, with no C++ of theirs: `robot
+// import` of a URDF the test writes (a 4-joint arm on a lift, a mesh link
+// behind a package:// path), `scenes import --robot` of a MoveIt scene and
+// request naming its joints, and `plan --rrt-connect --robot` of that problem
+// and of a start and goal given on the command line; h5py reads the plan file.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "tests/support/command.h"
+#include "tests/support/lift_arm_urdf.h"
+#include "tests/support/scratch_dir.h"
+
+namespace flowplan {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using testing::Flowplan;
+using testing::RunCommand;
+
+TEST(RobotCliTest, AUrdfIsImportedAndPlannedForFromTheCommandLine) {
+  const fs::path dir = testing::ScratchDir();
+  testing::WritePrismStl(dir / "share" / "lift_arm_description" / "meshes" / "hand.stl", 0.04, 0.1);
+  testing::WriteText(dir / "lift_arm.urdf", testing::LiftArmUrdf("package://lift_arm_description/meshes/hand.stl"));
+  const std::string robot = (dir / "robot").string();
+  const std::string import = "robot import " + (dir / "lift_arm.urdf").string() + " --package-dir " +
+                             (dir / "share").string() + " --tip tool --tcp-offset 0,0,0.02 --overshoot 0.02 " +
+                             "--pair-samples 1000 --out " + robot;
+  const testing::Outcome imported = Flowplan(import);
+  ASSERT_EQ(imported.exit_code, 0) << imported.output;
+  EXPECT_THAT(imported.output, HasSubstr("planned joints (4): lift, shoulder, elbow, wrist"));
+  EXPECT_TRUE(fs::is_regular_file(dir / "robot" / "robot.yaml"));
+  EXPECT_TRUE(fs::is_regular_file(dir / "robot" / "meshes" / "hand_0.stl"));
+  // A second import into the same folder is refused with one line naming the file, unless forced.
+  const testing::Outcome again = Flowplan(import);
+  EXPECT_EQ(again.exit_code, 1);
+  EXPECT_THAT(again.output, HasSubstr("robot.yaml exists (--force replaces it)"));
+
+  // A MoveIt scene (a box beside the arm, in the base frame) and a request (MotionBenchMaker's layout).
+  testing::WriteText(dir / "moveit" / "scene0001.yaml", R"(name: one box
+robot_state:
+  joint_state: {name: [lift, shoulder, elbow, wrist], position: [0.0, -1.5, 0.5, 0.0]}
+world:
+  collision_objects:
+    - id: crate
+      header: {frame_id: base}
+      primitives: [{type: box, dimensions: [0.2, 0.2, 0.3]}]
+      primitive_poses: [{position: [0.45, 0.3, 0.5], orientation: [0, 0, 0, 1]}]
+)");
+  testing::WriteText(dir / "moveit" / "request0001.yaml", R"(start_state:
+  joint_state: {name: [lift, shoulder, elbow, wrist], position: [0.0, -1.5, 0.5, 0.0]}
+goal_constraints:
+  - joint_constraints:
+      - {joint_name: lift, position: 0.25}
+      - {joint_name: shoulder, position: 1.5}
+      - {joint_name: elbow, position: 0.5}
+      - {joint_name: wrist, position: 1.0}
+)");
+  const std::string problems = (dir / "problems.yaml").string();
+  const testing::Outcome scenes =
+      Flowplan("scenes import --robot " + robot + " --dir " + (dir / "moveit").string() + " --out " + problems);
+  ASSERT_EQ(scenes.exit_code, 0) << scenes.output;
+  EXPECT_THAT(scenes.output, HasSubstr("1 problems (0 refused"));
+
+  const std::string config = std::string(FLOWPLAN_SOURCE_DIR) + "/configs/franka_joint.yaml";
+  const std::string prefix = (dir / "plans").string();
+  const testing::Outcome planned = Flowplan("plan --rrt-connect --robot " + robot + " --config " + config +
+                                            " --problems " + problems + " -n 2 --no-plot threads=1 --out " + prefix);
+  ASSERT_EQ(planned.exit_code, 0) << planned.output;
+  EXPECT_THAT(planned.output, HasSubstr("2/2"));
+  // The plan file, read by h5py: 2 plans of the config's horizon, 4 positions and 4 velocities, all valid, the
+  // lift within its limits and moved to the goal's 0.25 m.
+  const std::string check = std::string(FLOWPLAN_PYTHON) + " -c \"import h5py, numpy as np; f = h5py.File('" + prefix +
+                            ".h5', 'r'); p = f['problems/scene0001/plans'][()]; v = f['problems/scene0001/valid'][()]; print(p.shape, int(v.sum()), " +
+                            "float(p[..., 0].min()), float(p[..., 0].max()), float(np.abs(p[:, -1, 0] - 0.25).max()))\"";
+  const testing::Outcome read = RunCommand(check);
+  ASSERT_EQ(read.exit_code, 0) << read.output;
+  double lowest = -1, highest = -1, miss = -1;
+  int T = 0, D = 0, valid = 0;
+  ASSERT_EQ(std::sscanf(read.output.c_str(), "(2, %d, %d) %d %lf %lf %lf", &T, &D, &valid, &lowest, &highest, &miss), 6)
+      << read.output;
+  EXPECT_EQ(D, 8);
+  EXPECT_EQ(valid, 2);
+  EXPECT_GE(lowest, -1e-6);
+  EXPECT_LE(highest, 0.3 + 1e-6);
+  EXPECT_LT(miss, 1e-5);
+
+  // A start given on the command line inside the crate is refused with its reason.
+  const testing::Outcome refused =
+      Flowplan("plan --rrt-connect --robot " + robot + " --config " + config +
+               " --box 0.45,0.3,0.5,0.2,0.2,0.3 --start 0,0.59,0,0 --goal 0.25,1.5,0.5,1 -n 1 --no-plot --force --out " + prefix);
+  EXPECT_THAT(refused.output, HasSubstr("0/1"));
+  std::ifstream report(prefix + ".json");
+  const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+  EXPECT_THAT(text, HasSubstr(R"("failure": "refused", "reason": "start: sphere)"));
+  // --robot with a learned planner is refused.
+  const testing::Outcome learned = Flowplan("plan --planner " + std::string(FLOWPLAN_SOURCE_DIR) +
+                                            "/pretrained/franka_reach_planner.pt --robot " + robot + " --out " + prefix);
+  EXPECT_EQ(learned.exit_code, 1);
+  EXPECT_THAT(learned.output, HasSubstr("--robot: only with --rrt-connect"));
+}
+
+}  // namespace
+}  // namespace flowplan
