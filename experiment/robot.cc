@@ -67,6 +67,10 @@ void RunRobotImport(const RobotImportArgs& args) {
   for (int j = 0; j < d.num_joints; ++j) joints += (j ? ", " : "") + d.JointName(j);
   spdlog::info("planned joints ({}): {}", d.num_joints, joints);
   for (const robotfiles::LinkCover& c : result.file.cover) {
+    if (c.samples == 0) {
+      spdlog::info("link {}: {} spheres, the URDF's own", c.link, c.spheres);
+      continue;
+    }
     spdlog::info("link {}: {} spheres; of {} surface samples the farthest lies {:.2f} mm outside every sphere; the spheres "
                  "reach {:.1f} mm outside the geometry and add {:.0f} % of its volume",
                  c.link, c.spheres, c.samples, c.largest_uncovered * 1e3, c.largest_outside * 1e3, c.overshoot_ratio * 100);

@@ -222,8 +222,8 @@ ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& optio
       out.parent = link_index.at(joint->parent_link_name);
       out.pos = Vec(joint->parent_to_joint_origin_transform.position);
       out.quat = Quat(joint->parent_to_joint_origin_transform.rotation);
-      out.joint_name = joint->name;
       if (Movable(*joint)) {
+        out.joint_name = joint->name;  // a fixed joint has no value a MoveIt state could set
         const double n = std::sqrt(joint->axis.x * joint->axis.x + joint->axis.y * joint->axis.y + joint->axis.z * joint->axis.z);
         if (!(n > 0.0) || !std::isfinite(n)) throw Error(urdf_path + ": joint \"" + joint->name + "\": <axis> is zero");
         out.axis = {joint->axis.x / n, joint->axis.y / n, joint->axis.z / n};
