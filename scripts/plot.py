@@ -189,6 +189,7 @@ def command_scene(args):
         obstacles = read_scene(f)
         executed = f["executed/tcp"][...] if "executed" in f else None
         env, scale = f.attrs["env"], float(f.attrs["guidance_scale"])
+        planner = str(f.attrs["planner"]) if "planner" in f.attrs else ""
         radius = robot_radius(f)
         other = None
         if args.compare:
@@ -209,7 +210,8 @@ def command_scene(args):
                 for i in range(len(other)):
                     ax.plot(other[i, :, a], other[i, :, b], color="0.6", lw=0.8, alpha=0.6,
                             label=args.compare_label if i == 0 else None)
-            name = args.label or f"plans (scale {scale:g})"
+            # A classical planner has no guidance scale to name.
+            name = args.label or ("plans" if planner in ("rrt_connect",) else f"plans (scale {scale:g})")
             if valid is None:
                 for i in range(len(tcp)):
                     ax.plot(tcp[i, :, a], tcp[i, :, b], color="tab:blue", lw=0.9, alpha=0.7,
@@ -348,7 +350,7 @@ def main():
     p.add_argument("--episodes", type=int, default=200)
     p.add_argument("--compare", help="another plan file (e.g. unguided) drawn in grey")
     p.add_argument("--compare-label", default="unguided", help="the legend's name of the --compare plans")
-    p.add_argument("--label", help="the legend's name of the plans (default: plans (scale S))")
+    p.add_argument("--label", help="the legend's name of the plans (default: plans (scale S), or plans for RRT-Connect)")
     p.add_argument("--title")
     p.set_defaults(run=command_scene)
     p = sub.add_parser("problems", help="draw one problem of each problem file in 3-D")
