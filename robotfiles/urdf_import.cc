@@ -14,6 +14,7 @@
 #include "collision/self_pairs.h"
 #include "core/error.h"
 #include "core/random.h"
+#include "jit/library.h"
 #include "kinematics/robot.h"
 #include "spheres/cover.h"
 #include "spheres/mesh.h"
@@ -392,16 +393,31 @@ ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& optio
   }
   result.file.collision.self_collision = true;
   {
+    // A link stands on the floor when its height never changes (every joint between it and the base is fixed,
+    // held, or turns about the vertical) and a sphere of it reaches below z = 0 at home.
     const kinematics::Robot robot(with_spheres);
     const torch::Tensor home = torch::tensor(with_spheres.home, torch::kFloat64).unsqueeze(0);
     const torch::Tensor centres = robot.SphereCentres(home)[0];  // (S, 3)
-    std::set<std::string> exempt;
+    const auto frames = jit::Call(robot.module(), "link_frames", {home}).toTensorVector();  // (1, 4, 4) per link
+    const size_t L = with_spheres.links.size();
+    std::vector<bool> level(L, false), below(L, false);
+    for (size_t l = 0; l < L; ++l) {
+      const kinematics::RobotLink& link = with_spheres.links[l];
+      const bool parent_level = link.parent < 0 || level[static_cast<size_t>(link.parent)];
+      bool vertical = false;
+      if (link.joint >= 0 && link.type == kinematics::JointType::kRevolute) {
+        const torch::Tensor axis = frames[l][0].slice(0, 0, 3).slice(1, 0, 3).matmul(
+            torch::tensor({link.axis[0], link.axis[1], link.axis[2]}, torch::kFloat64));
+        vertical = std::abs(axis[2].item<double>()) > (1.0 - 1e-9) * axis.norm().item<double>();
+      }
+      level[l] = parent_level && (link.joint < 0 || vertical);
+    }
     for (int s = 0; s < with_spheres.num_spheres(); ++s) {
       const double bottom = centres[s][2].item<double>() - with_spheres.spheres[s].radius;
-      if (bottom < 0.0) exempt.insert(with_spheres.links[with_spheres.spheres[s].link].name);
+      if (bottom < 0.0) below[static_cast<size_t>(with_spheres.spheres[s].link)] = true;
     }
-    for (const auto& link : with_spheres.links) {
-      if (exempt.count(link.name)) result.file.collision.floor_exempt.push_back(link.name);
+    for (size_t l = 0; l < L; ++l) {
+      if (level[l] && below[l]) result.file.collision.floor_exempt.push_back(with_spheres.links[l].name);
     }
   }
   result.file.source = fs::path(urdf_path).filename().string();

@@ -20,7 +20,9 @@
 // self-collision are the SRDF's `disable_collisions` when one is given, else
 // collision::StudySelfPairs' adjacent, default (touching at home) and always
 // (touching at more than 95 % of `pair_samples` random configurations) pairs.
-// Links with a sphere below z = 0 at home stand on the floor (floor_exempt).
+// Links whose height no joint changes (every joint from the base fixed, held or
+// turning about the vertical) and that reach below z = 0 at home stand on the
+// floor (floor_exempt).
 
 #include <array>
 #include <map>

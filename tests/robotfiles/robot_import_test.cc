@@ -12,6 +12,7 @@
 #include <mujoco/mujoco.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -243,6 +244,42 @@ TEST_F(RobotImportTest, RrtConnectPlansForTheImportedArmPassThePlanChecker) {
   const planning::PlanResult refused = planner.Plan(request);
   EXPECT_TRUE(refused.refused[0]) << refused.failure[0];
   EXPECT_THAT(refused.failure[0], HasSubstr("start"));
+}
+
+TEST(ShippedRobotTest, Ur5FollowsThePublishedDenavitHartenbergParameters) {
+  // robots/ur5 against the standard DH product written here: T = prod Rz(q_i) Tz(d_i) Tx(a_i) Rx(alpha_i).
+  const kinematics::RobotDescription d = LoadRobot(std::string(FLOWPLAN_SOURCE_DIR) + "/robots/ur5");
+  ASSERT_EQ(d.num_joints, 6);
+  const double D[6] = {0.089159, 0.0, 0.0, 0.10915, 0.09465, 0.0823};
+  const double A[6] = {0.0, -0.425, -0.39225, 0.0, 0.0, 0.0};
+  const double alpha[6] = {M_PI / 2, 0.0, 0.0, M_PI / 2, -M_PI / 2, 0.0};
+  const kinematics::Robot robot(d);
+  torch::manual_seed(11);
+  const torch::Tensor q = (torch::rand({20, 6}, torch::kFloat64) * 2 - 1) * M_PI;
+  const torch::Tensor tcp = robot.Tcp(q);
+  for (int64_t b = 0; b < 20; ++b) {
+    double T[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+    for (int i = 0; i < 6; ++i) {
+      const double th = q[b][i].item<double>(), ct = std::cos(th), st = std::sin(th);
+      const double ca = std::cos(alpha[i]), sa = std::sin(alpha[i]);
+      const double step[4][4] = {{ct, -st * ca, st * sa, A[i] * ct},
+                                 {st, ct * ca, -ct * sa, A[i] * st},
+                                 {0, sa, ca, D[i]},
+                                 {0, 0, 0, 1}};
+      double next[4][4] = {};
+      for (int r = 0; r < 4; ++r) {
+        for (int c = 0; c < 4; ++c) {
+          for (int k = 0; k < 4; ++k) next[r][c] += T[r][k] * step[k][c];
+        }
+      }
+      std::memcpy(T, next, sizeof(T));
+    }
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(tcp[b][i].item<double>(), T[i][3], 1e-12) << "b " << b;
+  }
+  // The joints' published speeds and torques.
+  EXPECT_THAT(d.velocity_limit, ::testing::Each(::testing::DoubleEq(M_PI)));
+  EXPECT_EQ(LoadRobotFile(std::string(FLOWPLAN_SOURCE_DIR) + "/robots/ur5").effort_limit,
+            (std::vector<double>{150, 150, 150, 28, 28, 28}));
 }
 
 class RobotImportErrorTest : public ::testing::Test {
