@@ -1,12 +1,14 @@
 #!/usr/bin/env python3
-"""Recounts the TCP-only and whole-arm successes of saved Franka plans.
+"""Recounts the TCP-only and whole-arm successes of saved arm plans.
 
 usage: recount_plans.py [--out RESULT.json] PLAN_OR_FOLDER ...
 
 For every `flowplan plan` output pair PREFIX.h5 / PREFIX.json (a folder is
 searched for them), recomputes from the plans in the HDF5 file, with forward
-kinematics written here (modified Denavit-Hartenberg parameters of the Panda;
-no flowplan code), each plan's TCP path, the clearance of the TCP and of every
+kinematics written here (no flowplan code: modified Denavit-Hartenberg
+parameters of the Panda for the built-in Franka; for any other arm, the
+kinematic tree of the file's `robot` attribute, revolute and prismatic joints
+composed here), each plan's TCP path, the clearance of the TCP and of every
 collision sphere of the arm to every obstacle, the goal distance and the joint
 speeds, and from them the two success counts of `flowplan plan`: the TCP never
 inside an obstacle, and no collision sphere of the arm inside one (obstacles of
@@ -75,6 +77,42 @@ def link_frames(q):
     return frames
 
 
+def axis_motion(axis, values, prismatic):
+    """(N, 4, 4): turning about the unit axis by `values` (Rodrigues), or sliding along it."""
+    a = np.asarray(axis, dtype=np.float64) / np.linalg.norm(axis)
+    n = len(values)
+    out = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
+    if prismatic:
+        out[:, :3, 3] = values[:, None] * a
+        return out
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    out[:, :3, :3] = np.eye(3) + np.sin(values)[:, None, None] * k + (1 - np.cos(values))[:, None, None] * (k @ k)
+    return out
+
+
+def tree_frames(robot, q):
+    """q (N, J) -> {link name: (N, 4, 4)} and "tcp", from a robot description (its `links`: parent, pos, quat,
+    joint, axis, type, offset; its TCP)."""
+    n = len(q)
+    frames, by_index = {}, []
+    for link in robot["links"]:
+        fixed = np.eye(4)
+        fixed[:3, :3] = rotation(link.get("quat", [1, 0, 0, 0]))
+        fixed[:3, 3] = link.get("pos", [0, 0, 0])
+        joint = link.get("joint", -1)
+        values = q[:, joint] if joint >= 0 else np.full(n, float(link.get("offset", 0.0)))
+        local = fixed @ axis_motion(link.get("axis", [0, 0, 1]), values, link.get("type", "revolute") == "prismatic")
+        parent = link.get("parent", -1)
+        frame = local if parent < 0 else by_index[parent] @ local
+        by_index.append(frame)
+        frames[link["name"]] = frame
+    tcp = np.eye(4)
+    tcp[:3, :3] = rotation(robot.get("tcp_quat", [1, 0, 0, 0]))
+    tcp[:3, 3] = robot.get("tcp_pos", [0, 0, 0])
+    frames["tcp"] = by_index[robot["tcp_link"]] @ tcp
+    return frames
+
+
 def rotation(quaternion):
     """Local-to-world rotation (3, 3) of a quaternion (w, x, y, z) of any norm."""
     w, x, y, z = np.asarray(quaternion) / np.linalg.norm(quaternion)
@@ -130,8 +168,11 @@ def recount_group(f, g, report, samples):
     dt = float(f.attrs["dt"])
     robot = yaml.safe_load(f.attrs["robot"])
     n, t = plans.shape[:2]
-    q = plans[..., :7].reshape(-1, 7)
-    frames = link_frames(q)
+    J = int(robot["num_joints"])
+    q = plans[..., :J].reshape(-1, J)
+    franka = f.attrs["env"] == "franka"
+    frames = link_frames(q) if franka else tree_frames(robot, q)
+    velocity_limits = VELOCITY_LIMITS if franka else np.array(robot["velocity_limit"], dtype=np.float64)
     tcp = frames["tcp"][:, :3, 3].reshape(n, t, 3)
     names = [link["name"] for link in robot["links"]]
     centres = np.stack([(frames[names[s["link"]]] @ np.append(s["centre"], 1.0))[:, :3] for s in robot["spheres"]],
@@ -143,7 +184,7 @@ def recount_group(f, g, report, samples):
     else:
         tcp_gap = arm_gap = np.full(n, np.inf)
     goal = np.linalg.norm(tcp[:, -1] - goal_tcp, axis=-1)
-    ratio = (np.abs(np.diff(plans[..., :7], axis=1)) / dt / VELOCITY_LIMITS).max((1, 2))
+    ratio = (np.abs(np.diff(plans[..., :J], axis=1)) / dt / velocity_limits).max((1, 2))
     # Per plan, the values behind the counts, against flowplan's (largest difference).
     gaps = {"tcp_clearance": (tcp_gap, [min(s["tcp_clearance"], default=np.inf) for s in samples]),
             "arm_clearance": (arm_gap, [min(s["arm_clearance"], default=np.inf) for s in samples]),
@@ -172,8 +213,8 @@ def recount_group(f, g, report, samples):
 def recount(prefix):
     report = json.load(open(prefix + ".json"))
     with h5py.File(prefix + ".h5", "r") as f:
-        if f.attrs["env"] != "franka":
-            raise SystemExit(f"{prefix}.h5: env {f.attrs['env']!r}, only franka plans are recounted")
+        if yaml.safe_load(f.attrs["robot"]).get("kind", "arm") != "arm":
+            raise SystemExit(f"{prefix}.h5: env {f.attrs['env']!r}: only arms' plans are recounted")
         # A `flowplan plan --problems` report holds one group and list of samples per planned problem.
         parts = ([(f[p["group"]], p["samples"]) for p in report["problems"] if p["status"] == "planned"]
                  if "problems" in report else [(f, report["samples"])])

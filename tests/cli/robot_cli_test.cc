@@ -2,7 +2,8 @@
 // import` of a URDF the test writes (a 4-joint arm on a lift, a mesh link
 // behind a package:// path), `scenes import --robot` of a MoveIt scene and
 // request naming its joints, and `plan --rrt-connect --robot` of that problem
-// and of a start and goal given on the command line; h5py reads the plan file.
+// and of a start and goal given on the command line; h5py reads the plan file
+// and the recount script recounts it with its own kinematics.
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -89,6 +90,12 @@ goal_constraints:
   EXPECT_GE(lowest, -1e-6);
   EXPECT_LE(highest, 0.3 + 1e-6);
   EXPECT_LT(miss, 1e-5);
+
+  // The recount script, with kinematics of its own composed from the robot the plan file carries, agrees.
+  const testing::Outcome recount = RunCommand(std::string(FLOWPLAN_PYTHON) + " " + FLOWPLAN_SOURCE_DIR +
+                                              "/scripts/recount_plans.py " + prefix);
+  EXPECT_EQ(recount.exit_code, 0) << recount.output;
+  EXPECT_THAT(recount.output, HasSubstr("TCP 2/2 (flowplan 2), arm 2/2 (flowplan 2)"));
 
   // A start given on the command line inside the crate is refused with its reason.
   const testing::Outcome refused =
