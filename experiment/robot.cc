@@ -1,4 +1,4 @@
-// `flowplan robot import`: a robot folder from a URDF (robotfiles/urdf_import.h).
+// `flowplan robot import`: a robot folder from a URDF or an MJCF (robotfiles/urdf_import.h, mjcf_import.h).
 
 #include <spdlog/spdlog.h>
 
@@ -18,6 +18,8 @@ struct RobotImportArgs {
   std::string out;
   std::string srdf, package_dir, base, tip, tcp_offset;
   std::vector<std::string> joints, hold;
+  std::string velocity_limit;
+  int collision_group = -1;
   double overshoot = 0.01;
   int max_spheres = 64;
   int64_t pair_samples = 10000;
@@ -53,6 +55,8 @@ void RunRobotImport(const RobotImportArgs& args) {
     if (v.size() != 1) throw Error("--hold: expected one value for " + item.substr(0, eq) + ", got \"" + item + "\"");
     options.hold[item.substr(0, eq)] = v[0];
   }
+  if (!args.velocity_limit.empty()) options.velocity_limit = ParseNumbers(args.velocity_limit, "--velocity-limit");
+  options.collision_group = args.collision_group;
   options.overshoot = args.overshoot;
   options.max_spheres = args.max_spheres;
   options.pair_samples = args.pair_samples;
@@ -84,12 +88,12 @@ void RunRobotImport(const RobotImportArgs& args) {
 
 Command AddRobotCommand(CLI::App& app) {
   auto args = std::make_shared<RobotImportArgs>();
-  CLI::App* robot = app.add_subcommand("robot", "robots as data: import a URDF into a robot folder (robot.yaml)");
+  CLI::App* robot = app.add_subcommand("robot", "robots as data: import a URDF or an MJCF into a robot folder (robot.yaml)");
   robot->require_subcommand(1);
   CLI::App* import = robot->add_subcommand(
-      "import", "read a URDF and write DIR/robot.yaml (joints, limits, TCP, collision spheres fitted to the collision "
+      "import", "read a URDF or an MJCF and write DIR/robot.yaml (joints, limits, TCP, collision spheres fitted to the collision "
                 "geometry, link pairs not checked) and DIR/meshes/");
-  import->add_option("model", args->model, "the robot's URDF")->required()->check(CLI::ExistingFile);
+  import->add_option("model", args->model, "the robot's URDF (.urdf) or MJCF (.xml)")->required()->check(CLI::ExistingFile);
   import->add_option("--out", args->out, "robot folder to write")->required();
   import->add_option("--srdf", args->srdf, "SRDF whose disable_collisions are the link pairs not checked")
       ->check(CLI::ExistingFile);
@@ -106,6 +110,12 @@ Command AddRobotCommand(CLI::App& app) {
   import->add_option("--pair-samples", args->pair_samples,
                      "random configurations that decide which link pairs always touch (without --srdf)")
       ->check(CLI::PositiveNumber);
+  import->add_option("--velocity-limit", args->velocity_limit,
+                     "v1,...: MJCF: the planned joints' speed limits (rad/s or m/s), which an MJCF does not hold "
+                     "(default: the model's <numeric name=\"velocity_limit\">)");
+  import->add_option("--collision-group", args->collision_group,
+                     "MJCF: the geom group holding the collision geometry (default: every geom whose contype or "
+                     "conaffinity is set)");
   import->add_flag("--force", args->force, "replace DIR/robot.yaml if it exists");
   return {import, [args] { RunRobotImport(*args); }};
 }

@@ -4,7 +4,7 @@
 // planned and held joints with their limits, the TCP, the home posture, the
 // collision spheres and the link pairs not checked against each other) and
 // DIR/meshes/ (the collision meshes the spheres were fitted to). Written by
-// `flowplan robot import` (robotfiles/urdf_import.h), hand-editable, read by
+// `flowplan robot import` (robotfiles/urdf_import.h, mjcf_import.h), hand-editable, read by
 // every command given `--robot DIR` (or `robot: DIR` in a config). Key by key
 // in docs/robots.md.
 
@@ -21,8 +21,9 @@ namespace flowplan::robotfiles {
 /// spheres were fitted to, kept so that they can be fitted again and checked.
 struct CollisionGeometry {
   std::string link;                                // the link's name
-  std::string shape;                               // sphere, box, cylinder or mesh
-  std::array<double, 3> size{0.0, 0.0, 0.0};       // sphere: (r, 0, 0); box: full sides; cylinder: (r, length, 0)
+  std::string shape;                               // sphere, box, cylinder, capsule, ellipsoid or mesh
+  std::array<double, 3> size{0.0, 0.0, 0.0};       // sphere: (r, 0, 0); box: full sides; cylinder, capsule:
+                                                   // (r, length, 0); ellipsoid: semi-axes
   std::string mesh;                                // mesh: file, relative to the robot folder
   std::array<double, 3> scale{1.0, 1.0, 1.0};      // mesh: scale applied to its vertices
   std::array<double, 3> pos{0.0, 0.0, 0.0};        // m, origin in the link frame
@@ -31,8 +32,9 @@ struct CollisionGeometry {
   template <class V>
   void Visit(V& v) {
     v.Field("link", link, "link the geometry is fixed to");
-    v.Field("shape", shape, "sphere, box, cylinder or mesh");
-    v.Field("size", size, "sphere: [r, 0, 0]; box: full side lengths; cylinder: [r, length, 0] (m)");
+    v.Field("shape", shape, "sphere, box, cylinder, capsule, ellipsoid or mesh");
+    v.Field("size", size,
+            "sphere: [r, 0, 0]; box: full side lengths; cylinder, capsule: [r, length, 0]; ellipsoid: semi-axes (m)");
     v.Field("mesh", mesh, "mesh: file relative to the robot folder (.stl or .obj)");
     v.Field("scale", scale, "mesh: scale of its vertices");
     v.Field("pos", pos, "origin in the link frame (m)");

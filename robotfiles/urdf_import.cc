@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "robotfiles/collision_fit.h"
+#include "robotfiles/mjcf_import.h"
 #include "spheres/mesh.h"
 
 namespace flowplan::robotfiles {
@@ -78,9 +79,7 @@ ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& optio
   ImportResult result;
   if (!fs::is_regular_file(urdf_path)) throw Error(urdf_path + ": no such file");
   const std::string extension = Lower(fs::path(urdf_path).extension().string());
-  if (extension != ".urdf") {
-    throw Error(urdf_path + ": expected a URDF file (.urdf); an MJCF is not read by `robot import` yet");
-  }
+  if (extension != ".urdf") throw Error(urdf_path + ": expected a URDF file (.urdf)");
   std::ifstream in(urdf_path);
   std::stringstream text;
   text << in.rdbuf();
@@ -314,11 +313,22 @@ ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& optio
   return result;
 }
 
-ImportResult ImportRobot(const std::string& urdf_path, const ImportOptions& options, const std::string& dir) {
-  ImportResult result = ImportUrdf(urdf_path, options);
+ImportResult ImportRobot(const std::string& model_path, const ImportOptions& options, const std::string& dir) {
+  const std::string extension = Lower(fs::path(model_path).extension().string());
+  if (extension != ".urdf" && extension != ".xml") {
+    throw Error(model_path + ": expected a URDF (.urdf) or an MJCF (.xml) model");
+  }
+  ImportResult result = extension == ".urdf" ? ImportUrdf(model_path, options) : ImportMjcf(model_path, options);
   // The meshes first, the robot file last: a folder with robot.yaml is whole.
   fs::create_directories(fs::path(dir) / "meshes");
   for (const auto& [from, to] : result.meshes) fs::copy_file(from, fs::path(dir) / to, fs::copy_options::overwrite_existing);
+  for (const auto& [to, mesh] : result.mesh_files) {
+    std::ofstream out(fs::path(dir) / to);
+    out.precision(9);
+    for (const auto& v : mesh.vertices) out << "v " << v[0] << " " << v[1] << " " << v[2] << "\n";
+    for (const auto& t : mesh.triangles) out << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
+    if (!out) throw Error((fs::path(dir) / to).string() + ": write failed");
+  }
   WriteRobotFile(result.file, dir);
   return result;
 }

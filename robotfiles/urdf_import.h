@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "robotfiles/robot_folder.h"
+#include "spheres/mesh.h"
 
 namespace flowplan::robotfiles {
 
@@ -44,12 +45,15 @@ struct ImportOptions {
   double overshoot = 0.01;                  // m: how far spheres may reach outside the geometry
   int max_spheres = 64;                     // per link
   int64_t pair_samples = 10000;             // random configurations for the self-collision pairs
+  std::vector<double> velocity_limit;       // MJCF: the planned joints' speed limits, which an MJCF does not hold
+  int collision_group = -1;                 // MJCF: the geom group that is the collision geometry (-1: geoms that collide)
   uint64_t seed = 0;
 };
 
 struct ImportResult {
   RobotFile file;
   std::vector<std::pair<std::string, std::string>> meshes;  // (source path, path in the folder) to copy
+  std::vector<std::pair<std::string, spheres::Mesh>> mesh_files;  // (path in the folder, mesh) to write as OBJ
   std::vector<std::string> notes;                          // what the import decided, one line each
 };
 
@@ -60,7 +64,9 @@ struct ImportResult {
 ///   or in a format other than STL or OBJ, a floating or planar joint.
 ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& options);
 
-/// ImportUrdf, then the folder written: DIR/robot.yaml and DIR/meshes/.
-ImportResult ImportRobot(const std::string& urdf_path, const ImportOptions& options, const std::string& dir);
+/// ImportUrdf (a .urdf file) or ImportMjcf (robotfiles/mjcf_import.h; a .xml
+/// file), then the folder written: DIR/meshes/ first, DIR/robot.yaml last.
+/// @throws flowplan::Error for another extension, and as the importer does.
+ImportResult ImportRobot(const std::string& model_path, const ImportOptions& options, const std::string& dir);
 
 }  // namespace flowplan::robotfiles

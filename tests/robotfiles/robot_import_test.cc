@@ -282,6 +282,132 @@ TEST(ShippedRobotTest, Ur5FollowsThePublishedDenavitHartenbergParameters) {
             (std::vector<double>{150, 150, 150, 28, 28, 28}));
 }
 
+/// The lift arm as an MJCF: a slide, hinges through their bodies' origins, a capsule, a box, a mesh, a motor per
+/// joint, the speed limits as a custom numeric. `joint` replaces the wrist's joint element.
+std::string LiftArmMjcf(const std::string& wrist = R"(<joint name="wrist" axis="0 0 1" range="-3 3"/>)",
+                        const std::string& custom = R"(<custom><numeric name="velocity_limit" data="0.2 1.5 1.5 2"/></custom>)") {
+  return R"(<mujoco model="lift_arm_mjcf">
+  <compiler angle="radian" meshdir="." autolimits="true"/>
+  <asset><mesh name="hand" file="hand.stl"/></asset>)" + custom + R"(
+  <worldbody>
+    <body name="base">
+      <geom type="box" size="0.1 0.1 0.05" pos="0 0 0.05"/>
+      <body name="column" pos="0 0 0.1">
+        <joint name="lift" type="slide" axis="0 0 1" range="0 0.3"/>
+        <geom type="cylinder" size="0.05 0.2" pos="0 0 0.2"/>
+        <body name="upper" pos="0 0 0.45" quat="0.9887710779 0 0 0.1494381325">
+          <joint name="shoulder" axis="0 0 1" range="-2.8 2.8"/>
+          <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.04"/>
+          <body name="fore" pos="0.3 0 0">
+            <joint name="elbow" axis="0 1 0" range="-2 2"/>
+            <geom type="capsule" fromto="0 0 0 0.25 0 0" size="0.035"/>
+            <body name="hand" pos="0.25 0 0" quat="0.7071067812 0 0.7071067812 0">
+              )" + wrist + R"(
+              <geom type="mesh" mesh="hand"/>
+              <geom type="sphere" size="0.02" pos="0 0 0.1" contype="0" conaffinity="0"/>
+              <body name="tool" pos="0 0 0.12"/>
+            </body>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor joint="lift" gear="1" ctrlrange="-500 500"/>
+    <motor joint="shoulder" gear="80" ctrlrange="-1 1"/>
+    <motor joint="elbow" gear="1" forcerange="-60 60" forcelimited="true"/>
+    <motor joint="wrist" gear="1" ctrlrange="-20 20"/>
+  </actuator>
+</mujoco>
+)";
+}
+
+TEST(MjcfImportTest, AnMjcfBecomesARobotFolderWhoseKinematicsAreMujocos) {
+  const fs::path dir = testing::ScratchDir();
+  WritePrismStl(dir / "hand.stl", 0.04, 0.1);
+  WriteText(dir / "arm.xml", LiftArmMjcf());
+  ImportOptions options;
+  options.tip = "tool";
+  options.overshoot = 0.02;
+  options.pair_samples = 500;
+  const ImportResult imported = ImportRobot((dir / "arm.xml").string(), options, (dir / "robot").string());
+  const RobotFile file = LoadRobotFile((dir / "robot").string());
+  const kinematics::RobotDescription d = file.Description("robot.yaml");
+  EXPECT_EQ(d.name, "lift_arm_mjcf");
+  ASSERT_EQ(d.num_joints, 4);
+  EXPECT_EQ(d.JointName(0), "lift");
+  EXPECT_EQ(d.links[static_cast<size_t>(d.FindLink("column"))].type, kinematics::JointType::kPrismatic);
+  EXPECT_EQ(d.joint_upper, (std::vector<double>{0.3, 2.8, 2.0, 3.0}));
+  EXPECT_EQ(d.velocity_limit, (std::vector<double>{0.2, 1.5, 1.5, 2.0}));
+  EXPECT_EQ(file.effort_limit, (std::vector<double>{500, 80, 60, 20}));
+  // The mesh is written into the folder, and the sphere that does not collide is not collision geometry.
+  EXPECT_TRUE(fs::is_regular_file(dir / "robot" / file.geometry.back().mesh)) << file.geometry.back().mesh;
+  for (const CollisionGeometry& g : file.geometry) EXPECT_NE(g.shape, "sphere");
+  // Bodies, TCP and spheres against MuJoCo's kinematics of the same file.
+  char error[1000] = "";
+  const sim::MjModelPtr model(mj_loadXML((dir / "arm.xml").string().c_str(), nullptr, error, sizeof(error)));
+  ASSERT_TRUE(model) << error;
+  sim::MjDataPtr data = sim::MakeData(*model);
+  const kinematics::Robot robot(d);
+  torch::manual_seed(4);
+  const torch::Tensor lower = torch::tensor(d.joint_lower, torch::kFloat64), upper = torch::tensor(d.joint_upper, torch::kFloat64);
+  const torch::Tensor q = lower + (upper - lower) * torch::rand({8, 4}, torch::kFloat64);
+  const auto frames = jit::Call(robot.module(), "link_frames", {q}).toTensorVector();
+  const torch::Tensor tcp = robot.Tcp(q);
+  for (int64_t b = 0; b < 8; ++b) {
+    for (int j = 0; j < 4; ++j) data->qpos[j] = q[b][j].item<double>();
+    mj_kinematics(model.get(), data.get());
+    for (size_t l = 0; l < d.links.size(); ++l) {
+      const int body = mj_name2id(model.get(), mjOBJ_BODY, d.links[l].name.c_str());
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(frames[l][b][i][3].item<double>(), data->xpos[3 * body + i], 1e-9) << d.links[l].name;
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(frames[l][b][i][k].item<double>(), data->xmat[9 * body + 3 * i + k], 1e-9);
+      }
+    }
+    const int tool = mj_name2id(model.get(), mjOBJ_BODY, "tool");
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(tcp[b][i].item<double>(), data->xpos[3 * tool + i], 1e-9);
+  }
+  // Every vertex of the hand's mesh, placed by MuJoCo, lies in a sphere of the hand.
+  const int mesh = 0, hand = d.FindLink("hand");
+  int geom = 0;
+  while (model->geom_type[geom] != mjGEOM_MESH) ++geom;
+  for (int v = 0; v < model->mesh_vertnum[mesh]; ++v) {
+    const float* raw = model->mesh_vert + 3 * (model->mesh_vertadr[mesh] + v);
+    const mjtNum local[3] = {raw[0], raw[1], raw[2]};
+    mjtNum p[3];  // in the hand's frame: MuJoCo keeps a mesh about its own centre and places it by the geom's pose
+    mju_rotVecQuat(p, local, model->geom_quat + 4 * geom);
+    for (int i = 0; i < 3; ++i) p[i] += model->geom_pos[3 * geom + i];
+    double nearest = INFINITY;
+    for (const auto& sphere : d.spheres) {
+      if (sphere.link != hand) continue;
+      nearest = std::min(nearest, std::sqrt(std::pow(p[0] - sphere.centre[0], 2) + std::pow(p[1] - sphere.centre[1], 2) +
+                                            std::pow(p[2] - sphere.centre[2], 2)) - sphere.radius);
+    }
+    EXPECT_LE(nearest, 1e-6) << "vertex " << v;
+  }
+}
+
+TEST(MjcfImportTest, WhatAnMjcfCannotSayIsOneErrorNamingIt) {
+  const fs::path dir = testing::ScratchDir();
+  WritePrismStl(dir / "hand.stl", 0.04, 0.1);
+  auto error = [&](const std::string& text) {
+    WriteText(dir / "arm.xml", text);
+    try {
+      ImportRobot((dir / "arm.xml").string(), ImportOptions{}, (dir / "robot").string());
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_THAT(error(LiftArmMjcf(R"(<joint name="wrist" type="ball"/>)")),
+              AllOf(HasSubstr("arm.xml: joint \"wrist\""), HasSubstr("ball")));
+  EXPECT_THAT(error(LiftArmMjcf(R"(<joint name="wrist" axis="0 0 1" pos="0 0 0.01" range="-3 3"/>)")),
+              AllOf(HasSubstr("arm.xml: joint \"wrist\""), HasSubstr("through its body's origin")));
+  EXPECT_THAT(error(LiftArmMjcf(R"(<joint name="wrist" axis="0 0 1" range="-3 3"/>)", "")),
+              AllOf(HasSubstr("arm.xml"), HasSubstr("--velocity-limit")));
+  EXPECT_FALSE(fs::exists(dir / "robot" / "robot.yaml"));
+}
+
 class RobotImportErrorTest : public ::testing::Test {
  protected:
   std::string ImportError(const std::string& urdf_text, ImportOptions options = {}) {
