@@ -85,11 +85,19 @@ ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& optio
   text << in.rdbuf();
   Collector collector;
   console_bridge::useOutputHandler(&collector);
-  const urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(text.str());
+  urdf::ModelInterfaceSharedPtr model;
+  try {
+    model = urdf::parseURDF(text.str());
+  } catch (const std::exception& e) {  // liburdfdom lets some conversions throw
+    collector.errors.push_back(e.what());
+  }
   console_bridge::restorePreviousOutputHandler();
   if (!model) {
     std::string why = collector.errors.empty() ? "not a valid URDF" : collector.errors.front();
     for (size_t i = 1; i < collector.errors.size(); ++i) why += "; " + collector.errors[i];
+    for (char& c : why) {
+      if (c == '\n' || c == '\r') c = ' ';  // one line
+    }
     throw Error(urdf_path + ": " + why);
   }
   const fs::path urdf_dir = fs::absolute(urdf_path).parent_path();
