@@ -4,7 +4,8 @@
 //
 //   PREFIX.json  {"planner", "problems_file", "num_problems", "planned", "refused", "num_samples" (per problem),
 //                 "success_rate" (of every plan asked for; a refused problem's plans count as failures),
-//                 "problems_solved" (share with at least one success), "success_rate_executed",
+//                 "problems_solved" (how many have at least one success), "problems_solved_rate" (their
+//                 share), "success_rate_executed",
 //                 "planning_time_s" {median, p95, plans, per}, "problems": [{"name", "status": "planned" |
 //                 "refused", "reason", "group" (its HDF5 group), "success_rate", "samples": [...]}]}
 //   PREFIX.h5    ProblemGroup(NAME)/{plans, tcp, scene/…, start, goal, goal_tcp, executed/…} per planned problem
@@ -177,7 +178,8 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
       ", \"max_speed_ratio\": " + JsonNumber(args.max_speed_ratio) +
       ",\n " + SettingsJson(args, subject) +
       ",\n \"success_rate\": " + rate(total.success) +
-      ", \"problems_solved\": " + JsonNumber(count > 0 ? static_cast<double>(solved) / static_cast<double>(count) : 0.0) +
+      ", \"problems_solved\": " + std::to_string(solved) +
+      ", \"problems_solved_rate\": " + JsonNumber(count > 0 ? static_cast<double>(solved) / static_cast<double>(count) : 0.0) +
       (args.execute ? ", \"success_rate_executed\": " + rate(total.executed) : std::string()) +
       ", \"tcp_clear_rate\": " + rate(total.tcp_clear) + ", \"arm_clear_rate\": " + rate(total.arm_clear) +
       ",\n \"planning_time_s\": " + TimingJson(timed) + ", \"wall_time_s\": " + JsonNumber(planning_wall) +

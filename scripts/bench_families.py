@@ -489,7 +489,7 @@ def summarize(report):
                    "rrt_connect seeded" if route.startswith("rrt_connect seeded") else route)
             routes[key] = routes.get(key, 0) + 1
     return {"success": report["success_rate"], "executed": report.get("success_rate_executed", 0.0),
-            "problems_solved": report["problems_solved"], "refused": report["refused"], "plans": asked,
+            "problems_solved": report["problems_solved_rate"] if "problems_solved_rate" in report else report["problems_solved"], "refused": report["refused"], "plans": asked,
             "median_time_s": report["planning_time_s"]["median"], "p95_time_s": report["planning_time_s"]["p95"],
             "joint_path": median(s["quality"]["joint_path_length"] for s in pool),
             "tcp_path": median(s["quality"]["tcp_path_length"] for s in pool),

@@ -385,7 +385,7 @@ TEST(FrankaPlanTest, AProblemFileIsPlannedByOneProcessWithRefusalsAsAStatusAndTh
   const std::string rrt = ReadText(path("rrt.json"));
   EXPECT_THAT(rrt, HasSubstr("\"num_problems\": 3, \"planned\": 2, \"refused\": 1, \"num_samples\": 2"));
   EXPECT_THAT(rrt, HasSubstr("{\"name\": \"inside\", \"status\": \"refused\", \"reason\": \"start: sphere "));
-  EXPECT_THAT(rrt, HasSubstr("\"success_rate\": 0.6666667, \"problems_solved\": 0.6666667, \"success_rate_executed\": "
+  EXPECT_THAT(rrt, HasSubstr("\"success_rate\": 0.6666667, \"problems_solved\": 2, \"problems_solved_rate\": 0.6666667, \"success_rate_executed\": "
                              "0.6666667"));
   Outcome check = RunCommand(CheckPlan(path("rrt")));
   EXPECT_EQ(check.exit_code, 0) << check.output;
@@ -405,7 +405,7 @@ TEST(FrankaPlanTest, AProblemFileIsPlannedByOneProcessWithRefusalsAsAStatusAndTh
   const std::string hybrid = ReadText(path("hybrid.json"));
   EXPECT_THAT(hybrid, HasSubstr("\"planner\": \"hybrid("));
   EXPECT_THAT(hybrid, HasSubstr("\"num_problems\": 2, \"planned\": 2, \"refused\": 0"));
-  EXPECT_THAT(hybrid, HasSubstr("\"success_rate\": 1, \"problems_solved\": 1"));
+  EXPECT_THAT(hybrid, HasSubstr("\"success_rate\": 1, \"problems_solved\": 2, \"problems_solved_rate\": 1"));
   EXPECT_THAT(hybrid, HasSubstr("\"route\": \"rrt_connect\""));
   EXPECT_THAT(hybrid, HasSubstr("\"per\": \"plan, the wall time of the call that made it\""));
   check = RunCommand(CheckPlan(path("hybrid")));
@@ -414,7 +414,7 @@ TEST(FrankaPlanTest, AProblemFileIsPlannedByOneProcessWithRefusalsAsAStatusAndTh
   ExpectOk(Flowplan("plan --ckpt " + path("run") + " --hybrid hybrid.proposals=3 hybrid.seeded_fallback=true --problems " +
                     path("problems.yaml") + " --limit 2 --out " + path("seeded") + fast));
   const std::string seeded = ReadText(path("seeded.json"));
-  EXPECT_THAT(seeded, HasSubstr("\"success_rate\": 1, \"problems_solved\": 1"));
+  EXPECT_THAT(seeded, HasSubstr("\"success_rate\": 1, \"problems_solved\": 2, \"problems_solved_rate\": 1"));
   EXPECT_THAT(seeded, HasSubstr("\"route\": \"rrt_connect seeded by proposal "));
   check = RunCommand(CheckPlan(path("seeded")));
   EXPECT_EQ(check.exit_code, 0) << check.output;
