@@ -81,7 +81,7 @@ void RunRobotImport(const RobotImportArgs& args) {
   }
   spdlog::info("wrote {}: {} links, {} collision spheres, {} link pairs not checked, {} meshes", robot_yaml.string(),
                d.links.size(), result.file.collision.spheres.size(), result.file.collision.self_collision_ignore.size(),
-               result.meshes.size());
+               result.meshes.size() + result.mesh_files.size());
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -157,7 +158,8 @@ ImportResult ImportMjcf(const std::string& mjcf_path, const ImportOptions& optio
       if (m.actuator_trntype[a] != mjTRN_JOINT || m.actuator_trnid[2 * a] != j) continue;
       if (m.actuator_forcelimited[a]) {
         effort[k] = std::max(std::abs(m.actuator_forcerange[2 * a]), std::abs(m.actuator_forcerange[2 * a + 1]));
-      } else if (m.actuator_ctrllimited[a]) {
+      } else if (m.actuator_ctrllimited[a] && m.actuator_gaintype[a] == mjGAIN_FIXED && m.actuator_biastype[a] == mjBIAS_NONE) {
+        // A motor: its control is a force or torque (a position servo's control is a position, not an effort).
         effort[k] = std::abs(m.actuator_gear[6 * a]) *
                     std::max(std::abs(m.actuator_ctrlrange[2 * a]), std::abs(m.actuator_ctrlrange[2 * a + 1]));
       }
@@ -257,7 +259,9 @@ ImportResult ImportMjcf(const std::string& mjcf_path, const ImportOptions& optio
           mesh.triangles.push_back({t[0], t[1], t[2]});
         }
         entry.shape = "mesh";
-        entry.mesh = "meshes/" + entry.link + "_" + std::to_string(g) + ".obj";
+        std::string file;
+        for (const char c : entry.link) file += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' ? c : '_';
+        entry.mesh = "meshes/" + file + "_" + std::to_string(g) + ".obj";
         result.mesh_files.push_back({entry.mesh, mesh});
         break;
       }
@@ -266,6 +270,14 @@ ImportResult ImportMjcf(const std::string& mjcf_path, const ImportOptions& optio
     }
     if (!mesh.triangles.empty()) link.pieces.push_back(spheres::Transformed(mesh, entry.pos, entry.quat));
     result.file.geometry.push_back(entry);
+  }
+  for (int e = 0; e < m.neq; ++e) {
+    if (m.eq_type[e] == mjEQ_JOINT) {
+      result.notes.push_back("equality " + Name(m, mjOBJ_EQUALITY, e) + " couples joints \"" +
+                             Name(m, mjOBJ_JOINT, m.eq_obj1id[e]) + "\" and \"" +
+                             (m.eq_obj2id[e] >= 0 ? Name(m, mjOBJ_JOINT, m.eq_obj2id[e]) : std::string("-")) +
+                             "\"; the robot folder does not couple them (plan one and hold the other)");
+    }
   }
   std::vector<LinkGeometry> gathered;
   for (const int b : bodies) {

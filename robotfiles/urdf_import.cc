@@ -4,8 +4,10 @@
 #include <urdf_parser/urdf_parser.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <sstream>
 
@@ -39,6 +41,13 @@ std::array<double, 3> Vec(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
 std::string Lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
+}
+
+/// A link's name as a file name: letters, digits, '-' and '_' kept, anything else '_' (no '/', no "..").
+std::string SafeFileName(const std::string& name) {
+  std::string out;
+  for (const char c : name) out += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' ? c : '_';
+  return out.empty() ? "link" : out;
 }
 
 bool Movable(const urdf::Joint& joint) {
@@ -79,7 +88,7 @@ ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& optio
   ImportResult result;
   if (!fs::is_regular_file(urdf_path)) throw Error(urdf_path + ": no such file");
   const std::string extension = Lower(fs::path(urdf_path).extension().string());
-  if (extension != ".urdf") throw Error(urdf_path + ": expected a URDF file (.urdf)");
+  if (extension != ".urdf" && extension != ".xml") throw Error(urdf_path + ": expected a URDF file (.urdf or .xml)");
   std::ifstream in(urdf_path);
   std::stringstream text;
   text << in.rdbuf();
@@ -118,6 +127,16 @@ ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& optio
     if (!joint || !link_index.count(joint->child_link_name) || joint->child_link_name == base_name) {
       throw Error(urdf_path + ": --hold: no joint \"" + name + "\" below the base link \"" + base_name + "\"");
     }
+    if (!Movable(*joint)) throw Error(urdf_path + ": --hold: joint \"" + name + "\" is fixed; it has no value to hold");
+    if (joint->type != urdf::Joint::CONTINUOUS && joint->limits &&
+        (value < joint->limits->lower || value > joint->limits->upper)) {
+      throw Error(urdf_path + ": --hold: " + name + " = " + config::internal::FormatDouble(value) + " is outside its limits [" +
+                  config::internal::FormatDouble(joint->limits->lower) + ", " +
+                  config::internal::FormatDouble(joint->limits->upper) + "]");
+    }
+  }
+  if (!options.tip.empty() && (!link_index.count(options.tip) || options.tip == base_name)) {
+    throw Error(urdf_path + ": --tip: link \"" + options.tip + "\" is not below the base \"" + base_name + "\"");
   }
   auto joint_of = [&](const urdf::LinkConstSharedPtr& link) -> urdf::JointConstSharedPtr {
     return link->name == base_name ? nullptr : link->parent_joint;
@@ -185,7 +204,26 @@ ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& optio
     }
     return {joint.limits->lower, joint.limits->upper};
   };
-  std::map<std::string, double> held;  // held joints' values, for their mimics
+  // Held joints' values: given, or 0 moved into the limits; a mimic joint follows its leader, whatever order the
+  // file lists them in.
+  std::map<std::string, double> held;
+  std::function<double(const urdf::Joint&, int)> held_value = [&](const urdf::Joint& joint, int depth) -> double {
+    if (options.hold.count(joint.name)) return options.hold.at(joint.name);
+    if (joint.mimic) {
+      if (planned_index.count(joint.mimic->joint_name)) {
+        throw Error(urdf_path + ": joint \"" + joint.name + "\" mimics \"" + joint.mimic->joint_name +
+                    "\", which is planned; a mimic joint can only follow a held joint (hold both, or plan neither)");
+      }
+      const urdf::JointConstSharedPtr leader = model->getJoint(joint.mimic->joint_name);
+      if (!leader || !Movable(*leader) || depth > 64) {
+        throw Error(urdf_path + ": joint \"" + joint.name + "\" mimics \"" + joint.mimic->joint_name +
+                    "\", which is not a movable joint (or the mimics form a loop)");
+      }
+      return joint.mimic->multiplier * held_value(*leader, depth + 1) + joint.mimic->offset;
+    }
+    const auto [lo, hi] = limits_of(joint);
+    return std::clamp(0.0, lo, hi);
+  };
   for (const auto& link : links) {
     kinematics::RobotLink out;
     out.name = link->name;
@@ -219,20 +257,7 @@ ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& optio
           }
           result.file.effort_limit[j] = joint->limits->effort;
         } else {
-          double value;
-          if (options.hold.count(joint->name)) {
-            value = options.hold.at(joint->name);
-          } else if (joint->mimic) {
-            const auto leader = held.find(joint->mimic->joint_name);
-            if (leader == held.end()) {
-              throw Error(urdf_path + ": joint \"" + joint->name + "\" mimics \"" + joint->mimic->joint_name +
-                          "\", which is planned; a mimic joint can only follow a held joint (hold both, or plan neither)");
-            }
-            value = joint->mimic->multiplier * leader->second + joint->mimic->offset;
-          } else {
-            const auto [lo, hi] = limits_of(*joint);
-            value = std::clamp(0.0, lo, hi);
-          }
+          const double value = held_value(*joint, 0);
           held[joint->name] = value;
           out.offset = value;
           result.notes.push_back("joint \"" + joint->name + "\" is held at " + config::internal::FormatDouble(value));
@@ -299,7 +324,7 @@ ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& optio
           }
           g.shape = "mesh";
           g.scale = Vec(m.scale);
-          g.mesh = "meshes/" + link->name + "_" + std::to_string(c) + ext;
+          g.mesh = "meshes/" + SafeFileName(link->name) + "_" + std::to_string(c) + ext;
           result.meshes.push_back({path, g.mesh});
           try {
             mesh = spheres::Transformed(spheres::LoadMesh(path), g.pos, g.quat, g.scale);
@@ -326,10 +351,27 @@ ImportResult ImportRobot(const std::string& model_path, const ImportOptions& opt
   if (extension != ".urdf" && extension != ".xml") {
     throw Error(model_path + ": expected a URDF (.urdf) or an MJCF (.xml) model");
   }
-  ImportResult result = extension == ".urdf" ? ImportUrdf(model_path, options) : ImportMjcf(model_path, options);
-  // The meshes first, the robot file last: a folder with robot.yaml is whole.
-  fs::create_directories(fs::path(dir) / "meshes");
-  for (const auto& [from, to] : result.meshes) fs::copy_file(from, fs::path(dir) / to, fs::copy_options::overwrite_existing);
+  // A .xml file may be a URDF too (`robot.urdf.xml`): its root element decides.
+  bool urdf = extension == ".urdf";
+  if (!urdf) {
+    std::ifstream in(model_path);
+    std::string head(4096, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<size_t>(in.gcount()));
+    const size_t robot = head.find("<robot"), mujoco = head.find("<mujoco");
+    urdf = robot != std::string::npos && (mujoco == std::string::npos || robot < mujoco);
+  }
+  ImportResult result = urdf ? ImportUrdf(model_path, options) : ImportMjcf(model_path, options);
+  // An earlier robot.yaml goes first and the new one comes last, the meshes between them (the earlier import's
+  // removed): a folder with robot.yaml is whole.
+  try {
+    fs::remove(fs::path(dir) / "robot.yaml");
+    fs::remove_all(fs::path(dir) / "meshes");
+    fs::create_directories(fs::path(dir) / "meshes");
+    for (const auto& [from, to] : result.meshes) fs::copy_file(from, fs::path(dir) / to, fs::copy_options::overwrite_existing);
+  } catch (const fs::filesystem_error& e) {
+    throw Error(dir + ": cannot write the robot folder: " + e.what());
+  }
   for (const auto& [to, mesh] : result.mesh_files) {
     std::ofstream out(fs::path(dir) / to);
     out.precision(9);

@@ -8,7 +8,8 @@ searched for them), recomputes from the plans in the HDF5 file, with forward
 kinematics written here (no flowplan code: modified Denavit-Hartenberg
 parameters of the Panda for the built-in Franka; for any other arm, the
 kinematic tree of the file's `robot` attribute, revolute and prismatic joints
-composed here), each plan's TCP path, the clearance of the TCP and of every
+composed here; that tree is the data flowplan planned with, so for such an
+arm this checks the planning and checking, not the import), each plan's TCP path, the clearance of the TCP and of every
 collision sphere of the arm to every obstacle, the goal distance and the joint
 speeds, and from them the two success counts of `flowplan plan`: the TCP never
 inside an obstacle, and no collision sphere of the arm inside one (obstacles of
