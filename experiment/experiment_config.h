@@ -30,6 +30,7 @@ struct ExperimentConfig {
   int threads = 0;                   // CPU threads (0: all cores); does not change results
   std::string device = "cpu";        // cpu, cuda, cuda:N: where networks train and sample
   std::string run_dir = "runs/particle_cross";
+  std::string robot;                 // a robot folder (`flowplan robot import`); empty: the data task's own robot
   datasets::GenerateConfig generate;
   datasets::DataConfig data;
   models::ModelConfig model;
@@ -56,6 +57,9 @@ struct ExperimentConfig {
             "where networks train and plan: cpu, cuda or cuda:N (random draws stay on the CPU; guidance, "
             "simulation and the VAE planner run on the CPU)");
     v.Field("run_dir", run_dir, "folder of the training run (config, metrics, checkpoints, planner)");
+    v.Field("robot", robot,
+            "a robot folder (`flowplan robot import`) that `plan --rrt-connect` plans for (as --robot); empty: the "
+            "robot of generate.* (data generation and training run for the built-in robots only)");
     v.Field("generate", generate, "dataset generation");
     v.Field("data", data, "training data");
     v.Field("model", model, "velocity network");

@@ -39,6 +39,10 @@ std::pair<int, int> ParseShard(const std::string& text) {
 
 void RunGenerate(const GenerateArgs& args) {
   const ExperimentConfig config = args.config.Load();
+  if (!config.robot.empty()) {
+    throw Error("robot: " + config.robot + ": data is generated for the built-in robots only (generate.dataset); a "
+                "robot folder is planned with `flowplan plan --rrt-connect --robot DIR`");
+  }
   const auto [shard_index, shard_count] = ParseShard(args.shard);
   const int threads = ResolveThreadCount(config.threads);
   const std::string out = args.out.empty() ? config.generate.out : args.out;

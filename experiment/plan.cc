@@ -127,7 +127,8 @@ Command AddPlanCommand(CLI::App& app) {
       ->capture_default_str();
   plan->add_option("--robot", a.robot,
                    "with --rrt-connect: plan for the robot of this folder (DIR/robot.yaml, written by `flowplan robot "
-                   "import`) instead of --config's; the config's generate.* still gives the horizon and the time step")
+                   "import`; or `robot: DIR` in the config) instead of generate.*'s; generate.* still gives the horizon "
+                   "and the time step")
       ->check(CLI::ExistingPath);
   plan->add_option("--config", a.overlay_path, "YAML applied over the planner's config")->check(CLI::ExistingFile);
   plan->add_option("--start", a.start, "start: J comma-separated positions (at rest) or a full state of D values");

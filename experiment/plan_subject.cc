@@ -86,12 +86,13 @@ PlanSubject FromRrtConnect(const PlanArgs& args) {
   subject.config = LoadExperiment(args.overlay_path, args.overrides);
   subject.trajectory = datasets::MakeTask(subject.config.generate)->Layout().info;
   subject.source = "rrt_connect";
-  if (!args.robot.empty()) {
+  const std::string folder = !args.robot.empty() ? args.robot : subject.config.robot;
+  if (!folder.empty()) {
     // The folder's robot, planned over the config's horizon and time step, with velocities when its data has them.
     kinematics::TrajectoryInfo& t = subject.trajectory;
     const bool velocities = t.state_dim() == 2 * t.robot.num_joints;
-    t.robot = robotfiles::LoadRobot(args.robot);
-    t.env = "robot folder " + args.robot;
+    t.robot = robotfiles::LoadRobot(folder);
+    t.env = "robot folder " + folder;
     t.state_labels.clear();
     for (int j = 0; j < t.robot.num_joints; ++j) t.state_labels.push_back("q" + std::to_string(j + 1));
     for (int j = 0; velocities && j < t.robot.num_joints; ++j) t.state_labels.push_back("dq" + std::to_string(j + 1));
@@ -125,6 +126,10 @@ PlanSubject LoadPlanSubject(const PlanArgs& args) {
   PlanSubject subject = !args.planner_file.empty() ? FromFile(args)
                         : args.rrt_connect         ? FromRrtConnect(args)
                                                    : FromCheckpoint(args);
+  if (!args.rrt_connect && !subject.config.robot.empty()) {
+    throw Error("robot: " + subject.config.robot + ": only with --rrt-connect; a learned planner plans for the robot it "
+                "was trained for");
+  }
   subject.trajectory.robot = ResolveRobot(subject.trajectory.robot);
   subject.robot = kinematics::MakeRobot(subject.trajectory.robot, subject.source + ": robot");
   if (args.rrt_connect) {

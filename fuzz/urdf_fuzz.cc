@@ -8,7 +8,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = flowplan::fuzz::AsFile(data, size, ".urdf");
   try {
     flowplan::robotfiles::ImportOptions options;
-    options.overshoot = 0.2;  // a coarse fit: a few spheres a link, quickly
+    options.overshoot = 0.2;  // a coarse fit on a coarse surface: a few spheres a link, quickly under ASan
+    options.surface_spacing = 0.05;
     options.pair_samples = 20;
     const flowplan::robotfiles::ImportResult result = flowplan::robotfiles::ImportUrdf(path, options);
     result.file.Description("robot.yaml");

@@ -2,6 +2,7 @@
 
 #include <tinyxml.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "collision/self_pairs.h"
@@ -50,8 +51,10 @@ void FitCollisionBody(const std::vector<LinkGeometry>& gathered, const ImportOpt
   spheres::CoverSettings cover;
   cover.overshoot = options.overshoot;
   cover.max_spheres = options.max_spheres;
+  cover.spacing = options.surface_spacing;
   cover.seed = options.seed;
-  constexpr double kCheckSpacing = 0.002;
+  // The cover is checked on surface samples 2 mm apart (half the surface spacing when that is coarser).
+  const double kCheckSpacing = std::max(0.002, 0.5 * options.surface_spacing);
   for (const auto& [name, pieces, exact] : gathered) {
     std::vector<spheres::Sphere> fitted = exact;
     if (!pieces.empty()) {

@@ -44,6 +44,7 @@ struct ImportOptions {
   std::map<std::string, double> hold;       // joints held at a value (rad or m)
   double overshoot = 0.01;                  // m: how far spheres may reach outside the geometry
   int max_spheres = 64;                     // per link
+  double surface_spacing = 0.004;           // m: the resolution the cover is computed on (spheres::CoverSettings)
   int64_t pair_samples = 10000;             // random configurations for the self-collision pairs
   std::vector<double> velocity_limit;       // MJCF: the planned joints' speed limits, which an MJCF does not hold
   int collision_group = -1;                 // MJCF: the geom group that is the collision geometry (-1: geoms that collide)

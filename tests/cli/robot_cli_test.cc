@@ -105,6 +105,17 @@ goal_constraints:
   std::ifstream report(prefix + ".json");
   const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
   EXPECT_THAT(text, HasSubstr(R"("failure": "refused", "reason": "start: sphere)"));
+  // `robot: DIR` in a config does what --robot does; data generation refuses it with one line.
+  std::ifstream base(config);
+  testing::WriteText(dir / "with_robot.yaml", "robot: " + robot + "\n" +
+                                                  std::string((std::istreambuf_iterator<char>(base)), std::istreambuf_iterator<char>()));
+  const testing::Outcome from_config = Flowplan("plan --rrt-connect --config " + (dir / "with_robot.yaml").string() +
+                                                " --start 0,-1.5,0.5,0 --goal 0.25,1.5,0.5,1 -n 2 --no-plot --force --out " + prefix);
+  EXPECT_EQ(from_config.exit_code, 0) << from_config.output;
+  EXPECT_THAT(from_config.output, HasSubstr("success 2/2"));
+  const testing::Outcome generate = Flowplan("generate --config " + (dir / "with_robot.yaml").string());
+  EXPECT_EQ(generate.exit_code, 1);
+  EXPECT_THAT(generate.output, HasSubstr("data is generated for the built-in robots only"));
   // --robot with a learned planner is refused.
   const testing::Outcome learned = Flowplan("plan --planner " + std::string(FLOWPLAN_SOURCE_DIR) +
                                             "/pretrained/franka_reach_planner.pt --robot " + robot + " --out " + prefix);
