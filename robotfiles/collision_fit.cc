@@ -3,6 +3,7 @@
 #include <tinyxml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "collision/self_pairs.h"
@@ -45,6 +46,12 @@ std::vector<kinematics::IgnoredLinkPair> ReadSrdf(const std::string& path, const
 }
 
 }  // namespace
+
+std::string SafeFileName(const std::string& name) {
+  std::string out;
+  for (const char c : name) out += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' ? c : '_';
+  return out.empty() ? "link" : out;
+}
 
 void FitCollisionBody(const std::vector<LinkGeometry>& gathered, const ImportOptions& options, const std::string& where,
                       ImportResult& result) {

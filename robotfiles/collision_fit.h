@@ -22,6 +22,10 @@ struct LinkGeometry {
   std::vector<spheres::Sphere> exact;
 };
 
+/// A link's name as a file name in the robot folder: letters, digits, '-' and '_' kept, anything else '_'
+/// (so no '/' and no "..").
+std::string SafeFileName(const std::string& name);
+
 /// Fills result.file.collision (spheres, ignored pairs, floor_exempt) and result.file.cover for
 /// result.file.robot, whose tree, joints and home must be set; notes go to result.notes.
 /// @throws flowplan::Error prefixed by `where` if no link has collision geometry, or the SRDF cannot be read.

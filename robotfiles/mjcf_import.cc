@@ -259,9 +259,7 @@ ImportResult ImportMjcf(const std::string& mjcf_path, const ImportOptions& optio
           mesh.triangles.push_back({t[0], t[1], t[2]});
         }
         entry.shape = "mesh";
-        std::string file;
-        for (const char c : entry.link) file += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' ? c : '_';
-        entry.mesh = "meshes/" + file + "_" + std::to_string(g) + ".obj";
+        entry.mesh = "meshes/" + SafeFileName(entry.link) + "_" + std::to_string(g) + ".obj";
         result.mesh_files.push_back({entry.mesh, mesh});
         break;
       }

@@ -43,13 +43,6 @@ std::string Lower(std::string s) {
   return s;
 }
 
-/// A link's name as a file name: letters, digits, '-' and '_' kept, anything else '_' (no '/', no "..").
-std::string SafeFileName(const std::string& name) {
-  std::string out;
-  for (const char c : name) out += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' ? c : '_';
-  return out.empty() ? "link" : out;
-}
-
 bool Movable(const urdf::Joint& joint) {
   return joint.type == urdf::Joint::REVOLUTE || joint.type == urdf::Joint::CONTINUOUS ||
          joint.type == urdf::Joint::PRISMATIC;
