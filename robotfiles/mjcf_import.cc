@@ -194,6 +194,15 @@ ImportResult ImportMjcf(const std::string& mjcf_path, const ImportOptions& optio
       }
     }
     d.links.push_back(link);
+    if (m.body_mass[b] > 0.0) {
+      LinkInertia inertia;
+      inertia.link = link.name;
+      inertia.mass = m.body_mass[b];
+      inertia.com = Vec3(m.body_ipos + 3 * b);
+      const mjtNum* principal = m.body_inertia + 3 * b;
+      inertia.inertia = RotateInertia({principal[0], principal[1], principal[2], 0.0, 0.0, 0.0}, Quat(m.body_iquat + 4 * b));
+      result.file.inertia.push_back(inertia);
+    }
   }
   d.home.assign(J, 0.0);
   for (int k = 0; k < J; ++k) d.home[k] = std::clamp(0.0, d.joint_lower[k], d.joint_upper[k]);

@@ -1,5 +1,6 @@
 #include "robotfiles/robot_folder.h"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -17,6 +18,26 @@ std::string RobotYamlPath(const std::string& dir) {
 }
 
 }  // namespace
+
+std::array<double, 6> RotateInertia(const std::array<double, 6>& inertia, const std::array<double, 4>& quat) {
+  const double n = std::sqrt(quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]);
+  const double w = quat[0] / n, x = quat[1] / n, y = quat[2] / n, z = quat[3] / n;
+  const double R[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
+                          {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
+                          {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}};
+  const double I[3][3] = {{inertia[0], inertia[3], inertia[4]},
+                          {inertia[3], inertia[1], inertia[5]},
+                          {inertia[4], inertia[5], inertia[2]}};
+  double out[3][3] = {};
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      for (int k = 0; k < 3; ++k) {
+        for (int l = 0; l < 3; ++l) out[a][b] += R[a][k] * I[k][l] * R[b][l];
+      }
+    }
+  }
+  return {out[0][0], out[1][1], out[2][2], out[0][1], out[0][2], out[1][2]};
+}
 
 kinematics::RobotDescription RobotFile::Description(const std::string& where) const {
   kinematics::RobotDescription d = robot;

@@ -62,6 +62,28 @@ struct LinkCover {
   }
 };
 
+/// A link's mass and inertia, in the link's frame: what simulating the robot
+/// (`generate`, robotfiles/robot_model.h) needs, not planning.
+struct LinkInertia {
+  std::string link;                                      // the link's name
+  double mass = 0.0;                                     // kg
+  std::array<double, 3> com{0.0, 0.0, 0.0};              // m, centre of mass in the link frame
+  std::array<double, 6> inertia{0.0, 0.0, 0.0, 0.0, 0.0, 0.0};  // kg·m² about the com, link axes:
+                                                              // (ixx, iyy, izz, ixy, ixz, iyz)
+
+  template <class V>
+  void Visit(V& v) {
+    v.Field("link", link, "link the mass belongs to");
+    v.Field("mass", mass, "mass (kg)", config::NonNegative());
+    v.Field("com", com, "centre of mass in the link frame (m)");
+    v.Field("inertia", inertia, "inertia about the centre of mass along the link axes: [ixx, iyy, izz, ixy, ixz, iyz] (kg m^2)");
+  }
+};
+
+/// `inertia` (ixx, iyy, izz, ixy, ixz, iyz) given along axes turned by `quat`
+/// (w, x, y, z) from the link's, expressed along the link's axes: R I Rᵀ.
+std::array<double, 6> RotateInertia(const std::array<double, 6>& inertia, const std::array<double, 4>& quat);
+
 /// What DIR/robot.yaml holds.
 struct RobotFile {
   std::string source;                      // the file it was imported from
@@ -70,6 +92,7 @@ struct RobotFile {
   kinematics::CollisionBody collision;     // spheres by link name, pairs not checked, links standing on the floor
   std::vector<CollisionGeometry> geometry; // the collision geometry the spheres cover
   std::vector<LinkCover> cover;            // how well they cover it, link by link
+  std::vector<LinkInertia> inertia;        // mass and inertia per link (links without mass left out)
 
   template <class V>
   void Visit(V& v) {
@@ -79,6 +102,7 @@ struct RobotFile {
     v.Field("collision", collision, "collision spheres and the link pairs not checked against each other");
     v.Field("geometry", geometry, "the collision geometry the spheres cover, per link");
     v.Field("cover", cover, "how well the spheres cover the geometry, per link");
+    v.Field("inertia", inertia, "mass and inertia per link, for simulating the robot (`generate`)");
   }
 
   /// The robot as planned and checked: `robot` with the collision body applied.

@@ -258,6 +258,15 @@ ImportResult ImportUrdf(const std::string& urdf_path, const ImportOptions& optio
       }
     }
     d.links.push_back(out);
+    if (link->inertial && link->inertial->mass > 0.0) {
+      const urdf::Inertial& in = *link->inertial;
+      LinkInertia inertia;
+      inertia.link = link->name;
+      inertia.mass = in.mass;
+      inertia.com = Vec(in.origin.position);
+      inertia.inertia = RotateInertia({in.ixx, in.iyy, in.izz, in.ixy, in.ixz, in.iyz}, Quat(in.origin.rotation));
+      result.file.inertia.push_back(inertia);
+    }
   }
   d.home.assign(J, 0.0);
   for (int j = 0; j < J; ++j) d.home[j] = std::clamp(0.0, d.joint_lower[j], d.joint_upper[j]);
