@@ -2,7 +2,10 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <atomic>
+#include <map>
+#include <regex>
 #include <mutex>
 
 #include "core/error.h"
@@ -13,6 +16,23 @@
 
 namespace flowplan::datasets {
 namespace {
+
+/// The rejection reasons of `records`, numbers left out, most frequent first (three at most), with their counts.
+std::string CommonReasons(const std::vector<EpisodeRecord>& records) {
+  static const std::regex number(R"(-?[0-9][0-9.e+-]*)");
+  std::map<std::string, int64_t> counts;
+  for (const EpisodeRecord& record : records) {
+    if (record.rejected) ++counts[std::regex_replace(record.reject_reason, number, "#")];
+  }
+  std::vector<std::pair<int64_t, std::string>> ranked;
+  for (const auto& [reason, n] : counts) ranked.push_back({-n, reason});
+  std::sort(ranked.begin(), ranked.end());
+  std::string text;
+  for (size_t k = 0; k < std::min<size_t>(3, ranked.size()); ++k) {
+    text += (k ? "; " : "") + std::to_string(-ranked[k].first) + " x \"" + ranked[k].second + "\"";
+  }
+  return text;
+}
 
 void CheckRecord(const EpisodeRecord& record, const EpisodeLayout& layout) {
   FLOWPLAN_DEMAND(static_cast<int64_t>(record.states.size()) == layout.info.horizon * layout.info.state_dim());
@@ -96,8 +116,8 @@ TrajectoryDataset GenerateDataset(const EpisodeTask& task, const GenerateOptions
                 " episodes were rejected (first reason: " + records.front().reject_reason + ")");
   }
   if (dataset.rejected_episodes > 0) {
-    spdlog::warn("generate {}: rejected {} of {} episodes (unstable or failed rollouts)", layout.info.env,
-                 dataset.rejected_episodes, count);
+    spdlog::warn("generate {}: rejected {} of {} episodes (unstable or failed rollouts); most often: {}", layout.info.env,
+                 dataset.rejected_episodes, count, CommonReasons(records));
   }
 
   // Evaluation pairs from the noise-free nominal rollout of each family.

@@ -58,8 +58,8 @@ struct ExperimentConfig {
             "simulation and the VAE planner run on the CPU)");
     v.Field("run_dir", run_dir, "folder of the training run (config, metrics, checkpoints, planner)");
     v.Field("robot", robot,
-            "a robot folder (`flowplan robot import`) that `plan --rrt-connect` plans for (as --robot); empty: the "
-            "robot of generate.* (data generation and training run for the built-in robots only)");
+            "a robot folder (`flowplan robot import`): the robot generate.dataset robot_joint simulates and `plan "
+            "--rrt-connect` plans for (as --robot); empty: the built-in robot of generate.*");
     v.Field("generate", generate, "dataset generation");
     v.Field("data", data, "training data");
     v.Field("model", model, "velocity network");

@@ -39,16 +39,12 @@ std::pair<int, int> ParseShard(const std::string& text) {
 
 void RunGenerate(const GenerateArgs& args) {
   const ExperimentConfig config = args.config.Load();
-  if (!config.robot.empty()) {
-    throw Error("robot: " + config.robot + ": data is generated for the built-in robots only (generate.dataset); a "
-                "robot folder is planned with `flowplan plan --rrt-connect --robot DIR`");
-  }
   const auto [shard_index, shard_count] = ParseShard(args.shard);
   const int threads = ResolveThreadCount(config.threads);
   const std::string out = args.out.empty() ? config.generate.out : args.out;
   EnsureParentFolder(out);
   AtomicFile probe(out);  // fails early, before any rollout, if the file cannot be written
-  const auto task = datasets::MakeTask(config.generate);
+  const auto task = datasets::MakeTask(config.generate, config.robot);
   datasets::GenerateOptions options;
   options.episodes = config.generate.episodes;
   options.seed = static_cast<uint64_t>(config.seed);

@@ -84,9 +84,15 @@ PlanSubject FromRrtConnect(const PlanArgs& args) {
   }
   PlanSubject subject;
   subject.config = LoadExperiment(args.overlay_path, args.overrides);
-  subject.trajectory = datasets::MakeTask(subject.config.generate)->Layout().info;
-  subject.source = "rrt_connect";
   const std::string folder = !args.robot.empty() ? args.robot : subject.config.robot;
+  subject.source = "rrt_connect";
+  if (subject.config.generate.dataset == datasets::DatasetKind::kRobotJoint) {
+    // The trajectories of the folder's robot_joint data, without building its simulator.
+    if (folder.empty()) throw Error("generate.dataset: robot_joint plans for a robot folder: set robot: DIR or --robot DIR");
+    subject.trajectory = datasets::RobotJointLayout(robotfiles::LoadRobot(folder), subject.config.generate.robot_joint).info;
+    return subject;
+  }
+  subject.trajectory = datasets::MakeTask(subject.config.generate)->Layout().info;
   if (!folder.empty()) {
     // The folder's robot, planned over the config's horizon and time step, with velocities when its data has them.
     kinematics::TrajectoryInfo& t = subject.trajectory;
@@ -126,10 +132,6 @@ PlanSubject LoadPlanSubject(const PlanArgs& args) {
   PlanSubject subject = !args.planner_file.empty() ? FromFile(args)
                         : args.rrt_connect         ? FromRrtConnect(args)
                                                    : FromCheckpoint(args);
-  if (!args.rrt_connect && !subject.config.robot.empty()) {
-    throw Error("robot: " + subject.config.robot + ": only with --rrt-connect; a learned planner plans for the robot it "
-                "was trained for");
-  }
   subject.trajectory.robot = ResolveRobot(subject.trajectory.robot);
   subject.robot = kinematics::MakeRobot(subject.trajectory.robot, subject.source + ": robot");
   if (args.rrt_connect) {

@@ -25,15 +25,6 @@
 namespace flowplan::experiment {
 namespace {
 
-/// Training needs a data task's robot; a config naming a robot folder is refused.
-ExperimentConfig RequireBuiltInRobot(ExperimentConfig config, const char* command) {
-  if (!config.robot.empty()) {
-    throw Error("robot: " + config.robot + ": `flowplan " + command + "` runs for the built-in robots only; a robot "
-                "folder is planned with `flowplan plan --rrt-connect --robot DIR`");
-  }
-  return config;
-}
-
 struct TrainArgs {
   ConfigArgs config;
   std::string resume;      // --resume RUN_DIR
@@ -188,7 +179,7 @@ Command AddTrainCommand(CLI::App& app) {
               return;
             }
             if (args->config.path.empty()) throw Error("train: expected --config FILE or --resume RUN_DIR");
-            RunTrain(RequireBuiltInRobot(args->config.Load(), "train"), trainer::TrainStart::kFresh, args->until_step);
+            RunTrain(args->config.Load(), trainer::TrainStart::kFresh, args->until_step);
           }};
 }
 

@@ -105,7 +105,7 @@ goal_constraints:
   std::ifstream report(prefix + ".json");
   const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
   EXPECT_THAT(text, HasSubstr(R"("failure": "refused", "reason": "start: sphere)"));
-  // `robot: DIR` in a config does what --robot does; data generation refuses it with one line.
+  // `robot: DIR` in a config does what --robot does; the Franka's data set refuses it with one line.
   std::ifstream base(config);
   testing::WriteText(dir / "with_robot.yaml", "robot: " + robot + "\n" +
                                                   std::string((std::istreambuf_iterator<char>(base)), std::istreambuf_iterator<char>()));
@@ -115,12 +115,101 @@ goal_constraints:
   EXPECT_THAT(from_config.output, HasSubstr("success 2/2"));
   const testing::Outcome generate = Flowplan("generate --config " + (dir / "with_robot.yaml").string());
   EXPECT_EQ(generate.exit_code, 1);
-  EXPECT_THAT(generate.output, HasSubstr("data is generated for the built-in robots only"));
+  EXPECT_THAT(generate.output, HasSubstr("a robot folder's data set is generate.dataset: robot_joint"));
   // --robot with a learned planner is refused.
   const testing::Outcome learned = Flowplan("plan --planner " + std::string(FLOWPLAN_SOURCE_DIR) +
                                             "/pretrained/franka_reach_planner.pt --robot " + robot + " --out " + prefix);
   EXPECT_EQ(learned.exit_code, 1);
   EXPECT_THAT(learned.output, HasSubstr("--robot: only with --rrt-connect"));
+}
+
+TEST(RobotCliTest, AUrdfIsImportedAndItsDataGeneratedTrainedExportedAndPlannedWithTheHybrid) {
+  // The rest of "Adding your robot" (docs/robots.md): robot_joint data of the imported arm, a planner trained on it
+  // (three steps: what is checked is that every command takes the robot, not what it learns), exported, and planned
+  // with around a box, learned alone and as the hybrid's proposer.
+  const fs::path dir = testing::ScratchDir();
+  testing::WritePrismStl(dir / "meshes" / "hand.stl", 0.04, 0.1);
+  testing::WriteText(dir / "lift_arm.urdf", testing::LiftArmUrdf((dir / "meshes" / "hand.stl").string()));
+  const std::string robot = (dir / "robot").string();
+  const testing::Outcome imported = Flowplan("robot import " + (dir / "lift_arm.urdf").string() +
+                                             " --tip tool --pair-samples 500 --out " + robot);
+  ASSERT_EQ(imported.exit_code, 0) << imported.output;
+  const std::string config = (dir / "lift.yaml").string();
+  testing::WriteText(config, "robot: " + robot + R"(
+seed: 3
+threads: 1
+run_dir: )" + (dir / "run").string() + R"(
+generate:
+  dataset: robot_joint
+  episodes: 12
+  out: )" + (dir / "data.h5").string() + R"(
+  robot_joint:
+    horizon: 32
+    record_every: 4
+    joint_motion: {min_duration: 1.0, min_hold: 0.2}
+data:
+  path: )" + (dir / "data.h5").string() + R"(
+  val_fraction: 0.2
+model:
+  name: unet1d
+  unet: {down_dims: [8, 16]}
+train: {steps: 3, batch_size: 4, eval_every: 0, checkpoint_every: 3}
+)");
+  const testing::Outcome generated = Flowplan("generate --config " + config + " --log-level info");
+  ASSERT_EQ(generated.exit_code, 0) << generated.output;
+  // The data set, read by h5py: 12 episodes of 32 states of 4 positions and 4 velocities, the robot it carries, and
+  // every episode inside the joint limits (the lift within [0, 0.3] m) and starting at rest at its commanded start.
+  const std::string read_data =
+      std::string(FLOWPLAN_PYTHON) + " -c \"import h5py, numpy as np; f = h5py.File('" + (dir / "data.h5").string() +
+      "', 'r'); s = f['states'][()]; print(s.shape, 'lift_arm' in str(f.attrs['robot']), float(s[..., 0].min()), "
+      "float(s[..., 0].max()), float(np.abs(s[:, 0, :4] - f['commanded_start'][()]).max()), float(np.abs(s[:, 0, 4:]).max()))\"";
+  const testing::Outcome data = RunCommand(read_data);
+  ASSERT_EQ(data.exit_code, 0) << data.output;
+  int N = 0, T = 0, D = 0;
+  char carries[8] = {};
+  double lowest = -1, highest = -1, off_start = -1, start_speed = -1;
+  ASSERT_EQ(std::sscanf(data.output.c_str(), "(%d, %d, %d) %5s %lf %lf %lf %lf", &N, &T, &D, carries, &lowest, &highest,
+                        &off_start, &start_speed), 8)
+      << data.output;
+  EXPECT_EQ(N, 12);
+  EXPECT_EQ(T, 32);
+  EXPECT_EQ(D, 8);
+  EXPECT_STREQ(carries, "True");
+  EXPECT_GE(lowest, 0.0);
+  EXPECT_LE(highest, 0.3);
+  EXPECT_LT(off_start, 1e-6);  // states are stored as float32
+  EXPECT_EQ(start_speed, 0.0);
+
+  const testing::Outcome trained = Flowplan("train --config " + config + " --log-level warn");
+  ASSERT_EQ(trained.exit_code, 0) << trained.output;
+  const std::string planner = (dir / "lift.pt").string();
+  const testing::Outcome exported = Flowplan("export --ckpt " + (dir / "run").string() + " --out " + planner + " --log-level warn");
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  const std::string problem = " --box 0.45,0.3,0.5,0.2,0.2,0.3 --start 0.1,-1.5,0.5,0 --goal 0.25,1.5,0.5,1 --no-plot";
+  const testing::Outcome hybrid = Flowplan("plan --ckpt " + (dir / "run").string() + " --hybrid" + problem +
+                                           " -n 2 --out " + (dir / "hybrid").string());
+  ASSERT_EQ(hybrid.exit_code, 0) << hybrid.output;
+  EXPECT_THAT(hybrid.output, HasSubstr("success 2/2"));
+  const testing::Outcome learned = Flowplan("plan --planner " + planner + problem + " -n 2 --out " + (dir / "learned").string());
+  ASSERT_EQ(learned.exit_code, 0) << learned.output;
+  std::ifstream report(dir / "learned.json");
+  const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+  EXPECT_THAT(text, HasSubstr("\"env\": \"robot_joint\""));
+  // A robot folder without masses cannot be simulated: one line naming the file and what is missing.
+  std::ifstream yaml(robot + "/robot.yaml");
+  std::string kept, line;
+  bool in_inertia = false;
+  while (std::getline(yaml, line)) {
+    if (line.rfind("inertia:", 0) == 0) in_inertia = true;
+    else if (!line.empty() && line[0] != ' ' && line[0] != '-') in_inertia = false;
+    if (!in_inertia) kept += line + "\n";
+  }
+  testing::WriteText(dir / "massless" / "robot.yaml", kept);
+  const testing::Outcome massless = Flowplan("generate --config " + config + " robot=" + (dir / "massless").string() +
+                                             " generate.out=" + (dir / "massless.h5").string());
+  EXPECT_EQ(massless.exit_code, 1);
+  EXPECT_THAT(massless.output, HasSubstr("massless/robot.yaml: inertia: the links moved by joint \"lift\""));
+  EXPECT_FALSE(fs::exists(dir / "massless.h5"));
 }
 
 }  // namespace

@@ -17,6 +17,9 @@
 #include <fstream>
 
 #include "classical/rrt_connect.h"
+#include "collision/checker.h"
+#include "datasets/robot_joint_task.h"
+#include "robotfiles/robot_model.h"
 #include "core/error.h"
 #include "jit/library.h"
 #include "kinematics/robot.h"
@@ -245,6 +248,85 @@ TEST_F(RobotImportTest, RrtConnectPlansForTheImportedArmPassThePlanChecker) {
   EXPECT_TRUE(refused.refused[0]) << refused.failure[0];
   EXPECT_THAT(refused.failure[0], HasSubstr("start"));
 }
+
+TEST_F(RobotImportTest, TheSimulationModelMovesAsTheKinematicsAndWeighsWhatTheUrdfSays) {
+  DriveSettings drives;
+  drives.armature = 0.1;
+  drives.damping = 0.0;
+  const SimulationModel simulation = LoadSimulationModel(*file_, drives, "robot.yaml");
+  const mjModel& m = *simulation.model;
+  ASSERT_EQ(m.nv, 4);
+  sim::MjDataPtr data = sim::MakeData(m);
+  const kinematics::RobotDescription d = file_->Description("robot.yaml");
+  const kinematics::Robot robot(d);
+  torch::manual_seed(5);
+  const torch::Tensor lower = torch::tensor(d.joint_lower, torch::kFloat64), upper = torch::tensor(d.joint_upper, torch::kFloat64);
+  const torch::Tensor q = lower + (upper - lower) * torch::rand({8, 4}, torch::kFloat64);
+  const torch::Tensor tcp = robot.Tcp(q);
+  for (int64_t b = 0; b < 8; ++b) {
+    for (int j = 0; j < 4; ++j) data->qpos[simulation.qpos[static_cast<size_t>(j)]] = q[b][j].item<double>();
+    mj_kinematics(&m, data.get());
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(data->site_xpos[3 * simulation.tcp_site + i], tcp[b][i].item<double>(), 1e-9);
+  }
+  // At rest, the vertical lift holds up the five links above it (1 kg each in the URDF): its gravity force is
+  // 5 kg x 9.81 m/s^2 and its diagonal of the mass matrix 5 kg plus the armature.
+  mj_resetData(&m, data.get());
+  data->qpos[simulation.qpos[1]] = 0.7;
+  data->qpos[simulation.qpos[2]] = -0.4;
+  mj_forward(&m, data.get());
+  const int lift = simulation.dof[0];
+  EXPECT_NEAR(data->qfrc_bias[lift], 5 * 9.81, 1e-9);
+  std::vector<double> mass(16);
+  mj_fullM(&m, mass.data(), data->qM);
+  EXPECT_NEAR(mass[static_cast<size_t>(5 * lift)], 5.1, 1e-9);
+  // The motors are limited to the URDF's efforts, in the planned joints' order.
+  for (int j = 0; j < 4; ++j) EXPECT_EQ(m.actuator_ctrlrange[2 * j + 1], file_->effort_limit[static_cast<size_t>(j)]);
+}
+
+TEST_F(RobotImportTest, RobotJointEpisodesTrackTheirReferenceInsideTheLimitsAndClearOfTheArm) {
+  datasets::RobotJointTaskConfig config;
+  config.rollout.horizon = 32;  // 2.07 s at 15 Hz
+  const datasets::RobotJointTask task((*root_ / "robot").string(), config);
+  const datasets::EpisodeLayout layout = task.Layout();
+  ASSERT_EQ(layout.info.state_dim(), 8);
+  ASSERT_EQ(layout.point_dim, 4);
+  const kinematics::RobotDescription d = file_->Description("robot.yaml");
+  collision::Floor floor;
+  floor.present = true;
+  const collision::Checker checker(std::make_shared<const collision::BodyModel>(d),
+                                   std::make_shared<const collision::World>(geometry::Scene{}, 3, floor), {});
+  const auto worker = task.MakeWorker(), twin = task.MakeWorker();
+  int kept = 0;
+  for (uint64_t seed = 0; seed < 6; ++seed) {
+    const datasets::EpisodeRecord record = worker->Run(0, seed);
+    EXPECT_EQ(twin->Run(0, seed).states, record.states) << "same seed, same episode";
+    if (record.rejected) continue;
+    ++kept;
+    ASSERT_EQ(record.states.size(), 32u * 8);
+    for (int j = 0; j < 4; ++j) {
+      EXPECT_EQ(record.states[static_cast<size_t>(j)], record.commanded_start[static_cast<size_t>(j)]);
+      // The episode holds the goal for at least min_hold: the last state is there, up to the noise.
+      EXPECT_NEAR(record.states[31 * 8 + static_cast<size_t>(j)], record.commanded_goal[static_cast<size_t>(j)], 0.02);
+    }
+    for (int t = 0; t < 32; ++t) {
+      const double* state = &record.states[static_cast<size_t>(t) * 8];
+      EXPECT_TRUE(checker.Valid(state)) << "t = " << t;
+      for (int j = 0; j < 4; ++j) {
+        EXPECT_GE(state[j], d.joint_lower[static_cast<size_t>(j)]);
+        EXPECT_LE(state[j], d.joint_upper[static_cast<size_t>(j)]);
+        EXPECT_LE(std::abs(state[4 + j]), d.velocity_limit[static_cast<size_t>(j)]);
+        EXPECT_LE(std::abs(record.extras.at("torques")[static_cast<size_t>(t) * 4 + j]), file_->effort_limit[static_cast<size_t>(j)]);
+      }
+    }
+  }
+  EXPECT_GE(kept, 4);
+  // Without masses there is nothing to simulate: one line naming the link.
+  RobotFile massless = *file_;
+  massless.inertia.clear();
+  EXPECT_THAT([&] { SimulationXml(massless, DriveSettings{}, "robot.yaml"); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("robot.yaml: inertia: the links moved by joint \"lift\"")));
+}
+
 
 TEST(ShippedRobotTest, Ur5FollowsThePublishedDenavitHartenbergParameters) {
   // robots/ur5 against the standard DH product written here: T = prod Rz(q_i) Tz(d_i) Tx(a_i) Rx(alpha_i).
