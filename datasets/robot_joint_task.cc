@@ -27,6 +27,7 @@ class RobotJointWorker : public EpisodeWorker {
         lower_(Eigen::Map<const Eigen::VectorXd>(robot.joint_lower.data(), J_)),
         upper_(Eigen::Map<const Eigen::VectorXd>(robot.joint_upper.data(), J_)),
         velocity_(Eigen::Map<const Eigen::VectorXd>(robot.velocity_limit.data(), J_)),
+        margin_(Margins(robot, config)),
         simulator_(*model_->model, Drives(*model_, robot, effort_limit), config.rollout, config.joint_motion) {}
 
   EpisodeRecord Run(int64_t, uint64_t seed) override {
@@ -39,7 +40,7 @@ class RobotJointWorker : public EpisodeWorker {
     auto draw = [&](Eigen::VectorXd* q) {
       --budget;
       for (int j = 0; j < J_; ++j) {
-        (*q)[j] = rng.Uniform(lower_[j] + config_.joint_margin, upper_[j] - config_.joint_margin);
+        (*q)[j] = rng.Uniform(lower_[j] + margin_[j], upper_[j] - margin_[j]);
       }
       return checker_->Valid(q->data());
     };
@@ -106,6 +107,16 @@ class RobotJointWorker : public EpisodeWorker {
     return drives;
   }
 
+  // How far inside its limits each joint's starts and goals keep.
+  static Eigen::VectorXd Margins(const kinematics::RobotDescription& robot, const RobotJointTaskConfig& config) {
+    Eigen::VectorXd margin(robot.num_joints);
+    for (const kinematics::RobotLink& link : robot.links) {
+      if (link.joint < 0) continue;
+      margin[link.joint] = link.type == kinematics::JointType::kPrismatic ? config.slide_margin : config.joint_margin;
+    }
+    return margin;
+  }
+
   // Whether the noise-free reference keeps clear at every control step.
   bool ReferenceIsClear(const sim::JointMotion& motion) const {
     const int steps = (config_.rollout.horizon - 1) * config_.rollout.record_every;
@@ -136,7 +147,7 @@ class RobotJointWorker : public EpisodeWorker {
   std::shared_ptr<const collision::Checker> checker_;
   const RobotJointTaskConfig config_;
   const int J_;
-  const Eigen::VectorXd lower_, upper_, velocity_;
+  const Eigen::VectorXd lower_, upper_, velocity_, margin_;
   sim::JointSimulator simulator_;
   sim::JointEpisode episode_;
 };
@@ -151,14 +162,18 @@ RobotJointTask::RobotJointTask(const std::string& folder, const RobotJointTaskCo
     throw Error(source + ": robot.velocity_limit: data is timed by each joint's speed limit; expected " +
                 std::to_string(robot_.num_joints) + " values");
   }
-  for (int j = 0; j < robot_.num_joints; ++j) {
+  for (const kinematics::RobotLink& link : robot_.links) {
+    if (link.joint < 0) continue;
+    const int j = link.joint;
     const double range = robot_.joint_upper[j] - robot_.joint_lower[j];
     if (!std::isfinite(range)) {
       throw Error(source + ": joint \"" + robot_.JointName(j) + "\" has no finite limits; random configurations need them");
     }
-    if (2.0 * config.joint_margin >= range) {
-      throw Error(where + ".joint_margin: expected less than half of joint \"" + robot_.JointName(j) + "\"'s range " +
-                  Number(range) + ", got " + Number(config.joint_margin));
+    const bool slide = link.type == kinematics::JointType::kPrismatic;
+    const double margin = slide ? config.slide_margin : config.joint_margin;
+    if (2.0 * margin >= range) {
+      throw Error(where + (slide ? ".slide_margin" : ".joint_margin") + ": expected less than half of joint \"" +
+                  robot_.JointName(j) + "\"'s range " + Number(range) + ", got " + Number(margin));
     }
   }
   const double horizon_time = (config.rollout.horizon - 1) * config.rollout.record_dt();

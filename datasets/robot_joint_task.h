@@ -25,9 +25,11 @@ namespace flowplan::datasets {
 struct RobotJointTaskConfig {
   sim::JointRolloutConfig rollout;
   // Starts and goals are uniform within the joint limits shrunk by joint_margin
-  // (rad or m), free of self-collision and above the floor, and every control
-  // step of the episode stays so.
+  // (revolute joints, rad) or slide_margin (prismatic joints, m), free of
+  // self-collision and above the floor, and every control step of the episode
+  // stays so.
   double joint_margin = 0.1;
+  double slide_margin = 0.01;
   double floor_height = 0.0;  // m, z of the floor the arm stands on (-.inf: none)
   int max_draws = 100;        // rollouts tried per episode; 100 x this many configurations drawn at most
   robotfiles::DriveSettings drives;
@@ -36,7 +38,9 @@ struct RobotJointTaskConfig {
   template <class V>
   void Visit(V& v) {
     rollout.Visit(v);
-    v.Field("joint_margin", joint_margin, "starts and goals keep this far inside the joint limits (rad or m)",
+    v.Field("joint_margin", joint_margin, "starts and goals keep this far inside a revolute joint's limits (rad)",
+            config::NonNegative());
+    v.Field("slide_margin", slide_margin, "starts and goals keep this far inside a prismatic joint's limits (m)",
             config::NonNegative());
     const config::Bounds height{-INFINITY, INFINITY, false, false, "a height in m, or -.inf for no floor", true};
     v.Field("floor_height", floor_height, "z of the floor no collision sphere may go below (m; -.inf: none)", height);

@@ -32,7 +32,8 @@ struct TrainArgs {
 };
 
 /// Stitching errors of the EMA weights on the data's test and training pairs,
-/// planned unguided (the network alone); NaN for data without pairs.
+/// planned unguided (the network alone); none for data without pairs (the
+/// general data sets of motions between random configurations).
 trainer::Evaluator StitchingEvaluator(const ExperimentConfig& config, const datasets::TrajectorySplits& data,
                                       int threads) {
   return [&config, &data, threads](const models::NetworkPtr& net, const models::MinMaxNormalizer& normalizer) {
@@ -46,6 +47,7 @@ trainer::Evaluator StitchingEvaluator(const ExperimentConfig& config, const data
     parts.trajectory = data.info;
     const auto planner = planning::AssemblePlanner(parts);
     trainer::Scores scores;
+    if (data.test_pairs.names.empty() && data.train_pairs.names.empty()) return scores;
     for (const auto& [pairs, label] : {std::pair{&data.test_pairs, "test"}, std::pair{&data.train_pairs, "train"}}) {
       double mean = NAN, stddev = NAN;
       if (!pairs->names.empty()) {

@@ -1,5 +1,8 @@
 #include "robotfiles/robot_model.h"
 
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -32,6 +35,21 @@ std::string Escaped(const std::string& text) {
     }
   }
   return out;
+}
+
+/// An inertia MuJoCo accepts: `inertia` (ixx, iyy, izz, ixy, ixz, iyz) if it is positive definite, else (a URDF's
+/// placeholder, such as a finger's "ixx=0.002, iyy=izz=0") its mean moment about every axis, at least 1e-6 kg m^2
+/// per kg; `fixed` says which.
+std::array<double, 6> SimulatedInertia(const LinkInertia& link, bool* fixed) {
+  const auto& I = link.inertia;
+  const double a = I[0], b = I[1], c = I[2], xy = I[3], xz = I[4], yz = I[5];
+  const double minor2 = a * b - xy * xy;
+  const double det = a * (b * c - yz * yz) - xy * (xy * c - yz * xz) + xz * (xy * yz - b * xz);
+  const double tiny = 1e-9 * std::max(1.0, a + b + c);
+  *fixed = !(a > tiny && minor2 > tiny * tiny && det > tiny * tiny * tiny);
+  if (!*fixed) return I;
+  const double mean = std::max((a + b + c) / 3.0, 1e-6 * link.mass);
+  return {mean, mean, mean, 0.0, 0.0, 0.0};
 }
 
 }  // namespace
@@ -69,7 +87,7 @@ std::string SimulationXml(const RobotFile& file, const DriveSettings& drives, co
   for (int l = 0; l < L; ++l) (d.links[l].parent < 0 ? roots : children[d.links[l].parent]).push_back(l);
   std::ostringstream xml;
   xml << "<mujoco model=\"" << Escaped(d.name) << "\">\n"
-      << "  <compiler angle=\"radian\" inertiafromgeom=\"false\"/>\n"
+      << "  <compiler angle=\"radian\" inertiafromgeom=\"false\" balanceinertia=\"true\"/>\n"
       << "  <option gravity=\"0 0 -9.81\"/>\n"
       << "  <worldbody>\n";
   std::function<void(int, int)> body = [&](int l, int depth) {
@@ -83,8 +101,14 @@ std::string SimulationXml(const RobotFile& file, const DriveSettings& drives, co
     const auto found = inertia.find(link.name);
     if (found != inertia.end() && found->second->mass > 0.0) {
       const LinkInertia& in = *found->second;
+      bool fixed = false;
+      const std::array<double, 6> inertia = SimulatedInertia(in, &fixed);
+      if (fixed) {
+        spdlog::warn("{}: inertia of link \"{}\" [{}] is not positive definite; simulated as {} kg m^2 about every axis",
+                     where, link.name, Numbers(in.inertia), Number(inertia[0]));
+      }
       xml << indent << "  <inertial pos=\"" << Numbers(in.com) << "\" mass=\"" << Number(in.mass)
-          << "\" fullinertia=\"" << Numbers(in.inertia) << "\"/>\n";
+          << "\" fullinertia=\"" << Numbers(inertia) << "\"/>\n";
     }
     if (link.joint >= 0) {
       const int j = link.joint;
