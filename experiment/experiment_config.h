@@ -17,7 +17,7 @@
 #include "objectives/objective.h"
 #include "planning/sampler_config.h"
 #include "problems/blocked_problems.h"
-#include "render/franka_renderer.h"
+#include "render/arm_renderer.h"
 #include "sim/franka_execution.h"
 #include "trainer/trainer_config.h"
 #include "validity/plan_check.h"

@@ -1,8 +1,10 @@
 // `flowplan render`: one plan of a plan file (`flowplan plan`, or one problem
-// of `flowplan plan --problems`) executed in MuJoCo among its scene's shapes
-// and drawn by MuJoCo's renderer, offscreen: PREFIX.gif, the execution frame by
-// frame at the plan's rate with the TCP's trail, and PREFIX.png, the arm at
-// four states of the plan, one picture each, with the planned TCP path.
+// of `flowplan plan --problems`) drawn by MuJoCo's renderer among its scene's
+// shapes, offscreen: PREFIX.gif, frame by frame at the plan's rate with the
+// TCP's trail, and PREFIX.png, the arm at four states of the plan, one picture
+// each, with the planned TCP path. The built-in Franka's plan is executed in
+// MuJoCo first and the gif shows the execution; any other arm (drawn by its
+// collision spheres) is shown as planned.
 
 #include <spdlog/spdlog.h>
 
@@ -17,7 +19,7 @@
 #include "experiment/experiment_config.h"
 #include "experiment/plan.h"
 #include "kinematics/robot.h"
-#include "render/franka_renderer.h"
+#include "render/arm_renderer.h"
 #include "render/image_files.h"
 #include "sim/franka_execution.h"
 
@@ -44,19 +46,18 @@ void RunRender(const RenderArgs& args) {
     throw Error(args.plans + ": no plans" + (args.problem.empty() ? "" : " of problem \"" + args.problem + "\"") + hint);
   }
   const std::string where = args.plans + ":" + group;
-  if (file.GetStringAttribute("/", "env") != "franka") throw Error(args.plans + ": env: render draws the Franka's plans");
   const kinematics::RobotDescription robot =
-      kinematics::RobotFromYaml(file.GetStringAttribute("/", "robot"), args.plans + ": robot");
-  if (!IsBuiltInFranka(robot)) {
-    throw Error(args.plans + ": robot: render needs the built-in Franka's kinematics and geometry");
-  }
+      ResolveRobot(kinematics::RobotFromYaml(file.GetStringAttribute("/", "robot"), args.plans + ": robot"));
+  if (robot.kind != kinematics::RobotKind::kArm) throw Error(args.plans + ": robot: render draws arms, not a point robot");
+  const bool franka = IsBuiltInFranka(robot);
+  const int64_t J = robot.num_joints;
   std::vector<int64_t> shape;
   const std::vector<float> plans = file.ReadFloat32(group + "plans", &shape);
   const int64_t N = shape[0], T = shape[1], D = shape[2];
   if (args.index < 0 || args.index >= N) {
     throw Error("--index: expected a plan index in [0, " + std::to_string(N) + "), got " + std::to_string(args.index));
   }
-  if (D != 2 * sim::kFrankaJoints) throw Error(where + "plans: expected 14 state dimensions, got " + std::to_string(D));
+  if (D < J) throw Error(where + "plans: expected at least the robot's " + std::to_string(J) + " joints, got " + std::to_string(D));
   geometry::SceneRows rows;
   for (const std::string& kind : geometry::ObstacleKinds()) {
     if (!file.Exists(group + "scene/" + kind)) continue;
@@ -70,17 +71,36 @@ void RunRender(const RenderArgs& args) {
   const double dt = file.GetDoubleAttribute("/", "dt");
 
   const std::vector<double> plan(plans.begin() + args.index * T * D, plans.begin() + (args.index + 1) * T * D);
-  const sim::FrankaModel world = sim::MakeFrankaScene(scene, 1.0 / config.execute.control_hz);
-  sim::FrankaExecutor executor(world, static_cast<int>(scene.size()), config.execute);
-  const sim::ExecutionResult executed = executor.Execute(plan, T, dt, Eigen::Vector3d(goal[0], goal[1], goal[2]));
+  const kinematics::Robot kinematics(robot, args.plans + ": robot");
+  const torch::Tensor q = torch::tensor(plan, torch::kFloat64).view({T, D}).slice(1, 0, J);
+  const torch::Tensor tcp = kinematics.Tcp(q);
+  std::vector<Eigen::Vector3d> path;
+  for (int64_t t = 0; t < T; ++t) path.emplace_back(tcp[t][0].item<double>(), tcp[t][1].item<double>(), tcp[t][2].item<double>());
+  auto joints = [J](const double* state) { return std::vector<double>(state, state + J); };
 
-  render::FrankaRenderer renderer(scene, config.render);
-  auto joints = [](const double* state) { return sim::JointVector(Eigen::Map<const sim::JointVector>(state)); };
+  std::unique_ptr<render::ArmRenderer> renderer;
   std::vector<render::Image> frames;
   std::vector<Eigen::Vector3d> trail;
-  for (int64_t t = 0; t < executed.num_states; ++t) {
-    trail.emplace_back(executed.tcp[3 * t], executed.tcp[3 * t + 1], executed.tcp[3 * t + 2]);
-    frames.push_back(renderer.Render(joints(&executed.states[static_cast<size_t>(t * D)]), trail));
+  std::string shown;
+  if (franka) {
+    const sim::FrankaModel world = sim::MakeFrankaScene(scene, 1.0 / config.execute.control_hz);
+    sim::FrankaExecutor executor(world, static_cast<int>(scene.size()), config.execute);
+    const sim::ExecutionResult executed = executor.Execute(plan, T, dt, Eigen::Vector3d(goal[0], goal[1], goal[2]));
+    renderer = std::make_unique<render::ArmRenderer>(scene, config.render);
+    for (int64_t t = 0; t < executed.num_states; ++t) {
+      trail.emplace_back(executed.tcp[3 * t], executed.tcp[3 * t + 1], executed.tcp[3 * t + 2]);
+      frames.push_back(renderer->Render(joints(&executed.states[static_cast<size_t>(t * D)]), trail));
+    }
+    shown = fmt::format("the plan executed in MuJoCo: {} contact{}, goal {:.3g} m away", executed.contacts.size(),
+                        executed.contacts.size() == 1 ? "" : "s", executed.goal_distance);
+  } else {
+    // Execution in MuJoCo needs the built-in Franka: the plan as planned, the arm drawn by its collision spheres.
+    renderer = std::make_unique<render::ArmRenderer>(robot, scene, config.render);
+    for (int64_t t = 0; t < T; ++t) {
+      trail.push_back(path[static_cast<size_t>(t)]);
+      frames.push_back(renderer->Render(joints(&plan[static_cast<size_t>(t * D)]), trail));
+    }
+    shown = "the plan as planned, the " + robot.name + " drawn by its collision spheres";
   }
   const std::string prefix =
       !args.out.empty() ? args.out
@@ -88,25 +108,17 @@ void RunRender(const RenderArgs& args) {
                            (args.problem.empty() ? "" : "_" + args.problem) + "_" + std::to_string(args.index));
   EnsureParentFolder(prefix);
   render::WriteGif(prefix + ".gif", frames, dt);
-
-  const kinematics::Robot kinematics(robot, args.plans + ": robot");
-  const torch::Tensor q = torch::tensor(plan, torch::kFloat64).view({T, D}).slice(1, 0, sim::kFrankaJoints);
-  const torch::Tensor tcp = kinematics.Tcp(q);
-  std::vector<Eigen::Vector3d> path;
-  for (int64_t t = 0; t < T; ++t) path.emplace_back(tcp[t][0].item<double>(), tcp[t][1].item<double>(), tcp[t][2].item<double>());
   // Four pictures of one arm each (start, a third, two thirds, goal), two to a row, with the whole planned path:
   // arms drawn over each other at once hide each other.
   std::vector<render::Image> stills;
   constexpr int kPoses = 4;
   for (int k = 0; k < kPoses; ++k) {
     const int64_t t = k * (T - 1) / (kPoses - 1);
-    stills.push_back(renderer.Render(joints(&plan[static_cast<size_t>(t * D)]), path));
+    stills.push_back(renderer->Render(joints(&plan[static_cast<size_t>(t * D)]), path));
   }
   render::WritePng(prefix + ".png", render::Tile(stills, 2));
-  spdlog::info("wrote {}.gif ({} frames of {} x {}, the plan executed in MuJoCo: {} contact{}, goal {:.3g} m away) "
-               "and {}.png (the plan at {} states, two to a row)",
-               prefix, frames.size(), config.render.width, config.render.height, executed.contacts.size(),
-               executed.contacts.size() == 1 ? "" : "s", executed.goal_distance, prefix, kPoses);
+  spdlog::info("wrote {}.gif ({} frames of {} x {}, {}) and {}.png (the plan at {} states, two to a row)", prefix,
+               frames.size(), config.render.width, config.render.height, shown, prefix, kPoses);
 }
 
 }  // namespace
@@ -114,8 +126,9 @@ void RunRender(const RenderArgs& args) {
 Command AddRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* command = app.add_subcommand(
-      "render", "draw one plan of a plan file executed in MuJoCo among its scene's shapes: PREFIX.gif (a video, "
-                "offscreen through OSMesa) and PREFIX.png (the plan at four states, two to a row) (render.*, execute.*)");
+      "render", "draw one plan of a plan file among its scene's shapes (the built-in Franka's executed in MuJoCo "
+                "first): PREFIX.gif (a video, offscreen through OSMesa) and PREFIX.png (the plan at four states, two to a "
+                "row) (render.*, execute.*)");
   command->add_option("plans", args->plans, "a plan file of `flowplan plan` (PREFIX.h5)")->required()->check(CLI::ExistingFile);
   command->add_option("--problem", args->problem, "the problem, in a file of `flowplan plan --problems`");
   command->add_option("--index", args->index, "which plan of the file (or of the problem)")->capture_default_str();

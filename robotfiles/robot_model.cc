@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "sim/arm_xml.h"
 
 namespace flowplan::robotfiles {
 namespace {
@@ -20,21 +21,6 @@ std::string Numbers(const std::array<double, N>& values) {
   std::string text;
   for (size_t i = 0; i < N; ++i) text += (i ? " " : "") + Number(values[i]);
   return text;
-}
-
-/// XML attribute text: the characters XML reserves, escaped.
-std::string Escaped(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 /// An inertia MuJoCo accepts: `inertia` (ixx, iyy, izz, ixy, ixz, iyz) if it is positive definite, else (a URDF's
@@ -82,59 +68,23 @@ std::string SimulationXml(const RobotFile& file, const DriveSettings& drives, co
     }
   }
 
-  std::vector<std::vector<int>> children(static_cast<size_t>(L));
-  std::vector<int> roots;
-  for (int l = 0; l < L; ++l) (d.links[l].parent < 0 ? roots : children[d.links[l].parent]).push_back(l);
-  std::ostringstream xml;
-  xml << "<mujoco model=\"" << Escaped(d.name) << "\">\n"
-      << "  <compiler angle=\"radian\" inertiafromgeom=\"false\" balanceinertia=\"true\"/>\n"
-      << "  <option gravity=\"0 0 -9.81\"/>\n"
-      << "  <worldbody>\n";
-  std::function<void(int, int)> body = [&](int l, int depth) {
-    const kinematics::RobotLink& link = d.links[l];
-    const std::string indent(static_cast<size_t>(2 * depth + 4), ' ');
-    std::array<double, 3> pos = link.pos;
-    std::array<double, 4> quat = link.quat;
-    if (link.joint < 0) kinematics::FixedPose(link, pos, quat);  // a held joint is welded at its value
-    xml << indent << "<body name=\"" << Escaped(link.name) << "\" pos=\"" << Numbers(pos) << "\" quat=\""
-        << Numbers(quat) << "\">\n";
-    const auto found = inertia.find(link.name);
-    if (found != inertia.end() && found->second->mass > 0.0) {
-      const LinkInertia& in = *found->second;
-      bool fixed = false;
-      const std::array<double, 6> inertia = SimulatedInertia(in, &fixed);
-      if (fixed) {
-        spdlog::warn("{}: inertia of link \"{}\" [{}] is not positive definite; simulated as {} kg m^2 about every axis",
-                     where, link.name, Numbers(in.inertia), Number(inertia[0]));
-      }
-      xml << indent << "  <inertial pos=\"" << Numbers(in.com) << "\" mass=\"" << Number(in.mass)
-          << "\" fullinertia=\"" << Numbers(inertia) << "\"/>\n";
+  sim::ArmXmlOptions options;
+  options.compiler = "angle=\"radian\" inertiafromgeom=\"false\" balanceinertia=\"true\"";
+  options.effort_limit = file.effort_limit;
+  options.armature = drives.armature;
+  options.damping = drives.damping;
+  for (const auto& [name, in] : inertia) {
+    if (!(in->mass > 0.0)) continue;
+    bool fixed = false;
+    const std::array<double, 6> moments = SimulatedInertia(*in, &fixed);
+    if (fixed) {
+      spdlog::warn("{}: inertia of link \"{}\" [{}] is not positive definite; simulated as {} kg m^2 about every axis",
+                   where, name, Numbers(in->inertia), Number(moments[0]));
     }
-    if (link.joint >= 0) {
-      const int j = link.joint;
-      const bool slide = link.type == kinematics::JointType::kPrismatic;
-      xml << indent << "  <joint name=\"q" << j << "\" type=\"" << (slide ? "slide" : "hinge") << "\" axis=\""
-          << Numbers(link.axis) << "\"";
-      if (std::isfinite(d.joint_lower[j]) && std::isfinite(d.joint_upper[j])) {
-        xml << " limited=\"true\" range=\"" << Number(d.joint_lower[j]) << " " << Number(d.joint_upper[j]) << "\"";
-      }
-      xml << " armature=\"" << Number(drives.armature) << "\" damping=\"" << Number(drives.damping) << "\"/>\n";
-    }
-    if (l == d.tcp_link) {
-      xml << indent << "  <site name=\"tcp\" pos=\"" << Numbers(d.tcp_pos) << "\" quat=\"" << Numbers(d.tcp_quat)
-          << "\"/>\n";
-    }
-    for (const int c : children[l]) body(c, depth + 1);
-    xml << indent << "</body>\n";
-  };
-  for (const int r : roots) body(r, 0);
-  xml << "  </worldbody>\n  <actuator>\n";
-  for (int j = 0; j < J; ++j) {
-    xml << "    <motor name=\"q" << j << "\" joint=\"q" << j << "\" ctrllimited=\"true\" ctrlrange=\""
-        << Number(-file.effort_limit[j]) << " " << Number(file.effort_limit[j]) << "\"/>\n";
+    options.body_elements[name] = "      <inertial pos=\"" + Numbers(in->com) + "\" mass=\"" + Number(in->mass) +
+                                  "\" fullinertia=\"" + Numbers(moments) + "\"/>\n";
   }
-  xml << "  </actuator>\n</mujoco>\n";
-  return xml.str();
+  return sim::ArmXml(d, options);
 }
 
 SimulationModel LoadSimulationModel(const RobotFile& file, const DriveSettings& drives, const std::string& where) {

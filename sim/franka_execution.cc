@@ -6,6 +6,7 @@
 #include <map>
 
 #include "core/error.h"
+#include "sim/arm_xml.h"
 
 namespace flowplan::sim {
 namespace {
@@ -39,20 +40,6 @@ void ExecutionConfig::Validate() const {
   }
 }
 
-namespace {
-
-std::string Numbers(const std::vector<double>& values) {
-  std::string out;
-  for (double v : values) out += (out.empty() ? "" : " ") + Number(v);
-  return out;
-}
-
-/// The orientation attribute of a box or cylinder (MuJoCo normalises the quaternion).
-std::string Orientation(const std::vector<double>& quaternion) {
-  return quaternion.empty() ? std::string() : " quat=\"" + Numbers(quaternion) + "\"";
-}
-
-}  // namespace
 
 FrankaModel MakeFrankaScene(const geometry::Scene& scene, double timestep) {
   scene.Validate(3, "execution scene");
@@ -62,32 +49,10 @@ FrankaModel MakeFrankaScene(const geometry::Scene& scene, double timestep) {
   ReplaceOnce(xml, "njmax=\"64\"", "njmax=\"2000\"");
   ReplaceOnce(xml, "nconmax=\"16\"", "nconmax=\"1000\"");
   // Contacts are detected within kMeasuredDistance (margin) and act only on overlaps (gap = margin).
-  const std::string common = " margin=\"" + Number(kMeasuredDistance) + "\" gap=\"" + Number(kMeasuredDistance) +
-                             "\" group=\"4\" contype=\"0\" conaffinity=\"1\" rgba=\"0.8 0.2 0.2 0.5\"/>";
-  std::vector<std::string> shapes;
-  for (const auto& s : scene.spheres) {
-    shapes.push_back("type=\"sphere\" pos=\"" + Numbers(s.centre) + "\" size=\"" + Number(s.radius) + "\"");
-  }
-  for (const auto& b : scene.boxes) {
-    shapes.push_back("type=\"box\" pos=\"" + Numbers(b.centre) + "\" size=\"" +
-                     Numbers({0.5 * b.size[0], 0.5 * b.size[1], 0.5 * b.size[2]}) + "\"" + Orientation(b.quaternion));
-  }
-  for (const auto& c : scene.cylinders) {
-    shapes.push_back("type=\"cylinder\" pos=\"" + Numbers(c.centre) + "\" size=\"" +
-                     Numbers({c.radius, 0.5 * c.height}) + "\"" + Orientation(c.quaternion));
-  }
-  for (const auto& c : scene.capsules) {
-    const bool point = c.a == c.b;  // MuJoCo needs a segment of non-zero length
-    shapes.push_back(point ? "type=\"sphere\" pos=\"" + Numbers(c.a) + "\" size=\"" + Number(c.radius) + "\""
-                           : "type=\"capsule\" fromto=\"" + Numbers(c.a) + " " + Numbers(c.b) + "\" size=\"" +
-                                 Number(c.radius) + "\"");
-  }
-  std::string geoms;
-  for (size_t k = 0; k < shapes.size(); ++k) {
-    geoms += "\n    <geom name=\"obstacle" + std::to_string(k) + "\" " + shapes[k] + common;
-  }
-  ReplaceOnce(xml, "<worldbody>", "<worldbody>" + geoms);
-  FrankaModel model(xml, "Franka scene with " + std::to_string(shapes.size()) + " obstacles");
+  const std::string common = "margin=\"" + Number(kMeasuredDistance) + "\" gap=\"" + Number(kMeasuredDistance) +
+                             "\" group=\"4\" contype=\"0\" conaffinity=\"1\" rgba=\"0.8 0.2 0.2 0.5\"";
+  ReplaceOnce(xml, "<worldbody>", "<worldbody>\n" + ObstacleGeomsXml(scene, common));
+  FrankaModel model(xml, "Franka scene with " + std::to_string(scene.size()) + " obstacles");
   model.SetPhysics(timestep, Integrator::kEuler);
   model.EnableObstacleContacts();
   return model;

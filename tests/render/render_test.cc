@@ -2,7 +2,7 @@
 // projection written here puts them, and the PNG and GIF files decoded by
 // Pillow (an independent reader) to the pixels that were written.
 
-#include "render/franka_renderer.h"
+#include "render/arm_renderer.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -12,7 +12,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "collision/body_model.h"
+#include "core/error.h"
 #include "render/image_files.h"
+#include "robotfiles/robot_folder.h"
 #include "sim/mujoco_util.h"
 #include "tests/support/command.h"
 #include "tests/support/scratch_dir.h"
@@ -60,14 +63,14 @@ TEST(ImageFilesTest, TileLaysImagesOutInRowsAndFillsTheLastRowWithWhite) {
   EXPECT_EQ(tiled.At(3, 1)[2], 255);
 }
 
-TEST(FrankaRendererTest, TheObstacleAndTheArmAreWhereAProjectionPutsThem) {
+TEST(ArmRendererTest, TheObstacleAndTheArmAreWhereAProjectionPutsThem) {
   const Eigen::Vector3d sphere(0.45, 0.45, 0.3);
   RenderConfig config;
   config.width = 320;
   config.height = 240;
-  FrankaRenderer renderer(OneSphere(sphere, 0.08), config);
+  ArmRenderer renderer(OneSphere(sphere, 0.08), config);
   const sim::JointVector ready = sim::FrankaReadyPose();
-  const Image image = renderer.Render(ready);
+  const Image image = renderer.Render(std::vector<double>(ready.data(), ready.data() + 7));
   ASSERT_EQ(image.width, 320);
   ASSERT_EQ(image.rgb.size(), 320u * 240u * 3u);
   auto pixel = [&](const Eigen::Vector3d& p) {
@@ -91,14 +94,14 @@ TEST(FrankaRendererTest, TheObstacleAndTheArmAreWhereAProjectionPutsThem) {
   EXPECT_GT(arm[2], arm[0] + 8) << int(arm[0]) << " " << int(arm[1]) << " " << int(arm[2]);
   EXPECT_GT(arm[2], 60);
   // The same pixels differ once the sphere moves away: what was drawn there was the sphere.
-  FrankaRenderer elsewhere(OneSphere({0.45, -0.45, 0.3}, 0.08), config);
-  const Image moved = elsewhere.Render(ready);
+  ArmRenderer elsewhere(OneSphere({0.45, -0.45, 0.3}, 0.08), config);
+  const Image moved = elsewhere.Render(std::vector<double>(ready.data(), ready.data() + 7));
   const Eigen::Vector2d at = Project(renderer.camera(), sphere, config.width, config.height);
   const uint8_t* now = moved.At(static_cast<int>(at.x()), static_cast<int>(at.y()));
   EXPECT_LT(now[0], red[0] - 40);
   // A trail of points is drawn in its colour.
   const Eigen::Vector3d mark(0.3, -0.35, 0.4);
-  const Image trail = renderer.Render(ready, {mark});
+  const Image trail = renderer.Render(std::vector<double>(ready.data(), ready.data() + 7), {mark});
   const Eigen::Vector2d m = Project(renderer.camera(), mark, config.width, config.height);
   int greens = 0;  // the dot is a few pixels wide: look around its centre
   for (int dx = -1; dx <= 1; ++dx) {
@@ -112,16 +115,56 @@ TEST(FrankaRendererTest, TheObstacleAndTheArmAreWhereAProjectionPutsThem) {
   EXPECT_FALSE(before[1] > before[0] + 30 && before[1] > before[2] + 30);  // not green without the trail
 }
 
+TEST(ArmRendererTest, AnyArmIsDrawnByItsCollisionSpheresWhereItsKinematicsPutThem) {
+  // The shipped UR5 folder; its spheres placed by the collision check's kinematics (plain C++), drawn by MuJoCo
+  // from the model ArmXml writes.
+  const kinematics::RobotDescription ur5 = robotfiles::LoadRobot(std::string(FLOWPLAN_SOURCE_DIR) + "/robots/ur5");
+  RenderConfig config;
+  config.width = 320;
+  config.height = 240;
+  ArmRenderer renderer(ur5, OneSphere({0.45, -0.45, 0.3}, 0.08), config);
+  ASSERT_EQ(renderer.num_joints(), 6);
+  const std::vector<double> reaching = {M_PI, -0.6, 0.9, 0.0, 0.0, 0.0}, folded = {0.0, -2.5, 2.0, 0.0, 0.0, 0.0};
+  const collision::BodyModel body(ur5);
+  std::vector<collision::Frame> frames(static_cast<size_t>(body.num_links()));
+  std::vector<double> centres(static_cast<size_t>(3 * body.num_spheres()));
+  body.Place(reaching.data(), frames.data(), centres.data());
+  // The biggest sphere on the forearm.
+  int chosen = -1;
+  for (int s = 0; s < body.num_spheres(); ++s) {
+    if (body.link_name(body.sphere_link(s)) != "forearm_link") continue;
+    if (chosen < 0 || body.sphere_radius(s) > body.sphere_radius(chosen)) chosen = s;
+  }
+  ASSERT_GE(chosen, 0);
+  const Eigen::Vector3d forearm(centres[3 * chosen], centres[3 * chosen + 1], centres[3 * chosen + 2]);
+  const Image image = renderer.Render(reaching);
+  const Eigen::Vector2d at = Project(renderer.camera(), forearm, config.width, config.height);
+  ASSERT_TRUE(at.x() >= 0 && at.x() < config.width && at.y() >= 0 && at.y() < config.height) << at.transpose();
+  const uint8_t* arm = image.At(static_cast<int>(at.x()), static_cast<int>(at.y()));
+  EXPECT_GT(arm[2], arm[0] + 8) << int(arm[0]) << " " << int(arm[1]) << " " << int(arm[2]);
+  EXPECT_GT(arm[2], 60);
+  // Folded away, the forearm is not drawn there.
+  const Image away = renderer.Render(folded);
+  const uint8_t* now = away.At(static_cast<int>(at.x()), static_cast<int>(at.y()));
+  EXPECT_FALSE(now[2] > now[0] + 8 && now[2] > 60) << int(now[0]) << " " << int(now[1]) << " " << int(now[2]);
+  // A point robot is refused with one line.
+  kinematics::RobotDescription point;
+  point.name = "disc";
+  point.kind = kinematics::RobotKind::kPoint;
+  EXPECT_THAT([&] { ArmRenderer(point, OneSphere({0.45, -0.45, 0.3}, 0.08), config); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("render: draws arms")));
+}
+
 TEST(ImageFilesTest, PillowReadsBackThePngExactlyAndTheGifWithinItsPalette) {
   RenderConfig config;
   config.width = 160;
   config.height = 120;
-  FrankaRenderer renderer(OneSphere({0.45, 0.45, 0.3}, 0.08), config);
+  ArmRenderer renderer(OneSphere({0.45, 0.45, 0.3}, 0.08), config);
   std::vector<Image> frames;
   sim::JointVector q = sim::FrankaReadyPose();
   for (int k = 0; k < 3; ++k) {
     q[0] += 0.3;
-    frames.push_back(renderer.Render(q));
+    frames.push_back(renderer.Render(std::vector<double>(q.data(), q.data() + 7)));
   }
   const std::string dir = flowplan::testing::ScratchDir().string();
   WritePng(dir + "/still.png", frames[0]);

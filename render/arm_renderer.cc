@@ -1,4 +1,4 @@
-#include "render/franka_renderer.h"
+#include "render/arm_renderer.h"
 
 #include <GL/osmesa.h>
 #include <mujoco/mujoco.h>
@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "sim/arm_xml.h"
 #include "sim/franka_execution.h"
 
 namespace flowplan::render {
@@ -31,7 +32,7 @@ double LowestObstaclePoint(const geometry::Scene& scene) {
 
 }  // namespace
 
-struct FrankaRenderer::Gl {
+struct ArmRenderer::Gl {
   OSMesaContext context = nullptr;
   std::vector<unsigned char> buffer;  // the window OSMesa draws into (MuJoCo renders into its own offscreen buffer)
   mjvScene scene;
@@ -45,8 +46,60 @@ struct FrankaRenderer::Gl {
   }
 };
 
-FrankaRenderer::FrankaRenderer(const geometry::Scene& scene, const RenderConfig& config)
-    : config_(config), model_(sim::CopyModel(sim::MakeFrankaScene(scene, 0.001).mj())), data_(sim::MakeData(*model_)) {
+namespace {
+
+/// The Franka model's joints are its first qpos entries.
+std::vector<int> FirstJoints(int count) {
+  std::vector<int> qpos;
+  for (int j = 0; j < count; ++j) qpos.push_back(j);
+  return qpos;
+}
+
+/// A model of `robot` for drawing: its spheres as geoms, massless bodies given a token inertia, the obstacles.
+sim::MjModelPtr SphereModel(const kinematics::RobotDescription& robot, const geometry::Scene& scene) {
+  if (robot.kind != kinematics::RobotKind::kArm) throw Error("render: draws arms; the robot \"" + robot.name + "\" is a point");
+  scene.Validate(3, "render scene");
+  sim::ArmXmlOptions options;
+  options.compiler = "angle=\"radian\" inertiafromgeom=\"false\"";
+  for (const kinematics::RobotLink& link : robot.links) {
+    options.body_elements[link.name] = "      <inertial pos=\"0 0 0\" mass=\"0.001\" diaginertia=\"1e-6 1e-6 1e-6\"/>\n";
+  }
+  for (const kinematics::RobotSphere& sphere : robot.spheres) {
+    const std::string& link = robot.links[static_cast<size_t>(sphere.link)].name;
+    options.body_elements[link] += "      <geom type=\"sphere\" contype=\"0\" conaffinity=\"0\" pos=\"" +
+                                   sim::XmlNumber(sphere.centre[0]) + " " + sim::XmlNumber(sphere.centre[1]) + " " +
+                                   sim::XmlNumber(sphere.centre[2]) + "\" size=\"" + sim::XmlNumber(sphere.radius) + "\"/>\n";
+  }
+  options.world_elements = sim::ObstacleGeomsXml(scene, "contype=\"0\" conaffinity=\"0\"");
+  return sim::LoadModelFromXml(sim::ArmXml(robot, options), "render: the robot \"" + robot.name + "\"");
+}
+
+/// Where the description's planned joints are in the model of SphereModel.
+std::vector<int> NamedJoints(const mjModel& m, int count) {
+  std::vector<int> qpos;
+  for (int j = 0; j < count; ++j) {
+    const int id = mj_name2id(&m, mjOBJ_JOINT, ("q" + std::to_string(j)).c_str());
+    FLOWPLAN_DEMAND(id >= 0);
+    qpos.push_back(m.jnt_qposadr[id]);
+  }
+  return qpos;
+}
+
+}  // namespace
+
+ArmRenderer::ArmRenderer(const geometry::Scene& scene, const RenderConfig& config)
+    : ArmRenderer(sim::CopyModel(sim::MakeFrankaScene(scene, 0.001).mj()), FirstJoints(sim::kFrankaJoints), scene,
+                  config) {}
+
+ArmRenderer::ArmRenderer(const kinematics::RobotDescription& robot, const geometry::Scene& scene,
+                         const RenderConfig& config)
+    : ArmRenderer(SphereModel(robot, scene), {}, scene, config) {
+  qpos_ = NamedJoints(*model_, robot.num_joints);
+}
+
+ArmRenderer::ArmRenderer(sim::MjModelPtr model, std::vector<int> qpos, const geometry::Scene& scene,
+                         const RenderConfig& config)
+    : config_(config), qpos_(std::move(qpos)), model_(std::move(model)), data_(sim::MakeData(*model_)) {
   floor_height_ = std::min(0.0, LowestObstaclePoint(scene)) - 0.002;
   mjModel& m = *model_;
   for (int g = 0; g < m.ngeom; ++g) {
@@ -86,14 +139,15 @@ FrankaRenderer::FrankaRenderer(const geometry::Scene& scene, const RenderConfig&
   gl_->camera.elevation = config.elevation;
 }
 
-FrankaRenderer::~FrankaRenderer() = default;
+ArmRenderer::~ArmRenderer() = default;
 
-Image FrankaRenderer::Render(const sim::JointVector& q, const std::vector<Eigen::Vector3d>& trail) {
+Image ArmRenderer::Render(const std::vector<double>& q, const std::vector<Eigen::Vector3d>& trail) {
+  FLOWPLAN_DEMAND(q.size() == qpos_.size());
   const mjModel& m = *model_;
   mjData& d = *data_;
   mjvScene& scene = gl_->scene;
   OSMesaMakeCurrent(gl_->context, gl_->buffer.data(), GL_UNSIGNED_BYTE, config_.width, config_.height);
-  for (int j = 0; j < sim::kFrankaJoints; ++j) d.qpos[j] = q[j];
+  for (size_t j = 0; j < qpos_.size(); ++j) d.qpos[qpos_[j]] = q[j];
   mj_kinematics(&m, &d);
   mjv_updateScene(&m, &d, &gl_->option, nullptr, &gl_->camera, mjCAT_ALL, &scene);
   auto add = [&](int type, const mjtNum size[3], const mjtNum pos[3], const std::array<float, 4>& rgba) {

@@ -1,11 +1,13 @@
 #pragma once
 
-// Pictures of the Franka among a scene's obstacles from MuJoCo's own renderer,
+// Pictures of an arm among a scene's obstacles from MuJoCo's own renderer,
 // offscreen and headless: an OSMesa context (Mesa's software rasteriser,
 // Debian's libosmesa6) holds the OpenGL state MuJoCo draws into, so no display,
-// GPU or window system is needed. The arm is drawn by its collision capsules
-// (the model has no meshes), the obstacles by their real shapes, the floor as
-// a plane, and a path's TCP as a trail of small spheres.
+// GPU or window system is needed. The built-in Franka is drawn by its collision
+// capsules (its model has no meshes), any other arm by its collision spheres
+// (what the planner and the plan checker see of it), the obstacles by their
+// real shapes, the floor as a plane, and a path's TCP as a trail of small
+// spheres.
 
 #include <Eigen/Core>
 #include <array>
@@ -14,6 +16,7 @@
 
 #include "core/config.h"
 #include "geometry/scene.h"
+#include "kinematics/robot_description.h"
 #include "render/image_files.h"
 #include "sim/franka_model.h"
 #include "sim/mujoco_util.h"
@@ -51,17 +54,23 @@ struct CameraView {
   double frustum_center, frustum_bottom, frustum_top, frustum_near;
 };
 
-class FrankaRenderer {
+class ArmRenderer {
  public:
-  /// Builds the scene's model and an offscreen context of config.width × height.
+  /// The built-in Franka among `scene`'s obstacles, in an offscreen context of
+  /// config.width × height.
   /// @throws flowplan::Error if the scene is not 3-D or no OpenGL context can be made.
-  FrankaRenderer(const geometry::Scene& scene, const RenderConfig& config);
-  ~FrankaRenderer();
-  FrankaRenderer(const FrankaRenderer&) = delete;
-  FrankaRenderer& operator=(const FrankaRenderer&) = delete;
+  ArmRenderer(const geometry::Scene& scene, const RenderConfig& config);
+  /// Any arm (`robot`, kind arm) drawn by its collision spheres, likewise.
+  /// @throws flowplan::Error as above, or if `robot` is not an arm.
+  ArmRenderer(const kinematics::RobotDescription& robot, const geometry::Scene& scene, const RenderConfig& config);
+  ~ArmRenderer();
+  ArmRenderer(const ArmRenderer&) = delete;
+  ArmRenderer& operator=(const ArmRenderer&) = delete;
 
-  /// The arm at q (rad), with an optional trail of points (m, e.g. the TCP path so far).
-  Image Render(const sim::JointVector& q, const std::vector<Eigen::Vector3d>& trail = {});
+  /// The arm at q (its J joint values, rad or m), with an optional trail of points (m, e.g. the TCP path so far).
+  Image Render(const std::vector<double>& q, const std::vector<Eigen::Vector3d>& trail = {});
+
+  int num_joints() const { return static_cast<int>(qpos_.size()); }
 
   /// The camera of the last picture.
   const CameraView& camera() const { return camera_; }
@@ -69,7 +78,10 @@ class FrankaRenderer {
  private:
   struct Gl;  // the OSMesa context, its buffer and MuJoCo's render context
 
+  ArmRenderer(sim::MjModelPtr model, std::vector<int> qpos, const geometry::Scene& scene, const RenderConfig& config);
+
   RenderConfig config_;
+  std::vector<int> qpos_;  // (J) index into qpos of joint j
   sim::MjModelPtr model_;  // the scene's model, recoloured for pictures
   sim::MjDataPtr data_;
   std::unique_ptr<Gl> gl_;
