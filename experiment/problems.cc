@@ -12,6 +12,7 @@
 #include "kinematics/robot.h"
 #include "problems/blocked_problems.h"
 #include "problems/scene_families.h"
+#include "robotfiles/robot_folder.h"
 #include "sim/franka_model.h"
 
 namespace flowplan::experiment {
@@ -21,13 +22,16 @@ Command AddProblemsCommand(CLI::App& app) {
     ConfigArgs config;
     std::string out;
     std::string family;
+    std::string robot;
   };
   auto args = std::make_shared<Args>();
   CLI::App* command =
-      app.add_subcommand("problems", "draw random Franka problems: spheres blocking the straight path (problems.*), "
-                                     "or a scene family (--family)");
+      app.add_subcommand("problems", "draw random problems: spheres blocking the straight path (problems.*), for the "
+                                     "Franka or a robot folder (--robot), or a scene family of the Franka (--family)");
   args->config.Add(command, false);
   command->add_option("--out", args->out, "YAML file of problems")->required();
+  command->add_option("--robot", args->robot,
+                      "a robot folder (`flowplan robot import`; or robot: in the config) to draw the blocked problems for");
   std::string families;
   for (const auto& name : problems::SceneFamilies()) families += (families.empty() ? "" : ", ") + name;
   command->add_option("--family", args->family,
@@ -35,8 +39,15 @@ Command AddProblemsCommand(CLI::App& app) {
   return {command, [args] {
             const ExperimentConfig config = args->config.Load();
             const int threads = ConfigureThreads(config);
-            const kinematics::Robot arm(sim::LoadFrankaModel().description(), "the Franka");
+            const std::string folder = !args->robot.empty() ? args->robot : config.robot;
+            const kinematics::Robot arm = folder.empty()
+                                              ? kinematics::Robot(sim::LoadFrankaModel().description(), "the Franka")
+                                              : kinematics::Robot(robotfiles::LoadRobot(folder), folder);
             if (!args->family.empty()) {
+              if (!folder.empty()) {
+                throw Error("--family: the scene families are laid out for the built-in Franka; a robot folder's "
+                            "problems are the blocked ones (problems.*) or MoveIt files (`flowplan scenes import`)");
+              }
               const problems::ProblemSet set = problems::MakeFamilyProblems(
                   arm, args->family, static_cast<uint64_t>(config.seed), config.problems.count,
                   config.problems.clearance, threads);

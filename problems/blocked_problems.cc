@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "collision/body_model.h"
+#include "collision/checker.h"
 #include "core/error.h"
 #include "core/random.h"
 
@@ -73,7 +74,14 @@ std::vector<double> RandomQuaternion(Rng& rng) {
 ProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProblemsConfig& config, uint64_t seed) {
   CheckConfig(config);
   if (!arm.is_arm() || arm.workspace_dim() != 3) throw Error("blocked problems: expected an arm in a 3-D workspace");
-  const collision::BodyModel body(arm.description(), "blocked problems: robot");
+  const auto body_model = std::make_shared<const collision::BodyModel>(arm.description(), "blocked problems: robot");
+  const collision::BodyModel& body = *body_model;
+  // The robot on its own, on the floor the problems stand on (z = 0, below): a start or goal must be valid before
+  // any obstacle is placed.
+  collision::Floor floor;
+  floor.present = true;
+  floor.height = 0.0;
+  const collision::Checker alone(body_model, std::make_shared<const collision::World>(geometry::Scene{}, 3, floor), {});
   ProblemSet set;
   set.seed = static_cast<int64_t>(seed);
   set.source = "blocked: " + config::ToYaml(config);  // how they were drawn
@@ -94,6 +102,8 @@ ProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProble
                                              torch::tensor(problem.goal_tcp, torch::kFloat64).view({1, 3})});
       const kinematics::IkSolution ik = arm.InverseTcp(both);
       if (!ik.converged.all().item<bool>()) continue;
+      const torch::Tensor postures = ik.q.to(torch::kFloat64).contiguous();
+      if (!alone.Valid(postures[0].data_ptr<double>()) || !alone.Valid(postures[1].data_ptr<double>())) continue;
 
       const int spheres = config.min_spheres +
                           static_cast<int>(rng.Below(static_cast<uint64_t>(config.max_spheres - config.min_spheres + 1)));
