@@ -58,7 +58,7 @@ void RunPlan(const PlanArgs& args) {
   const int64_t K = inputs.scene.size();
   spdlog::info("planning {} samples with {} around {} obstacle{}{} ({})", args.num_samples, subject.source, K,
                K == 1 ? "" : "s", DescribeObstacles(inputs),
-               args.rrt_connect ? fmt::format("check.margin {}, {} iterations", subject.config.check.margin,
+               !subject.kind->network ? fmt::format("check.margin {}, {} iterations", subject.config.check.margin,
                                               subject.config.rrt_connect.max_iterations)
                                 : fmt::format("guidance scale {}, splitting {}", subject.config.guidance.scale,
                                               config::EnumName(subject.config.sampler.splitting)));
@@ -109,10 +109,14 @@ Command AddPlanCommand(CLI::App& app) {
                                               "write plans, a report and a figure (guidance.*, scene.*, execute.*)");
   plan->add_option("--ckpt", a.ckpt, "checkpoint file, or a run folder (its newest checkpoint)");
   plan->add_option("--planner", a.planner_file, "an exported planner file (instead of --ckpt)")->check(CLI::ExistingFile);
+  std::string kinds;
+  for (const PlannerKind& kind : PlannerKinds()) kinds += (kinds.empty() ? "" : "; ") + kind.name + ": " + kind.description;
+  plan->add_option("--planner-kind", a.kind, "the planner, by name (default: learned): " + kinds);
   plan->add_flag("--rrt-connect", a.rrt_connect,
-                 "plan with RRT-Connect (rrt_connect.*, valid by check.*) for the robot and trajectories of --config's generate.*");
+                 "--planner-kind rrt_connect: RRT-Connect (rrt_connect.*, valid by check.*) for the robot and trajectories of "
+                 "--config's generate.*");
   plan->add_flag("--hybrid", a.hybrid,
-                 "with --ckpt or --planner: the learned planner proposes hybrid.proposals plans, the plan checker "
+                 "--planner-kind hybrid, with --ckpt or --planner: the learned planner proposes hybrid.proposals plans, the plan checker "
                  "(check.*) keeps the valid ones and returns the best by guidance cost, then length; RRT-Connect "
                  "(rrt_connect.*) plans when none is valid");
   plan->add_option("--problems", a.problems,

@@ -8,6 +8,7 @@
 
 #include <torch/torch.h>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -27,9 +28,11 @@ namespace flowplan::experiment {
 struct PlanArgs {
   std::string ckpt;                    // --ckpt: a run folder or checkpoint file
   std::string planner_file;            // --planner: an exported planner file (instead of --ckpt)
-  bool rrt_connect = false;            // --rrt-connect: RRT-Connect for the robot of generate.*
-  bool hybrid = false;                 // --hybrid: the learned planner proposes, RRT-Connect falls back
-  std::string robot;                   // --robot: with --rrt-connect, a robot folder (robotfiles/robot_folder.h)
+  std::string kind;                    // --planner-kind: a name of PlannerKinds(); empty: learned, or a flag's
+  bool rrt_connect = false;            // --rrt-connect: --planner-kind rrt_connect
+  bool hybrid = false;                 // --hybrid: --planner-kind hybrid
+  std::string robot;                   // --robot: for a planner without a network, a robot folder
+                                       // (robotfiles/robot_folder.h)
   std::string overlay_path;            // --config: YAML applied over the planner's config
   std::vector<std::string> overrides;  // key=value, e.g. guidance.scale=2
   std::string start, goal;             // --start/--goal: J positions (at rest) or D state values
@@ -53,8 +56,29 @@ struct PlanArgs {
   double max_speed_ratio = 1.5;        // --max-speed-ratio: a feasible plan's joint speeds stay within this × the limits
 };
 
+struct PlanSubject;
+
+/// A planner `flowplan plan` runs, chosen by name (--planner-kind): one entry
+/// of PlannerKinds() per planner, what it is made of and what its report
+/// carries. A new planner is its own files plus one entry.
+struct PlannerKind {
+  std::string name;         // e.g. "learned", "rrt_connect", "hybrid"
+  std::string description;  // for --help
+  bool network = false;     // made from a trained network (--ckpt or --planner); else from --config and its robot
+  std::vector<std::string> report_sections;  // config sections its report carries (besides check)
+  // Makes subject.planner from the loaded subject (a network kind's holds the learned planner already).
+  std::function<void(PlanSubject& subject)> make;
+};
+
+/// plan_subject.cc: every planner `flowplan plan` knows, in --help's order.
+const std::vector<PlannerKind>& PlannerKinds();
+
+/// The entry called `name`. @throws flowplan::Error listing the names for another.
+const PlannerKind& FindPlannerKind(const std::string& name);
+
 /// The planner a plan command runs, with what scoring and execution need.
 struct PlanSubject {
+  const PlannerKind* kind = nullptr;
   std::unique_ptr<planning::Planner> planner;
   ExperimentConfig config;                // resolved: the planner's, then --config, then overrides
   kinematics::TrajectoryInfo trajectory;  // what it plans

@@ -47,14 +47,18 @@ std::string DescribeObstacles(const PlanInputs& inputs) {
   return out.empty() ? out : out + " from " + inputs.scene_source;
 }
 
-std::string SettingsJson(const PlanArgs& args, const PlanSubject& subject) {
-  const std::string rrt = "\"rrt_connect\": " + config::ToJson(subject.config.rrt_connect);
-  const std::string learned = "\"guidance\": " + config::ToJson(subject.config.guidance) +
-                              ", \"splitting\": " + JsonString(config::EnumName(subject.config.sampler.splitting));
-  const std::string check = "\"check\": " + config::ToJson(subject.config.check);
-  if (args.rrt_connect) return rrt + ", " + check;
-  if (args.hybrid) return learned + ", " + rrt + ", \"hybrid\": " + config::ToJson(subject.config.hybrid) + ", " + check;
-  return learned + ", " + check;
+std::string SettingsJson(const PlanArgs&, const PlanSubject& subject) {
+  std::string out;
+  for (const std::string& section : subject.kind->report_sections) {
+    std::string value;
+    if (section == "guidance") value = config::ToJson(subject.config.guidance);
+    if (section == "splitting") value = JsonString(config::EnumName(subject.config.sampler.splitting));
+    if (section == "rrt_connect") value = config::ToJson(subject.config.rrt_connect);
+    if (section == "hybrid") value = config::ToJson(subject.config.hybrid);
+    FLOWPLAN_DEMAND(!value.empty());
+    out += "\"" + section + "\": " + value + ", ";
+  }
+  return out + "\"check\": " + config::ToJson(subject.config.check);
 }
 
 namespace {

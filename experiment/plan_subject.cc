@@ -74,18 +74,19 @@ PlanSubject FromCheckpoint(const PlanArgs& args) {
   return subject;
 }
 
-/// RRT-Connect needs a robot and the trajectories to time its paths to: those
-/// the config's data generator makes (generate.*), no data file.
-PlanSubject FromRrtConnect(const PlanArgs& args) {
+/// A planner without a network (RRT-Connect) needs a robot and the trajectories
+/// to time its paths to: those the config's data generator makes (generate.*,
+/// and robot: or --robot), no data file.
+PlanSubject FromConfig(const PlanArgs& args, const std::string& kind) {
   if (args.overlay_path.empty()) {
     // Without one the config's defaults would plan for the 2-D particle, which is never what was meant.
-    throw Error("plan --rrt-connect: expected --config FILE, whose generate.* names the robot and the trajectories "
+    throw Error("plan --planner-kind " + kind + ": expected --config FILE, whose generate.* names the robot and the trajectories "
                 "to time the paths to (e.g. --config configs/franka_joint.yaml)");
   }
   PlanSubject subject;
   subject.config = LoadExperiment(args.overlay_path, args.overrides);
   const std::string folder = !args.robot.empty() ? args.robot : subject.config.robot;
-  subject.source = "rrt_connect";
+  subject.source = kind;
   if (subject.config.generate.dataset == datasets::DatasetKind::kRobotJoint) {
     // The trajectories of the folder's robot_joint data, without building its simulator.
     if (folder.empty()) throw Error("generate.dataset: robot_joint plans for a robot folder: set robot: DIR or --robot DIR");
@@ -118,27 +119,66 @@ void MakeHybrid(PlanSubject& subject) {
   subject.source = "hybrid(" + subject.source + ", rrt_connect)";
 }
 
-}  // namespace
-
-PlanSubject LoadPlanSubject(const PlanArgs& args) {
-  const int given = !args.ckpt.empty() + !args.planner_file.empty() + args.rrt_connect;
-  if (given != 1) throw Error("plan: expected one of --ckpt RUN_DIR, --planner FILE or --rrt-connect");
-  if (!args.robot.empty() && !args.rrt_connect) {
-    throw Error("--robot: only with --rrt-connect; a learned planner plans for the robot it was trained for");
-  }
-  if (args.hybrid && args.rrt_connect) {
+/// The kind the command line names: --planner-kind, or the flag that stands for one, or the learned planner.
+const PlannerKind& ChosenKind(const PlanArgs& args) {
+  const std::string flag = args.rrt_connect ? "rrt_connect" : args.hybrid ? "hybrid" : "";
+  if (args.rrt_connect && args.hybrid) {
     throw Error("--hybrid: a learned planner (--ckpt or --planner) proposes; RRT-Connect is the fallback");
   }
+  if (!args.kind.empty() && !flag.empty() && flag != args.kind) {
+    throw Error("--planner-kind " + args.kind + ": contradicts --" + (args.rrt_connect ? "rrt-connect" : "hybrid"));
+  }
+  return FindPlannerKind(!args.kind.empty() ? args.kind : !flag.empty() ? flag : "learned");
+}
+
+}  // namespace
+
+const std::vector<PlannerKind>& PlannerKinds() {
+  static const std::vector<PlannerKind> kinds = {
+      {"learned", "the trained planner of --ckpt or --planner, guided around the scene (guidance.*)", true,
+       {"guidance", "splitting"}, [](PlanSubject&) {}},
+      {"rrt_connect", "RRT-Connect (rrt_connect.*, valid by check.*) for the robot and trajectories of --config", false,
+       {"rrt_connect"},
+       [](PlanSubject& subject) {
+         subject.planner = std::make_unique<classical::RrtConnectPlanner>(subject.trajectory, subject.config.rrt_connect,
+                                                                          subject.config.check);
+       }},
+      {"hybrid",
+       "the trained planner proposes hybrid.proposals plans, the plan checker (check.*) keeps the valid ones, "
+       "RRT-Connect (rrt_connect.*) plans when none is valid",
+       true, {"guidance", "splitting", "rrt_connect", "hybrid"}, MakeHybrid},
+  };
+  return kinds;
+}
+
+const PlannerKind& FindPlannerKind(const std::string& name) {
+  std::string names;
+  for (const PlannerKind& kind : PlannerKinds()) {
+    if (kind.name == name) return kind;
+    names += (names.empty() ? "" : ", ") + kind.name;
+  }
+  throw Error("--planner-kind: expected one of " + names + ", got \"" + name + "\"");
+}
+
+PlanSubject LoadPlanSubject(const PlanArgs& args) {
+  const PlannerKind& kind = ChosenKind(args);
+  const int files = !args.ckpt.empty() + !args.planner_file.empty();
+  if (kind.network && files != 1) {
+    throw Error("plan: expected one of --ckpt RUN_DIR or --planner FILE (or --rrt-connect, which needs neither)");
+  }
+  if (!kind.network && files != 0) {
+    throw Error("plan: --planner-kind " + kind.name + " plans without a trained network; leave out --ckpt and --planner");
+  }
+  if (!args.robot.empty() && kind.network) {
+    throw Error("--robot: only with --rrt-connect; a learned planner plans for the robot it was trained for");
+  }
   PlanSubject subject = !args.planner_file.empty() ? FromFile(args)
-                        : args.rrt_connect         ? FromRrtConnect(args)
-                                                   : FromCheckpoint(args);
+                        : !args.ckpt.empty()       ? FromCheckpoint(args)
+                                                   : FromConfig(args, kind.name);
+  subject.kind = &kind;
   subject.trajectory.robot = ResolveRobot(subject.trajectory.robot);
   subject.robot = kinematics::MakeRobot(subject.trajectory.robot, subject.source + ": robot");
-  if (args.rrt_connect) {
-    subject.planner = std::make_unique<classical::RrtConnectPlanner>(subject.trajectory, subject.config.rrt_connect,
-                                                                     subject.config.check);
-  }
-  if (args.hybrid) MakeHybrid(subject);
+  kind.make(subject);
   return subject;
 }
 

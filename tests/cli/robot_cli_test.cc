@@ -109,7 +109,7 @@ goal_constraints:
   std::ifstream base(config);
   testing::WriteText(dir / "with_robot.yaml", "robot: " + robot + "\n" +
                                                   std::string((std::istreambuf_iterator<char>(base)), std::istreambuf_iterator<char>()));
-  const testing::Outcome from_config = Flowplan("plan --rrt-connect --config " + (dir / "with_robot.yaml").string() +
+  const testing::Outcome from_config = Flowplan("plan --planner-kind rrt_connect --config " + (dir / "with_robot.yaml").string() +
                                                 " --start 0,-1.5,0.5,0 --goal 0.25,1.5,0.5,1 -n 2 --no-plot --force --out " + prefix);
   EXPECT_EQ(from_config.exit_code, 0) << from_config.output;
   EXPECT_THAT(from_config.output, HasSubstr("success 2/2"));
@@ -187,7 +187,7 @@ train: {steps: 3, batch_size: 4, eval_every: 0, checkpoint_every: 3}
   const testing::Outcome exported = Flowplan("export --ckpt " + (dir / "run").string() + " --out " + planner + " --log-level warn");
   ASSERT_EQ(exported.exit_code, 0) << exported.output;
   const std::string problem = " --box 0.45,0.3,0.5,0.2,0.2,0.3 --start 0.1,-1.5,0.5,0 --goal 0.25,1.5,0.5,1 --no-plot";
-  const testing::Outcome hybrid = Flowplan("plan --ckpt " + (dir / "run").string() + " --hybrid" + problem +
+  const testing::Outcome hybrid = Flowplan("plan --ckpt " + (dir / "run").string() + " --planner-kind hybrid" + problem +
                                            " -n 2 --out " + (dir / "hybrid").string());
   ASSERT_EQ(hybrid.exit_code, 0) << hybrid.output;
   EXPECT_THAT(hybrid.output, HasSubstr("success 2/2"));
@@ -203,6 +203,22 @@ train: {steps: 3, batch_size: 4, eval_every: 0, checkpoint_every: 3}
   std::ifstream report(dir / "learned.json");
   const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
   EXPECT_THAT(text, HasSubstr("\"env\": \"robot_joint\""));
+  std::ifstream hybrid_report(dir / "hybrid.json");
+  const std::string hybrid_text((std::istreambuf_iterator<char>(hybrid_report)), std::istreambuf_iterator<char>());
+  EXPECT_THAT(hybrid_text, HasSubstr("\"rrt_connect\": {"));
+  EXPECT_THAT(hybrid_text, HasSubstr("\"hybrid\": {"));
+  // Planners by name: an unknown one is one line listing those there are; a contradicting flag is named.
+  const testing::Outcome unknown = Flowplan("plan --ckpt " + (dir / "run").string() + " --planner-kind prm" + problem);
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_THAT(unknown.output, HasSubstr("--planner-kind: expected one of learned, rrt_connect, hybrid, got \"prm\""));
+  const testing::Outcome contradicting =
+      Flowplan("plan --ckpt " + (dir / "run").string() + " --planner-kind learned --hybrid" + problem);
+  EXPECT_EQ(contradicting.exit_code, 1);
+  EXPECT_THAT(contradicting.output, HasSubstr("--planner-kind learned: contradicts --hybrid"));
+  const testing::Outcome network_free =
+      Flowplan("plan --ckpt " + (dir / "run").string() + " --planner-kind rrt_connect" + problem);
+  EXPECT_EQ(network_free.exit_code, 1);
+  EXPECT_THAT(network_free.output, HasSubstr("plans without a trained network; leave out --ckpt and --planner"));
   // A robot folder without masses cannot be simulated: one line naming the file and what is missing.
   std::ifstream yaml(robot + "/robot.yaml");
   std::string kept, line;
