@@ -85,7 +85,7 @@ class RobotJointWorker : public EpisodeWorker {
     EpisodeRecord record = Record(start, goal);
     record.rejected = true;
     record.reject_reason = "no collision-free episode in " + std::to_string(config_.max_draws) + " attempts and " +
-                           std::to_string(100 * static_cast<int64_t>(config_.max_draws)) +
+                           std::to_string(100 * static_cast<int64_t>(config_.max_draws) - budget) +
                            " configurations drawn (last: " + reason + ")";
     return record;
   }

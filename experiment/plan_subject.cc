@@ -80,7 +80,7 @@ PlanSubject FromCheckpoint(const PlanArgs& args) {
 PlanSubject FromConfig(const PlanArgs& args, const std::string& kind) {
   if (args.overlay_path.empty()) {
     // Without one the config's defaults would plan for the 2-D particle, which is never what was meant.
-    throw Error("plan --planner-kind " + kind + ": expected --config FILE, whose generate.* names the robot and the trajectories "
+    throw Error("plan --planner-kind " + kind + " (--rrt-connect): expected --config FILE, whose generate.* names the robot and the trajectories "
                 "to time the paths to (e.g. --config configs/franka_joint.yaml)");
   }
   PlanSubject subject;
@@ -170,7 +170,14 @@ PlanSubject LoadPlanSubject(const PlanArgs& args) {
     throw Error("plan: --planner-kind " + kind.name + " plans without a trained network; leave out --ckpt and --planner");
   }
   if (!args.robot.empty() && kind.network) {
-    throw Error("--robot: only with --rrt-connect; a learned planner plans for the robot it was trained for");
+    throw Error("--robot: only with --rrt-connect (a planner without a network); a learned planner plans for the "
+                "robot it was trained for");
+  }
+  for (const std::string& override : args.overrides) {
+    if (kind.network && override.rfind("robot=", 0) == 0) {
+      throw Error(override + ": a learned planner plans for the robot it was trained for (robot: names the robot of "
+                  "generate and --rrt-connect)");
+    }
   }
   PlanSubject subject = !args.planner_file.empty() ? FromFile(args)
                         : !args.ckpt.empty()       ? FromCheckpoint(args)

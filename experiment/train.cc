@@ -37,6 +37,7 @@ struct TrainArgs {
 trainer::Evaluator StitchingEvaluator(const ExperimentConfig& config, const datasets::TrajectorySplits& data,
                                       int threads) {
   return [&config, &data, threads](const models::NetworkPtr& net, const models::MinMaxNormalizer& normalizer) {
+    if (data.test_pairs.names.empty() && data.train_pairs.names.empty()) return trainer::Scores{};
     planning::PlannerParts parts;
     parts.net = net;
     parts.normalizer = normalizer;
@@ -47,7 +48,6 @@ trainer::Evaluator StitchingEvaluator(const ExperimentConfig& config, const data
     parts.trajectory = data.info;
     const auto planner = planning::AssemblePlanner(parts);
     trainer::Scores scores;
-    if (data.test_pairs.names.empty() && data.train_pairs.names.empty()) return scores;
     for (const auto& [pairs, label] : {std::pair{&data.test_pairs, "test"}, std::pair{&data.train_pairs, "train"}}) {
       double mean = NAN, stddev = NAN;
       if (!pairs->names.empty()) {

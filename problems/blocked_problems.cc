@@ -2,6 +2,8 @@
 
 #include "geometry/scene_rows.h"
 
+#include <spdlog/spdlog.h>
+
 #include <cmath>
 
 #include "collision/body_model.h"
@@ -102,8 +104,6 @@ ProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProble
                                              torch::tensor(problem.goal_tcp, torch::kFloat64).view({1, 3})});
       const kinematics::IkSolution ik = arm.InverseTcp(both);
       if (!ik.converged.all().item<bool>()) continue;
-      const torch::Tensor postures = ik.q.to(torch::kFloat64).contiguous();
-      if (!alone.Valid(postures[0].data_ptr<double>()) || !alone.Valid(postures[1].data_ptr<double>())) continue;
 
       const int spheres = config.min_spheres +
                           static_cast<int>(rng.Below(static_cast<uint64_t>(config.max_spheres - config.min_spheres + 1)));
@@ -142,6 +142,14 @@ ProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProble
             break;
           }
         }
+      }
+      // Checked last, after every draw of the attempt, so that a robot whose postures are all valid on their own
+      // (the Franka in its reach box) draws the problems it drew before this check existed.
+      const torch::Tensor postures = ik.q.to(torch::kFloat64).contiguous();
+      if (!alone.Valid(postures[0].data_ptr<double>()) || !alone.Valid(postures[1].data_ptr<double>())) {
+        spdlog::debug("blocked problem {}: attempt {} drawn again, its start or goal not valid for the robot alone", i,
+                      attempt);
+        continue;
       }
       for (int j = 0; j < ik.q.size(1); ++j) {
         problem.start_q.push_back(ik.q[0][j].item<double>());

@@ -60,7 +60,9 @@ std::string ArmXml(const kinematics::RobotDescription& d, const ArmXmlOptions& o
     std::array<double, 3> pos = link.pos;
     std::array<double, 4> quat = link.quat;
     if (link.joint < 0) kinematics::FixedPose(link, pos, quat);  // a held joint is welded at its value
-    xml << indent << "<body name=\"" << Escaped(link.name) << "\" pos=\"" << Numbers(pos) << "\" quat=\""
+    // MuJoCo's world body is "world"; a URDF's root link often has that name too.
+    const std::string body_name = link.name == "world" ? "world (link)" : link.name;
+    xml << indent << "<body name=\"" << Escaped(body_name) << "\" pos=\"" << Numbers(pos) << "\" quat=\""
         << Numbers(quat) << "\">\n";
     const auto elements = options.body_elements.find(link.name);
     if (elements != options.body_elements.end()) xml << elements->second;

@@ -25,7 +25,8 @@ struct ArmXmlOptions {
   double damping = 0.0;                                  // viscous friction of every planned joint
 };
 
-/// The MJCF of `d`: a body per link named after it (pos and quat in its parent;
+/// The MJCF of `d`: a body per link named after it ("world (link)" for a link
+/// called world, MuJoCo's name for its world body; pos and quat in its parent;
 /// a held joint welded at its value), planned joint j as the hinge or slide
 /// "q<j>" at the body's origin with its limits, the site "tcp", and motor j
 /// driving joint j. The joints' order in MuJoCo is the tree's, not j's: find

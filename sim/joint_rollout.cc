@@ -97,7 +97,7 @@ void JointSimulator::Rollout(const JointMotion& motion, const StateCheck& check,
         for (int j = 0; j < J; ++j) torque[j] += sigma_[j] * rng.Normal();
       }
       torque = torque.cwiseMax(-drives_.effort_limit).cwiseMin(drives_.effort_limit);
-      for (int j = 0; j < J; ++j) d.ctrl[drives_.dof[j]] = torque[j];
+      for (int j = 0; j < J; ++j) d.ctrl[j] = torque[j];  // motor j drives joint j
 
       if (s == 0 && k % config_.record_every == 0) {
         const size_t t = static_cast<size_t>(k / config_.record_every);

@@ -56,7 +56,8 @@ struct JointRolloutConfig {
 /// Where the planned joints are in the model and what limits them.
 struct JointDrives {
   std::vector<int> qpos;           // (J,) index into qpos of joint j
-  std::vector<int> dof;            // (J,) index into qvel, qfrc_*, ctrl and the mass matrix (nv = nu = J)
+  std::vector<int> dof;            // (J,) index into qvel, qfrc_* and the mass matrix (nv = J); motor j
+                                   // (ctrl[j]) drives joint j
   Eigen::VectorXd velocity_limit;  // (J,) rad/s or m/s
   Eigen::VectorXd effort_limit;    // (J,) N·m or N
   int tcp_site = -1;               // site recorded as the TCP

@@ -182,7 +182,7 @@ TEST_F(ParticlePlanTest, BadInputsEndInOneClearLine) {
   ExpectCleanFailure(Flowplan(run + "--start 0,nan --goal 1,0"), "--start value 2 \"nan\": not a finite number");
   ExpectCleanFailure(Flowplan(run + "--start 1.5,0 --goal 1,0"), "--start: x = 1.5 is outside [0, 1]");
   ExpectCleanFailure(Flowplan(run + "--goal 1,0"), "either as --start");
-  ExpectCleanFailure(Flowplan("plan --rrt-connect --start 0,0 --goal 1,0"), "plan --planner-kind rrt_connect: expected --config FILE");
+  ExpectCleanFailure(Flowplan("plan --rrt-connect --start 0,0 --goal 1,0"), "plan --planner-kind rrt_connect (--rrt-connect): expected --config FILE");
   std::ofstream(Path("three_d.yaml")) << "spheres:\n  - {centre: [0.5, 0.3, 0.2], radius: 0.1}\n";
   ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --scene " + Path("three_d.yaml")),
                      "three_d.yaml: spheres[0].centre: expected 2 values (the robot's workspace is 2-D), got 3");

@@ -249,6 +249,23 @@ TEST_F(RobotImportTest, RrtConnectPlansForTheImportedArmPassThePlanChecker) {
   EXPECT_THAT(refused.failure[0], HasSubstr("start"));
 }
 
+TEST(RotateInertiaTest, TurnsPrincipalMomentsIntoTheLinkFrameInClosedForm) {
+  // Principal moments (1, 2, 3) along axes turned by theta about z: the link-frame tensor is R diag R^T, whose x-y
+  // block is [[c^2 + 2 s^2, -c s], [-c s, s^2 + 2 c^2]] (a 90 deg turn swaps the x and y moments).
+  const double theta = M_PI / 4, c = std::cos(theta), s = std::sin(theta);
+  const std::array<double, 6> turned = RotateInertia({1, 2, 3, 0, 0, 0}, {std::cos(theta / 2), 0, 0, std::sin(theta / 2)});
+  const std::array<double, 6> expected = {c * c + 2 * s * s, s * s + 2 * c * c, 3, -c * s, 0, 0};
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(turned[k], expected[k], 1e-12) << k;
+  const std::array<double, 6> quarter = RotateInertia({1, 2, 3, 0, 0, 0}, {std::cos(M_PI / 4), 0, 0, std::sin(M_PI / 4)});
+  EXPECT_NEAR(quarter[0], 2, 1e-12);
+  EXPECT_NEAR(quarter[1], 1, 1e-12);
+  // An off-diagonal tensor turned there and back is itself.
+  const std::array<double, 6> full = {0.3, 0.2, 0.25, 0.01, -0.02, 0.015};
+  const std::array<double, 4> q = {0.9, 0.1, -0.3, 0.2}, inverse = {0.9, -0.1, 0.3, -0.2};
+  const std::array<double, 6> back = RotateInertia(RotateInertia(full, q), inverse);
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(back[k], full[k], 1e-12) << k;
+}
+
 TEST_F(RobotImportTest, TheSimulationModelMovesAsTheKinematicsAndWeighsWhatTheUrdfSays) {
   DriveSettings drives;
   drives.armature = 0.1;
@@ -299,7 +316,9 @@ TEST_F(RobotImportTest, RobotJointEpisodesTrackTheirReferenceInsideTheLimitsAndC
   int kept = 0;
   for (uint64_t seed = 0; seed < 6; ++seed) {
     const datasets::EpisodeRecord record = worker->Run(0, seed);
-    EXPECT_EQ(twin->Run(0, seed).states, record.states) << "same seed, same episode";
+    const datasets::EpisodeRecord again = twin->Run(0, seed);
+    EXPECT_EQ(again.states, record.states) << "same seed, same episode";
+    EXPECT_EQ(again.extras, record.extras);
     if (record.rejected) continue;
     ++kept;
     ASSERT_EQ(record.states.size(), 32u * 8);
@@ -320,6 +339,30 @@ TEST_F(RobotImportTest, RobotJointEpisodesTrackTheirReferenceInsideTheLimitsAndC
     }
   }
   EXPECT_GE(kept, 4);
+  // Planned joints numbered against the tree's order (--joints reversed): joint j is not MuJoCo's joint j, and each
+  // motor must still drive its own joint, or the episodes miss their goals.
+  ImportOptions reversed;
+  reversed.package_dir = (*root_ / "packages").string();
+  reversed.tip = "tool";
+  reversed.joints = {"wrist", "elbow", "shoulder", "lift"};
+  reversed.pair_samples = 500;
+  ImportRobot((*root_ / "urdf" / "lift_arm.urdf").string(), reversed, (*root_ / "reversed").string());
+  const RobotFile reversed_file = LoadRobotFile((*root_ / "reversed").string());
+  const SimulationModel simulation = LoadSimulationModel(reversed_file, DriveSettings{}, "reversed");
+  EXPECT_EQ(simulation.dof, (std::vector<int>{3, 2, 1, 0}));
+  const datasets::RobotJointTask reversed_task((*root_ / "reversed").string(), config);
+  const auto reversed_worker = reversed_task.MakeWorker();
+  int reached = 0;
+  for (uint64_t seed = 0; seed < 6; ++seed) {
+    const datasets::EpisodeRecord record = reversed_worker->Run(0, seed);
+    if (record.rejected) continue;
+    bool near = true;
+    for (int j = 0; j < 4; ++j) {
+      near = near && std::abs(record.states[31 * 8 + static_cast<size_t>(j)] - record.commanded_goal[static_cast<size_t>(j)]) < 0.02;
+    }
+    reached += near;
+  }
+  EXPECT_GE(reached, 4);
   // Without masses there is nothing to simulate: one line naming the link.
   RobotFile massless = *file_;
   massless.inertia.clear();
