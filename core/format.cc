@@ -37,6 +37,12 @@ std::string JsonNumber(double value) {
   return buffer;
 }
 
+std::string ShortNumber(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.4g", value);
+  return buffer;
+}
+
 std::string JsonString(const std::string& text) {
   std::string out = "\"";
   for (const char c : text) {

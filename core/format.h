@@ -23,6 +23,9 @@ std::string LastLine(const std::string& text);
 /// A JSON number with up to 7 significant digits; "null" for NaN and infinities.
 std::string JsonNumber(double value);
 
+/// A number for a message, to 4 significant digits ("%.4g").
+std::string ShortNumber(double value);
+
 /// A JSON string literal, quoted and escaped.
 std::string JsonString(const std::string& text);
 

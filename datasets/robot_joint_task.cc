@@ -1,19 +1,14 @@
 #include "datasets/robot_joint_task.h"
 
-#include <cstdio>
 
 #include "collision/checker.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/random.h"
 
 namespace flowplan::datasets {
 namespace {
 
-std::string Number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.4g", v);
-  return buffer;
-}
 
 class RobotJointWorker : public EpisodeWorker {
  public:
@@ -173,13 +168,13 @@ RobotJointTask::RobotJointTask(const std::string& folder, const RobotJointTaskCo
     const double margin = slide ? config.slide_margin : config.joint_margin;
     if (2.0 * margin >= range) {
       throw Error(where + (slide ? ".slide_margin" : ".joint_margin") + ": expected less than half of joint \"" +
-                  robot_.JointName(j) + "\"'s range " + Number(range) + ", got " + Number(margin));
+                  robot_.JointName(j) + "\"'s range " + ShortNumber(range) + ", got " + ShortNumber(margin));
     }
   }
   const double horizon_time = (config.rollout.horizon - 1) * config.rollout.record_dt();
   if (config.joint_motion.min_duration + config.joint_motion.min_hold > horizon_time) {
-    throw Error(where + ".joint_motion.min_duration: expected at most the episode's " + Number(horizon_time) +
-                " s less joint_motion.min_hold, got " + Number(config.joint_motion.min_duration));
+    throw Error(where + ".joint_motion.min_duration: expected at most the episode's " + ShortNumber(horizon_time) +
+                " s less joint_motion.min_hold, got " + ShortNumber(config.joint_motion.min_duration));
   }
   auto model = std::make_shared<robotfiles::SimulationModel>(robotfiles::LoadSimulationModel(file_, config.drives, source));
   model->model->opt.timestep = config.rollout.physics_timestep();

@@ -15,6 +15,7 @@ namespace flowplan::problems {
 namespace {
 
 constexpr int kAttempts = 10000;
+constexpr double kFloorHeight = 0.0;  // m: the problems' arm stands on a floor at z = 0
 
 using Point = std::vector<double>;
 
@@ -78,11 +79,10 @@ ProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProble
   if (!arm.is_arm() || arm.workspace_dim() != 3) throw Error("blocked problems: expected an arm in a 3-D workspace");
   const auto body_model = std::make_shared<const collision::BodyModel>(arm.description(), "blocked problems: robot");
   const collision::BodyModel& body = *body_model;
-  // The robot on its own, on the floor the problems stand on (z = 0, below): a start or goal must be valid before
-  // any obstacle is placed.
+  // The robot on its own, on the problems' floor: a start or goal must be valid before any obstacle is placed.
   collision::Floor floor;
   floor.present = true;
-  floor.height = 0.0;
+  floor.height = kFloorHeight;
   const collision::Checker alone(body_model, std::make_shared<const collision::World>(geometry::Scene{}, 3, floor), {});
   ProblemSet set;
   set.seed = static_cast<int64_t>(seed);
@@ -156,7 +156,7 @@ ProblemSet MakeBlockedProblems(const kinematics::Robot& arm, const BlockedProble
         problem.goal_q.push_back(ik.q[1][j].item<double>());
       }
       const Point start_tcp = problem.start_tcp, goal_tcp = problem.goal_tcp;  // the drawn points
-      problem.floor_height = 0.0;  // the arm stands on the floor
+      problem.floor_height = kFloorHeight;
       DescribeEnds(body, problem);  // the clearances (and the TCPs of the IK, within its tolerance)
       problem.start_tcp = start_tcp;
       problem.goal_tcp = goal_tcp;

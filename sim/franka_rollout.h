@@ -16,6 +16,7 @@
 #include "sim/franka_controller.h"
 #include "sim/franka_joint_motion.h"
 #include "sim/franka_model.h"
+#include "sim/joint_rollout.h"
 
 namespace flowplan::sim {
 
@@ -60,34 +61,15 @@ struct AugmentationConfig {
   }
 };
 
-/// Physics, control and recording of a rollout. The recorded rate is
-/// control_hz / record_every; an episode records `horizon` states, the first at
-/// t = 0, so it simulates (horizon - 1) · record_every control steps.
-struct FrankaRolloutConfig {
-  int control_hz = 30;        // controller updates per second
-  int physics_substeps = 2;   // physics steps per control step: timestep 1 / (control_hz · substeps)
-  int record_every = 2;       // control steps between recorded states
-  int horizon = 64;           // recorded states per episode, T
-  Integrator integrator = Integrator::kEuler;
-  // Reject an episode once |q̇_j| > factor · limit_j at a physics step: at 1, kept
-  // data respects the arm's velocity limits (a real Panda stops when it breaks one).
-  double reject_velocity_factor = 1.0;
+/// The Franka's rollout: the timing and rejection rule of every rollout
+/// (RolloutTiming, sim/joint_rollout.h), its controller and its augmentation.
+struct FrankaRolloutConfig : RolloutTiming {
   OscConfig controller;
   AugmentationConfig augmentation;
 
-  double physics_timestep() const { return 1.0 / (control_hz * physics_substeps); }
-  double record_dt() const { return static_cast<double>(record_every) / control_hz; }
-
   template <class V>
   void Visit(V& v) {
-    v.Field("control_hz", control_hz, "controller rate (Hz)", config::Positive());
-    v.Field("physics_substeps", physics_substeps, "physics steps per control step", config::Positive());
-    v.Field("record_every", record_every, "control steps between recorded states", config::Positive());
-    v.Field("horizon", horizon, "recorded states per episode", config::AtLeast(2));
-    v.Field("integrator", integrator, "physics integrator");
-    v.Field("reject_velocity_factor", reject_velocity_factor,
-            "reject an episode once a joint speed exceeds this many times its limit (1: kept data obeys the "
-            "limits)", config::Positive());
+    RolloutTiming::Visit(v);
     v.Field("controller", controller, "operational-space controller");
     v.Field("augmentation", augmentation, "how episodes are randomized");
   }

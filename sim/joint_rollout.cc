@@ -1,20 +1,11 @@
 #include "sim/joint_rollout.h"
 
 #include <cmath>
-#include <cstdio>
 
 #include "core/error.h"
+#include "core/format.h"
 
 namespace flowplan::sim {
-namespace {
-
-std::string Number(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.4g", value);
-  return buffer;
-}
-
-}  // namespace
 
 JointSimulator::JointSimulator(const mjModel& model, JointDrives drives, const JointRolloutConfig& config,
                                const JointMotionConfig& motion)
@@ -40,7 +31,7 @@ JointSimulator::JointSimulator(const mjModel& model, JointDrives drives, const J
 
 void JointSimulator::Reject(JointEpisode* episode, const std::string& reason) const {
   episode->rejected = true;
-  episode->reject_reason = reason + " at t = " + Number(data_->time) + " s";
+  episode->reject_reason = reason + " at t = " + ShortNumber(data_->time) + " s";
 }
 
 void JointSimulator::Clear(JointEpisode* episode) const {
@@ -121,9 +112,9 @@ void JointSimulator::Rollout(const JointMotion& motion, const StateCheck& check,
           if (!std::isfinite(qj) || !std::isfinite(vj)) {
             Reject(episode, "joint " + std::to_string(j + 1) + " state is not finite");
           } else if (std::abs(vj) > config_.reject_velocity_factor * drives_.velocity_limit[j]) {
-            Reject(episode, "joint " + std::to_string(j + 1) + " speed " + Number(std::abs(vj)) + " exceeds " +
-                                Number(config_.reject_velocity_factor) + " x its limit " +
-                                Number(drives_.velocity_limit[j]));
+            Reject(episode, "joint " + std::to_string(j + 1) + " speed " + ShortNumber(std::abs(vj)) + " exceeds " +
+                                ShortNumber(config_.reject_velocity_factor) + " x its limit " +
+                                ShortNumber(drives_.velocity_limit[j]));
           }
         }
       }

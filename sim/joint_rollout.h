@@ -21,20 +21,19 @@
 
 namespace flowplan::sim {
 
-/// Physics, control, noise and recording of a joint-space rollout. The recorded
-/// rate is control_hz / record_every; an episode records `horizon` states, the
-/// first at t = 0, so it simulates (horizon - 1) · record_every control steps.
-struct JointRolloutConfig {
+/// Physics, control and recording of every rollout (the Franka's and any
+/// arm's). The recorded rate is control_hz / record_every; an episode records
+/// `horizon` states, the first at t = 0, so it simulates (horizon - 1) ·
+/// record_every control steps.
+struct RolloutTiming {
   int control_hz = 30;       // controller updates per second
   int physics_substeps = 2;  // physics steps per control step: timestep 1 / (control_hz · substeps)
   int record_every = 2;      // control steps between recorded states
   int horizon = 64;          // recorded states per episode, T
   Integrator integrator = Integrator::kEuler;
-  // Reject an episode once |q̇_j| > factor · limit_j at a physics step (1: kept data obeys the limits).
+  // Reject an episode once |q̇_j| > factor · limit_j at a physics step: at 1, kept
+  // data respects the arm's velocity limits (a real arm stops when it breaks one).
   double reject_velocity_factor = 1.0;
-  // σ_j = share × effort_limit_j: the std of the torque noise added to joint j at every physics step (0: none).
-  // The Franka's data sets add 1 N·m to joints with an 87 N·m limit and 0.1 to those with 12 (shares 0.011, 0.008).
-  double torque_noise_share = 0.01;
 
   double physics_timestep() const { return 1.0 / (control_hz * physics_substeps); }
   double record_dt() const { return static_cast<double>(record_every) / control_hz; }
@@ -47,7 +46,20 @@ struct JointRolloutConfig {
     v.Field("horizon", horizon, "recorded states per episode", config::AtLeast(2));
     v.Field("integrator", integrator, "physics integrator");
     v.Field("reject_velocity_factor", reject_velocity_factor,
-            "reject an episode once a joint speed exceeds this many times its limit", config::Positive());
+            "reject an episode once a joint speed exceeds this many times its limit (1: kept data obeys the "
+            "limits)", config::Positive());
+  }
+};
+
+/// A joint-space rollout: the timing of every rollout and its torque noise.
+struct JointRolloutConfig : RolloutTiming {
+  // σ_j = share × effort_limit_j: the std of the torque noise added to joint j at every physics step (0: none).
+  // The Franka's data sets add 1 N·m to joints with an 87 N·m limit and 0.1 to those with 12 (shares 0.011, 0.008).
+  double torque_noise_share = 0.01;
+
+  template <class V>
+  void Visit(V& v) {
+    RolloutTiming::Visit(v);
     v.Field("torque_noise_share", torque_noise_share,
             "std of the per-joint torque noise as a share of the joint's effort limit (0: none)", config::NonNegative());
   }
