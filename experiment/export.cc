@@ -3,12 +3,14 @@
 
 #include <spdlog/spdlog.h>
 
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "experiment/commands.h"
 #include "experiment/trained_planner.h"
+#include "core/error.h"
 #include "geometry/scene.h"
 #include "trainer/run_dir.h"
 
@@ -16,12 +18,18 @@ namespace flowplan::experiment {
 
 Command AddExportCommand(CLI::App& app) {
   struct Args {
-    std::string ckpt, out, scene, kernels = "portable";
+    std::string ckpt, planner, out, scene, kernels = "portable";
     ConfigArgs overlay;
   };
   auto args = std::make_shared<Args>();
   CLI::App* command = app.add_subcommand("export", "write the self-contained TorchScript planner");
-  command->add_option("--ckpt", args->ckpt, "checkpoint file, or a run folder")->required();
+  CLI::Option* ckpt = command->add_option("--ckpt", args->ckpt, "checkpoint file, or a run folder");
+  command
+      ->add_option("--planner", args->planner,
+                   "an exported planner file instead of a checkpoint: written again with --kernels, --scene and "
+                   "the per-call settings of the overrides (what is compiled into it cannot change)")
+      ->check(CLI::ExistingFile)
+      ->excludes(ckpt);
   command->add_option("--out", args->out, "output file (default: RUN_DIR/planner.pt)");
   command
       ->add_option("--scene", args->scene,
@@ -36,6 +44,7 @@ Command AddExportCommand(CLI::App& app) {
       ->check(CLI::IsMember({"portable", "native"}));
   args->overlay.Add(command, false, "YAML applied over the checkpoint's config");
   return {command, [args] {
+            if (args->ckpt.empty() == args->planner.empty()) throw Error("export: give --ckpt or --planner");
             // An exported file runs anywhere: its weights are written from the CPU.
             std::vector<std::string> overrides = args->overlay.overrides;
             overrides.push_back("device=cpu");
@@ -43,23 +52,38 @@ Command AddExportCommand(CLI::App& app) {
             overrides.push_back("guidance.distance_kernels=" + args->kernels);
             // The file carries no obstacle its user did not ask for.
             const geometry::Scene scene = args->scene.empty() ? geometry::Scene{} : geometry::LoadScene(args->scene);
-            const TrainedPlanner loaded = LoadTrainedPlanner(args->ckpt, args->overlay.path, overrides, scene);
-            const std::string out =
-                args->out.empty() ? trainer::RunDir(RunFolderOf(loaded.checkpoint)).planner() : args->out;
+            std::unique_ptr<planning::LearnedPlanner> planner;
+            std::string source, out = args->out;
+            if (!args->planner.empty()) {
+              const auto file = planning::LearnedPlanner::Load(args->planner);
+              ExperimentConfig config = LoadExperimentText(file->config_yaml(), args->planner + " (its config)",
+                                                           args->overlay.path, overrides);
+              config.scene = scene;
+              planner = AssembleExported(*file, config);
+              source = args->planner;
+              if (out.empty()) throw Error("export --planner: give --out (the file is not written over)");
+            } else {
+              TrainedPlanner loaded = LoadTrainedPlanner(args->ckpt, args->overlay.path, overrides, scene);
+              source = loaded.checkpoint + " (step " + std::to_string(loaded.step) + ")";
+              if (out.empty()) out = trainer::RunDir(RunFolderOf(loaded.checkpoint)).planner();
+              planner = std::move(loaded.planner);
+            }
+            if (std::filesystem::exists(out) && std::filesystem::equivalent(out, args->planner.empty() ? out : args->planner)) {
+              throw Error(out + ": is the planner being read; give another --out");
+            }
             EnsureParentFolder(out);
-            loaded.planner->Save(out);
-            const planning::LearnedPlanner& planner = *loaded.planner;
-            const int64_t D = planner.state_dim(), T = planner.horizon();
+            planner->Save(out);
+            const int64_t D = planner->state_dim(), T = planner->horizon();
             auto batch_shape = [](const std::vector<int64_t>& shape) {
               std::string text = "(B";
               for (const int64_t n : shape) text += ", " + std::to_string(n);
               return text + ")";
             };
             const std::string renoise =
-                planner.renoise_shape().empty() ? "" : ", renoise " + batch_shape(planner.renoise_shape());
-            spdlog::info("exported {} (step {}) to {}: plan(start (B, {}), goal (B, {}), noise {}{}, scene...) -> (B, {}, {}); "
-                         "baked scene: {}",
-                         loaded.checkpoint, loaded.step, out, D, D, batch_shape(planner.noise_shape()), renoise, T, D,
+                planner->renoise_shape().empty() ? "" : ", renoise " + batch_shape(planner->renoise_shape());
+            spdlog::info("exported {} to {} ({} kernels): plan(start (B, {}), goal (B, {}), noise {}{}, scene...) -> "
+                         "(B, {}, {}); baked scene: {}",
+                         source, out, args->kernels, D, D, batch_shape(planner->noise_shape()), renoise, T, D,
                          args->scene.empty() ? std::string("none") : args->scene);
           }};
 }

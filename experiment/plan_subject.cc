@@ -35,28 +35,21 @@ planning::PlanSettings CallSettings(const planning::LearnedPlanner& planner, con
   return settings;
 }
 
-/// An exported file takes every number of guidance.* and its sampler's settings
-/// per call; what is compiled into it cannot change.
-void CheckExportedKeys(const ExperimentConfig& exported, const ExperimentConfig& changed, const std::string& file) {
-  CheckSameNetwork(exported, changed, file);
-  const auto before = config::ListKeys(exported), after = config::ListKeys(changed);
-  for (size_t i = 0; i < before.size(); ++i) {
-    const std::string& key = before[i].key;
-    const bool compiled = key == "sampler.splitting" || key == "sampler.ddpm.guide_on" || key == "guidance.user_cost" ||
-                          key.rfind("objective.ddpm.", 0) == 0;
-    if (compiled && before[i].default_value != after[i].default_value) {
-      throw Error(key + ": is compiled into " + file + " (" + before[i].default_value +
-                  "); plan from the run folder with --ckpt, or export again with the setting");
-    }
-  }
-}
-
 PlanSubject FromFile(const PlanArgs& args) {
   PlanSubject subject;
-  auto planner = planning::LearnedPlanner::Load(args.planner_file);
+  // The file's weights with flowplan's native kernels, unless the call asks for LibTorch's operators.
+  std::unique_ptr<planning::LearnedPlanner> planner = LoadExportedPlanner(args.planner_file);
   const std::string where = args.planner_file + " (its config)";
+  const ExperimentConfig exported = LoadExperimentText(planner->config_yaml(), where, "", {});
   subject.config = LoadExperimentText(planner->config_yaml(), where, args.overlay_path, args.overrides);
-  CheckExportedKeys(LoadExperimentText(planner->config_yaml(), where, "", {}), subject.config, args.planner_file);
+  CheckExportedKeys(exported, subject.config, args.planner_file);
+  if (subject.config.sampler.network_kernels != exported.sampler.network_kernels ||
+      subject.config.guidance.distance_kernels != exported.guidance.distance_kernels) {
+    ExperimentConfig kernels = exported;
+    kernels.sampler.network_kernels = subject.config.sampler.network_kernels;
+    kernels.guidance.distance_kernels = subject.config.guidance.distance_kernels;
+    planner = AssembleExported(*planner, kernels);
+  }
   subject.settings = CallSettings(*planner, subject.config);
   subject.trajectory = planner->info();
   subject.source = args.planner_file;

@@ -1,10 +1,14 @@
 #include "experiment/trained_planner.h"
 
+#include <spdlog/spdlog.h>
+
 #include "checkpoints/checkpoint.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "models/conditioning.h"
 #include "models/device.h"
 #include "models/model_config.h"
+#include "models/trajectory_net.h"
 #include "planning/assemble.h"
 #include "trainer/run_dir.h"
 
@@ -18,6 +22,20 @@ void CheckSameNetwork(const ExperimentConfig& trained, const ExperimentConfig& c
     if (shapes_network && before[i].default_value != after[i].default_value) {
       throw Error(key + ": the network was trained with " + before[i].default_value + " (" + where + "), got " +
                   after[i].default_value + "; a trained network's architecture and conditioning cannot change");
+    }
+  }
+}
+
+void CheckExportedKeys(const ExperimentConfig& exported, const ExperimentConfig& changed, const std::string& file) {
+  CheckSameNetwork(exported, changed, file);
+  const auto before = config::ListKeys(exported), after = config::ListKeys(changed);
+  for (size_t i = 0; i < before.size(); ++i) {
+    const std::string& key = before[i].key;
+    const bool compiled = key == "sampler.splitting" || key == "sampler.ddpm.guide_on" || key == "guidance.user_cost" ||
+                          key.rfind("objective.ddpm.", 0) == 0;
+    if (compiled && before[i].default_value != after[i].default_value) {
+      throw Error(key + ": is compiled into " + file + " (" + before[i].default_value +
+                  "); plan from the run folder with --ckpt, or export again with the setting");
     }
   }
 }
@@ -50,6 +68,57 @@ TrainedPlanner LoadTrainedPlanner(const std::string& ckpt, const std::string& ov
   parts.config_yaml = ToYaml(loaded.config);
   loaded.planner = planning::AssemblePlanner(parts);
   return loaded;
+}
+
+std::unique_ptr<planning::LearnedPlanner> AssembleExported(const planning::LearnedPlanner& file,
+                                                           const ExperimentConfig& given) {
+  if (file.kind() == "latent") return std::make_unique<planning::LearnedPlanner>(file.module(), file.source());
+  CheckExportedKeys(LoadExperimentText(file.config_yaml(), file.source() + " (its config)", "", {}), given,
+                    file.source());
+  ExperimentConfig config = given;
+  config.device = "cpu";
+  const torch::jit::Module& module = file.module();
+  planning::PlannerParts parts;
+  try {
+    const torch::jit::Module normalizer = module.attr("normalizer").toModule();
+    parts.normalizer = models::MinMaxNormalizer(normalizer.attr("lo").toTensor().clone(),
+                                                normalizer.attr("hi").toTensor().clone());
+    const int64_t D = parts.normalizer.dim();
+    const models::NetworkPtr net =
+        models::MakeNetwork(config.model, D, models::ConditionDim(config.objective.conditioning, D));
+    const torch::jit::Module exported = module.attr("sampler").toModule().attr("network").toModule();
+    auto* trajectory_net = dynamic_cast<models::TrajectoryNet*>(net.get());
+    if (trajectory_net == nullptr) throw Error(file.source() + ": its network is not a trajectory network");
+    models::ReadScriptedWeights(*trajectory_net, exported, file.source());
+    net->eval();
+    parts.net = net;
+  } catch (const c10::Error& e) {
+    throw Error(file.source() + ": cannot read its network and normalizer: " + FirstLine(e.what_without_backtrace()));
+  }
+  parts.objective = config.objective;
+  parts.sampler = config.sampler;
+  parts.guidance = config.guidance;
+  parts.trajectory = file.info();
+  parts.config_yaml = ToYaml(config);
+  const std::unique_ptr<planning::LearnedPlanner> assembled = planning::AssemblePlanner(parts);
+  return std::make_unique<planning::LearnedPlanner>(assembled->module(), file.source());
+}
+
+std::unique_ptr<planning::LearnedPlanner> AssembleNative(const planning::LearnedPlanner& file) {
+  ExperimentConfig config = LoadExperimentText(file.config_yaml(), file.source() + " (its config)", "", {});
+  config.sampler.network_kernels = models::Kernels::kNative;
+  config.guidance.distance_kernels = models::Kernels::kNative;
+  return AssembleExported(file, config);
+}
+
+std::unique_ptr<planning::LearnedPlanner> LoadExportedPlanner(const std::string& path) {
+  std::unique_ptr<planning::LearnedPlanner> file = planning::LearnedPlanner::Load(path);
+  try {
+    return AssembleNative(*file);
+  } catch (const Error& e) {
+    spdlog::warn("{}: plans with the file's own code, not flowplan's native kernels: {}", path, e.what());
+    return file;
+  }
 }
 
 }  // namespace flowplan::experiment

@@ -31,9 +31,40 @@ TrainedPlanner LoadTrainedPlanner(const std::string& ckpt, const std::string& ov
                                   const std::vector<std::string>& overrides,
                                   const std::optional<geometry::Scene>& scene = std::nullopt);
 
+/// The planner an exported file holds, assembled again in-process from the
+/// file's network weights and normalizer with `config`: the file's own config
+/// (LoadExperimentText of file.config_yaml()), changed in nothing compiled
+/// into the file (CheckExportedKeys) but free in the kernels
+/// (sampler.network_kernels, guidance.distance_kernels), every per-call number
+/// and the scene. How flowplan plans with a portable file at the speed of its
+/// native operators. A VAE planner (no native network) comes back as loaded.
+/// @throws flowplan::Error naming the file if its weights do not fit its
+///   config, a compiled-in key changed, or a user cost file it was compiled
+///   with is gone.
+std::unique_ptr<planning::LearnedPlanner> AssembleExported(const planning::LearnedPlanner& file,
+                                                           const ExperimentConfig& config);
+
+/// AssembleExported with the file's own config and flowplan's native kernels
+/// (the network's and the collision cost's).
+/// @throws flowplan::Error as AssembleExported.
+std::unique_ptr<planning::LearnedPlanner> AssembleNative(const planning::LearnedPlanner& file);
+
+/// An exported planner file as flowplan plans with it: AssembleNative, or the
+/// file as written (and a warning saying why) when it cannot be assembled
+/// again.
+/// @throws flowplan::Error naming the file if it is not a flowplan planner.
+std::unique_ptr<planning::LearnedPlanner> LoadExportedPlanner(const std::string& path);
+
 /// Throws, naming the key, if `changed` differs from `trained` in anything that
 /// shapes the trained network (model.*, objective.name, objective.conditioning).
 /// `where` names the stored config in the message.
 void CheckSameNetwork(const ExperimentConfig& trained, const ExperimentConfig& changed, const std::string& where);
+
+/// Throws, naming the key and `file`, if `changed` differs from `exported` in
+/// the network (CheckSameNetwork) or in what is compiled into an exported file
+/// (sampler.splitting, sampler.ddpm.guide_on, guidance.user_cost,
+/// objective.ddpm.*); every number of guidance.* and of its sampler is a
+/// per-call setting.
+void CheckExportedKeys(const ExperimentConfig& exported, const ExperimentConfig& changed, const std::string& file);
 
 }  // namespace flowplan::experiment

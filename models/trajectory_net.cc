@@ -50,6 +50,60 @@ def forward(self, x: Tensor, t: Tensor, cond: Optional[Tensor]) -> Tensor:
       .Build();
 }
 
+void ReadScriptedWeights(TrajectoryNet& net, const torch::jit::Module& scripted, const std::string& where) {
+  std::vector<torch::Tensor> weights;  // every parameter and buffer, in one numbering of their elements
+  for (auto& entry : net.named_parameters(true)) weights.push_back(entry.value());
+  for (auto& entry : net.named_buffers(true)) weights.push_back(entry.value());
+  int64_t count = 0;
+  for (const torch::Tensor& w : weights) count += w.numel();
+  // Markers are whole numbers that float32 holds exactly, far from the small constants a script may carry.
+  constexpr double kFirst = 1 << 20, kEnd = 1 << 24;
+  if (kFirst + static_cast<double>(count) > kEnd) {
+    throw Error(where + ": a network of " + std::to_string(count) + " weights is too large to read back");
+  }
+  torch::NoGradGuard no_grad;
+  std::vector<torch::Tensor> kept;
+  int64_t next = 0;
+  for (torch::Tensor& w : weights) {
+    kept.push_back(w.clone());
+    w.copy_(torch::arange(kFirst + next, kFirst + next + w.numel(), torch::kFloat64).view(w.sizes()));
+    next += w.numel();
+  }
+  const torch::jit::Module marked = ScriptNetwork(net, Kernels::kPortable);
+  for (size_t i = 0; i < weights.size(); ++i) weights[i].copy_(kept[i]);
+  torch::Tensor values = torch::empty({count}, torch::kFloat64);
+  torch::Tensor written = torch::zeros({count}, torch::kBool);
+  for (const auto& entry : marked.named_buffers(false)) {
+    const std::string& name = entry.name;
+    if (!scripted.hasattr(name) || !scripted.attr(name).isTensor()) {
+      throw Error(where + ": the network has no weight " + name + " that its config's model.* asks for");
+    }
+    const torch::Tensor given = scripted.attr(name).toTensor();
+    if (given.sizes() != entry.value.sizes()) {
+      throw Error(where + ": network weight " + name + " is " + ShapeString(given) + ", its config's model.* makes it " +
+                  ShapeString(entry.value));
+    }
+    const torch::Tensor marker = entry.value.to(torch::kFloat64).flatten();
+    const torch::Tensor value = given.to(torch::kFloat64).flatten();
+    const torch::Tensor is_marker = (marker >= kFirst) & (marker < kFirst + count) & (marker == marker.round());
+    if (!torch::equal(marker.masked_select(~is_marker), value.masked_select(~is_marker))) {
+      throw Error(where + ": network weight " + name + " is not a rearrangement of the network's weights");
+    }
+    const torch::Tensor index = (marker.masked_select(is_marker) - kFirst).to(torch::kLong);
+    values.index_put_({index}, value.masked_select(is_marker));
+    written.index_put_({index}, true);
+  }
+  if (!written.all().item<bool>()) {
+    throw Error(where + ": " + std::to_string(count - written.sum().item<int64_t>()) +
+                " of the network's weights are not in its script");
+  }
+  next = 0;
+  for (torch::Tensor& w : weights) {
+    w.copy_(values.slice(0, next, next + w.numel()).view(w.sizes()));
+    next += w.numel();
+  }
+}
+
 }  // namespace flowplan::models
 
 namespace flowplan::models {

@@ -52,6 +52,16 @@ using TrajectoryNetPtr = std::shared_ptr<TrajectoryNet>;
 /// its parameters copied into buffers (what planners and exported files run).
 torch::jit::Module ScriptNetwork(const TrajectoryNet& net, Kernels kernels);
 
+/// The inverse of ScriptNetwork: loads into `net` (made from the same model
+/// config) the weights of `scripted`, a module ScriptNetwork wrote of a network
+/// like it, with either kernels. ScriptNetwork only rearranges weights
+/// (reshapes, concatenations, transposes), so writing `net` with every element
+/// set to its own index shows where each element went; an element that
+/// ScriptNetwork computes from several cannot be read back, and is an error.
+/// @throws flowplan::Error naming `where` if a weight is missing, of another
+///   shape, not a rearrangement, or never written.
+void ReadScriptedWeights(TrajectoryNet& net, const torch::jit::Module& scripted, const std::string& where);
+
 /// Checks x (B, T, D), t (B,) and cond (B, C) against a network's dimensions.
 /// @throws flowplan::Error "expected (B, T, 4), got (…)" style messages.
 void CheckTrajectoryInputs(const torch::Tensor& x, const torch::Tensor& t, const torch::Tensor& cond,

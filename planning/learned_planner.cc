@@ -42,8 +42,12 @@ LearnedPlanner::LearnedPlanner(torch::jit::Module module, std::string source)
     }
     noise_shape_ = module_.attr("noise_shape").toIntVector();
     renoise_shape_ = module_.attr("renoise_shape").toIntVector();
+  } catch (const Error&) {
+    throw;
   } catch (const c10::Error& e) {
     throw Error(source_ + ": not a flowplan planner (" + FirstLine(e.what_without_backtrace()) + ")");
+  } catch (const std::exception& e) {  // torch::jit::ObjectAttributeError: a module without our attributes
+    throw Error(source_ + ": not a flowplan planner (" + FirstLine(e.what()) + ")");
   }
 }
 
