@@ -9,7 +9,8 @@ packages=(
   libtorch-dev libopenblas0-openmp
   libmujoco-dev libhdf5-dev libspdlog-dev libcli11-dev libeigen3-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libgloo-dev libosmesa6-dev zlib1g-dev liburdfdom-dev
-  python3 python3-torch python3-h5py python3-numpy python3-matplotlib python3-yaml python3-pil
+  python3 python3-dev pybind11-dev python3-torch python3-h5py python3-numpy python3-matplotlib python3-yaml python3-pil
+  python3-pytest
 )
 if [ "${1:-}" = "--fuzz" ]; then
   packages+=(clang libclang-rt-14-dev)  # libFuzzer and the sanitizer runtimes: only a Recommends of clang

@@ -245,6 +245,14 @@ TEST(InstalledPlanTest, AnInstalledBinaryPlansAndDrawsFromAnotherFolder) {
   ExpectOk(installed("export --ckpt run --log-level warn"));
   ExpectOk(installed("plan --planner run/planner.pt --start 0,0 --goal 1,0 --capsule 0.4,0.2,0.6,0.2,0.05 -n 2 --no-plot "
                      "--out q --log-level warn"));
+  // The installed Python package plans with the exported particle planner through flowplan's native kernels.
+  const Outcome python = RunCommand(
+      "cd " + work + " && PYTHONPATH=" + prefix + "/lib/python3/dist-packages " + FLOWPLAN_PYTHON +
+      " -c \"import torch, flowplan; p = flowplan.load_planner('run/planner.pt', native=True); "
+      "x = p.sample(torch.tensor([0., 0., 0., 0.]), torch.tensor([1., 0., 0., 0.]), 3, "
+      "spheres=torch.tensor([[0.5, 0.3, 0.1]])); print(p.native, x.shape[0], x.shape[2], flowplan.__file__)\"");
+  ExpectOk(python);
+  EXPECT_THAT(python.output, HasSubstr("True 3 4 " + prefix + "/lib/python3/dist-packages/flowplan/__init__.py"));
 }
 
 /// A Franka reach model trained for two steps: enough to exercise IK, FK, guidance and execution.

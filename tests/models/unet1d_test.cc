@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "models/model_config.h"
+#include "models/trajectory_net.h"
 
 namespace flowplan::models {
 namespace {
@@ -78,6 +79,31 @@ TEST(ModelConfigTest, CopyWeightsMakesAnIdenticalNetwork) {
   CopyWeights(*a, *b);
   EXPECT_TRUE(torch::equal(a->Forward(x, t, {}), b->Forward(x, t, {})));
   EXPECT_GT(CountParameters(*a), 1000000);
+}
+
+TEST(ModelConfigTest, WeightsThatAreNotTheScriptsAreOneClearError) {
+  // The planner matrix reads every network's weights back from its script; here what cannot be read back.
+  torch::manual_seed(3);
+  ModelConfig config;
+  config.unet = Small();
+  auto small = MakeTrajectoryNet(config, 4, 0);
+  const torch::jit::Module script = ScriptNetwork(*small, Kernels::kPortable);
+  auto other_state = MakeTrajectoryNet(config, 6, 0);
+  EXPECT_THAT([&] { ReadScriptedWeights(*other_state, script, "f.pt"); },
+              ThrowsMessage<Error>(HasSubstr("f.pt: network weight p_down0_block0_block0_conv_weight is (16, 4, 5), "
+                                             "its config's model.* makes it (16, 6, 5)")));
+  auto default_size = MakeTrajectoryNet(ModelConfig{}, 4, 0);
+  EXPECT_THAT([&] { ReadScriptedWeights(*default_size, script, "f.pt"); }, ThrowsMessage<Error>(HasSubstr("f.pt: ")));
+  ModelConfig transformer;
+  transformer.architecture = Architecture::kTransformer;
+  auto another_kind = MakeTrajectoryNet(transformer, 4, 0);
+  EXPECT_THAT([&] { ReadScriptedWeights(*another_kind, script, "f.pt"); },
+              ThrowsMessage<Error>(HasSubstr("f.pt: network weight p_frequencies is (16,), its config's model.* makes it")));
+  torch::manual_seed(4);
+  auto same = MakeTrajectoryNet(config, 4, 0);
+  ReadScriptedWeights(*same, script, "f.pt");
+  const torch::Tensor x = torch::randn({2, 16, 4}), t = torch::rand({2});
+  EXPECT_TRUE(torch::equal(small->Forward(x, t, {}), same->Forward(x, t, {})));
 }
 
 }  // namespace

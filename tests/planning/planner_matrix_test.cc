@@ -20,6 +20,7 @@
 
 #include "jit/library.h"
 #include "models/model_config.h"
+#include "models/trajectory_net.h"
 #include "planning/assemble.h"
 #include "tests/support/planners.h"
 #include "tests/support/scratch_dir.h"
@@ -210,6 +211,16 @@ TEST_P(PlannerMatrixTest, InProcessCppAndPythonPlanAlike) {
                                                              net->cond_dim() > 0 ? c10::IValue(torch::zeros({0, net->cond_dim()}))
                                                                                  : c10::IValue()}).toTensor();
     EXPECT_EQ(none.sizes(), torch::IntArrayRef({0, 16, D})) << "an empty batch";
+    // The weights read back from the script (how flowplan plans with an exported file's weights) are the
+    // network's, bit for bit, whichever kernels wrote it.
+    torch::manual_seed(99);
+    const models::NetworkPtr fresh = models::MakeNetwork(model, D, models::ConditionDim(parts.objective.conditioning, D));
+    models::ReadScriptedWeights(dynamic_cast<models::TrajectoryNet&>(*fresh), script, "the matrix's planner");
+    const auto want = parts.net->named_parameters(true), got = fresh->named_parameters(true);
+    ASSERT_EQ(want.size(), got.size());
+    for (const auto& entry : want) EXPECT_TRUE(torch::equal(entry.value(), got[entry.key()])) << entry.key();
+    const auto want_buffers = parts.net->named_buffers(true), got_buffers = fresh->named_buffers(true);
+    for (const auto& entry : want_buffers) EXPECT_TRUE(torch::equal(entry.value(), got_buffers[entry.key()])) << entry.key();
   }
 
   // Start and goal: positions at 40 % and 60 % of the range, velocities 0; the scene around the middle.

@@ -1,0 +1,178 @@
+"""The Python package: flowplan.load_planner runs the shipped planners' weights with flowplan's native kernels,
+plans what the files plan, and says what is wrong with bad files in one line.
+
+Run by ctest (Python.Package) with PYTHONPATH=BUILD/python; by hand:
+    PYTHONPATH=build/python /usr/bin/python3 -m pytest -q python/tests
+"""
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+
+import pytest
+import torch
+
+import flowplan
+
+SOURCE = os.environ.get("FLOWPLAN_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+BINARY = os.environ.get("FLOWPLAN_BINARY_DIR", os.path.join(SOURCE, "build"))
+REACH = os.path.join(SOURCE, "pretrained", "franka_reach_planner.pt")
+SPLIT = os.path.join(SOURCE, "pretrained", "franka_joint_split_planner.pt")
+UR5 = os.path.join(SOURCE, "pretrained", "ur5_joint_planner.pt")
+SPHERE = torch.tensor([[0.5, 0.0, 0.2, 0.1]])  # the paper's: centre, radius (m)
+
+torch.set_num_threads(2)
+
+
+def paper_problem(planner):
+    """Start and goal (14,) at rest, TCP from (0.5, -0.3, 0.2) to (0.5, 0.3, 0.2)."""
+    start = torch.cat([planner.ik(torch.tensor([0.5, -0.3, 0.2])), torch.zeros(7)])
+    goal = torch.cat([planner.ik(torch.tensor([0.5, 0.3, 0.2])), torch.zeros(7)])
+    return start, goal
+
+
+def noises(planner, batch, seed=0):
+    generator = torch.Generator().manual_seed(seed)
+    noise = torch.randn([batch] + list(planner.noise_shape), generator=generator)
+    renoise = torch.randn([batch] + list(planner.renoise_shape), generator=generator) if planner.renoise_shape else None
+    return noise, renoise
+
+
+def test_the_cpp_module_is_there():
+    assert flowplan.native_kernels()
+
+
+@pytest.mark.parametrize("path", [REACH, SPLIT])
+def test_native_planner_plans_what_the_file_plans(path):
+    native = flowplan.load_planner(path)
+    portable = flowplan.load_planner(path, native=False)
+    assert native.native and not portable.native
+    # The native planner's network and guidance are flowplan's operators; the file's are LibTorch's.
+    assert "ops.flowplan.unet1d" in native.module.sampler.network.code
+    assert "ops.flowplan" not in portable.module.sampler.network.code
+    start, goal = paper_problem(portable)
+    noise, renoise = noises(portable, 8)
+    starts, goals = start.expand(8, -1), goal.expand(8, -1)
+    extra = {} if renoise is None else {"renoise": renoise}
+    ours = native.plan(starts, goals, noise, spheres=SPHERE, **extra)
+    theirs = portable.plan(starts, goals, noise, spheres=SPHERE, **extra)
+    by_torch = torch.jit.load(path)
+    with torch.no_grad():
+        direct = by_torch.plan(starts, goals, noise, spheres=SPHERE, **extra)
+    assert torch.equal(theirs, direct)  # native=False is the file as written
+    assert ours.shape == (8, portable.horizon, 14)
+    # Summed in another order, iterated over the sampler's guided steps: close, not the same bytes
+    # (docs/export.md); rad and rad/s.
+    assert (ours - theirs).abs().max().item() < 2e-2
+    assert (ours - theirs).abs().mean().item() < 2e-4
+
+
+def test_guided_native_plans_clear_the_sphere():
+    planner = flowplan.load_planner(REACH)
+    start, goal = paper_problem(planner)
+    torch.manual_seed(0)
+    plans = planner.sample(start, goal, 16, spheres=SPHERE)
+    assert plans.shape == (16, 64, 14) and not plans.requires_grad
+    # Judged by the file's own scripts (LibTorch's operators), not by the native kernels that planned.
+    judge = torch.jit.load(REACH)
+    with torch.no_grad():
+        clear = judge.clearance(plans[..., :7], spheres=SPHERE).amin(dim=(1, 2)) >= 0
+        unguided = planner.sample(start, goal, 16, spheres=SPHERE, settings={"guidance.scale": 0.0})
+        unguided_clear = judge.clearance(unguided[..., :7], spheres=SPHERE).amin(dim=(1, 2)) >= 0
+        reached = (judge.tcp(plans[:, -1, :7]) - torch.tensor([0.5, 0.3, 0.2])).norm(dim=-1)
+    assert clear.sum().item() >= 14
+    assert unguided_clear.sum().item() <= 2  # the guidance, not luck, clears it
+    assert reached.max().item() < 0.03
+
+
+def test_any_arm_planner_loads_native():
+    planner = flowplan.load_planner(UR5)
+    assert planner.native and planner.state_dim == 12
+    noise, _ = noises(planner, 2)
+    start = torch.zeros(2, 12)
+    goal = torch.cat([torch.full((2, 6), 0.5), torch.zeros(2, 6)], dim=1)
+    plans = planner.plan(start, goal, noise)
+    assert plans.shape == (2, planner.horizon, 12)
+    assert torch.allclose(plans[:, 0], start, atol=1e-5) and torch.allclose(plans[:, -1], goal, atol=1e-5)
+
+
+def test_bad_files_are_one_clear_error(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        flowplan.load_planner(tmp_path / "missing.pt")
+    text = tmp_path / "notes.pt"
+    text.write_text("not a planner\n")
+    with pytest.raises(flowplan.Error, match="notes.pt: not a TorchScript module"):
+        flowplan.load_planner(text)
+
+    class Tiny(torch.nn.Module):
+        def forward(self, x):
+            return x + 1
+
+    tiny = tmp_path / "tiny.pt"
+    torch.jit.script(Tiny()).save(str(tiny))
+    for native in (None, False):
+        with pytest.raises(flowplan.Error, match="tiny.pt: not a flowplan planner"):
+            flowplan.load_planner(tiny, native=native)
+
+
+def export(*args):
+    subprocess.run([os.path.join(BINARY, "apps", "flowplan", "flowplan"), "export", *map(str, args)], check=True,
+                   capture_output=True)
+
+
+def test_export_planner_reads_back_every_weight(tmp_path):
+    # The file's weights read back from its script (models::ReadScriptedWeights) and written again with the
+    # same portable code: the same planner, bit for bit.
+    out = tmp_path / "split_again.pt"
+    export("--planner", SPLIT, "--kernels", "portable", "--out", out)
+    original, again = torch.jit.load(SPLIT), torch.jit.load(str(out))
+    assert "ops.flowplan" not in again.sampler.network.code
+    written = dict(again.sampler.network.named_buffers())
+    for name, weight in original.sampler.network.named_buffers():
+        assert torch.equal(weight, written.pop(name)), name
+    assert not written
+    start, goal = paper_problem(original)
+    noise, renoise = noises(original, 4)
+    with torch.no_grad():
+        assert torch.equal(original.plan(start.expand(4, -1), goal.expand(4, -1), noise, renoise, spheres=SPHERE),
+                           again.plan(start.expand(4, -1), goal.expand(4, -1), noise, renoise, spheres=SPHERE))
+
+
+def test_export_planner_writes_a_native_file(tmp_path):
+    out = tmp_path / "reach_native.pt"
+    export("--planner", REACH, "--kernels", "native", "--out", out)
+    # flowplan's C++ module loaded the kernels into this process: the native file loads with torch.jit.load.
+    loaded = torch.jit.load(str(out))
+    assert "ops.flowplan.unet1d" in loaded.sampler.network.code
+    planner = flowplan.load_planner(out)
+    start, goal = paper_problem(planner)
+    noise, _ = noises(planner, 4)
+    with torch.no_grad():
+        assert torch.equal(loaded.plan(start.expand(4, -1), goal.expand(4, -1), noise, spheres=SPHERE),
+                           planner.plan(start.expand(4, -1), goal.expand(4, -1), noise, spheres=SPHERE))
+
+
+def test_without_the_cpp_module_the_files_own_code_plans(tmp_path):
+    shutil.copytree(os.path.dirname(flowplan.__file__), tmp_path / "flowplan",
+                    ignore=shutil.ignore_patterns("_flowplan*", "__pycache__"))
+    script = textwrap.dedent(f"""
+        import warnings, torch, flowplan
+        assert not flowplan.native_kernels()
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            planner = flowplan.load_planner({REACH!r})
+        assert not planner.native
+        assert "portable code" in str(caught[0].message), caught
+        start = torch.cat([planner.ik(torch.tensor([0.5, -0.3, 0.2])), torch.zeros(7)])
+        goal = torch.cat([planner.ik(torch.tensor([0.5, 0.3, 0.2])), torch.zeros(7)])
+        assert planner.sample(start, goal, 2).shape == (2, 64, 14)
+        try:
+            flowplan.load_planner({REACH!r}, native=True)
+        except RuntimeError as error:
+            assert "not importable" in str(error), error
+        else:
+            raise AssertionError("native=True without the C++ module must fail")
+    """)
+    environment = dict(os.environ, PYTHONPATH=str(tmp_path))
+    subprocess.run([sys.executable, "-c", script], check=True, env=environment, cwd=tmp_path)
