@@ -4,13 +4,22 @@
 // PyTorch runs on), so TorchScript modules that call them load in Python.
 
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <torch/python.h>  // torch.Tensor <-> torch::Tensor, without copies
 
+#include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include "core/config.h"
 #include "core/error.h"
+#include "experiment/plan.h"
 #include "experiment/trained_planner.h"
+#include "geometry/scene_rows.h"
 #include "planning/learned_planner.h"
+#include "validity/plan_check.h"
 
 namespace py = pybind11;
 
@@ -31,6 +40,98 @@ py::bytes NativePlanner(const std::string& path) {
   return py::bytes(bytes);
 }
 
+/// A planner as `flowplan plan` makes it (learned, RRT-Connect, the hybrid), with its plan checker.
+class InProcessPlanner {
+ public:
+  InProcessPlanner(const std::string& kind, const std::string& planner, const std::string& ckpt,
+                   const std::string& config, const std::string& robot, const std::vector<std::string>& overrides) {
+    flowplan::experiment::PlanArgs args;
+    args.kind = kind;
+    args.planner_file = planner;
+    args.ckpt = ckpt;
+    args.overlay_path = config;
+    args.robot = robot;
+    args.overrides = overrides;
+    py::gil_scoped_release unlocked;
+    subject_ = flowplan::experiment::LoadPlanSubject(args);
+    checker_ = std::make_unique<flowplan::validity::PlanChecker>(subject_.robot, subject_.trajectory.dt,
+                                                                 subject_.config.check);
+  }
+
+  py::dict Plan(const torch::Tensor& start, const torch::Tensor& goal, const py::dict& scene, uint64_t seed,
+                std::optional<double> floor_height) const {
+    flowplan::planning::PlanRequest request;
+    request.start = start.to(torch::kFloat32).contiguous();
+    request.goal = goal.to(torch::kFloat32).contiguous();
+    request.scene = Rows(scene);
+    request.seed = seed;
+    request.settings = subject_.settings;
+    request.world.floor_height = floor_height;
+    flowplan::planning::PlanResult result;
+    {
+      py::gil_scoped_release unlocked;
+      flowplan::planning::CheckEnds(request.start, request.goal, subject_.trajectory.state_dim(), "plan");
+      result = subject_.planner->Plan(request);
+    }
+    const size_t B = static_cast<size_t>(result.plans.size(0));
+    py::dict out;
+    out["plans"] = result.plans;
+    out["found"] = result.found;
+    out["refused"] = result.refused.empty() ? std::vector<bool>(B, false) : result.refused;
+    out["failure"] = result.failure.empty() ? std::vector<std::string>(B) : result.failure;
+    out["route"] = result.route;
+    std::vector<double> seconds;
+    for (size_t b = 0; b < B; ++b) seconds.push_back(result.call_seconds[b] / static_cast<double>(result.call_plans[b]));
+    out["seconds"] = seconds;
+    return out;
+  }
+
+  std::vector<py::dict> Check(const torch::Tensor& plans, const torch::Tensor& start, const torch::Tensor& goal,
+                              const py::dict& scene, const std::optional<torch::Tensor>& found,
+                              std::optional<double> floor_height) const {
+    flowplan::collision::WorldOptions world;
+    world.floor_height = floor_height;
+    const flowplan::geometry::SceneRows rows = Rows(scene);
+    std::vector<flowplan::validity::PlanVerdict> verdicts;
+    {
+      py::gil_scoped_release unlocked;
+      verdicts = checker_->Check(plans, start, goal, rows, found ? *found : torch::Tensor(), world);
+    }
+    std::vector<py::dict> out;
+    for (const auto& verdict : verdicts) {
+      py::dict entry;
+      entry["valid"] = verdict.valid();
+      entry["failure"] = flowplan::config::EnumName(verdict.failure);
+      entry["reason"] = verdict.reason;
+      entry["clearance"] = verdict.clearance;
+      out.push_back(entry);
+    }
+    return out;
+  }
+
+  const std::string& kind() const { return subject_.kind->name; }
+  int64_t horizon() const { return subject_.trajectory.horizon; }
+  int64_t state_dim() const { return subject_.trajectory.state_dim(); }
+  int64_t num_joints() const { return subject_.robot->num_joints(); }
+  double dt() const { return subject_.trajectory.dt; }
+  const std::string& source() const { return subject_.source; }
+  std::string config() const { return flowplan::experiment::ToYaml(subject_.config); }
+
+ private:
+  flowplan::geometry::SceneRows Rows(const py::dict& scene) const {
+    flowplan::geometry::SceneRows rows;
+    for (const auto& [key, value] : scene) {
+      if (value.is_none()) continue;
+      rows.insert(key.cast<std::string>(), value.cast<torch::Tensor>());
+    }
+    flowplan::geometry::CheckRows(rows, static_cast<int>(subject_.robot->workspace_dim()), "scene");
+    return rows;
+  }
+
+  flowplan::experiment::PlanSubject subject_;
+  std::unique_ptr<flowplan::validity::PlanChecker> checker_;
+};
+
 }  // namespace
 
 PYBIND11_MODULE(_flowplan, m) {
@@ -47,4 +148,20 @@ PYBIND11_MODULE(_flowplan, m) {
         "The exported planner file at `path` assembled again with flowplan's native kernels: the bytes of its "
         "TorchScript module. Raises flowplan.Error naming the file if it is not a flowplan planner or cannot be "
         "assembled again.");
+  py::class_<InProcessPlanner>(m, "InProcessPlanner")
+      .def(py::init<const std::string&, const std::string&, const std::string&, const std::string&,
+                    const std::string&, const std::vector<std::string>&>(),
+           py::arg("kind"), py::arg("planner"), py::arg("ckpt"), py::arg("config"), py::arg("robot"),
+           py::arg("overrides"))
+      .def("plan", &InProcessPlanner::Plan, py::arg("start"), py::arg("goal"), py::arg("scene"), py::arg("seed"),
+           py::arg("floor_height"))
+      .def("check", &InProcessPlanner::Check, py::arg("plans"), py::arg("start"), py::arg("goal"), py::arg("scene"),
+           py::arg("found"), py::arg("floor_height"))
+      .def_property_readonly("kind", &InProcessPlanner::kind)
+      .def_property_readonly("horizon", &InProcessPlanner::horizon)
+      .def_property_readonly("state_dim", &InProcessPlanner::state_dim)
+      .def_property_readonly("num_joints", &InProcessPlanner::num_joints)
+      .def_property_readonly("dt", &InProcessPlanner::dt)
+      .def_property_readonly("source", &InProcessPlanner::source)
+      .def_property_readonly("config", &InProcessPlanner::config);
 }

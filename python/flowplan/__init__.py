@@ -6,14 +6,23 @@
     goal = torch.cat([planner.ik(torch.tensor([0.5, 0.3, 0.2])), torch.zeros(7)])
     plans = planner.sample(start, goal, 16, spheres=torch.tensor([[0.5, 0.0, 0.2, 0.1]]))  # (16, 64, 14)
 
+`make_planner` makes any planner `flowplan plan` runs (the learned planner, RRT-Connect, the hybrid) in-process,
+with the plan checker beside it:
+
+    rrt = flowplan.make_planner("rrt_connect", config="configs/franka_joint.yaml")
+    result = rrt.plan(start, goal, 4, spheres=sphere)                  # result.plans (4, 64, 14), result.found (4,)
+    verdicts = rrt.check(result.plans, start, goal, spheres=sphere)    # [Verdict(valid=True, ...), ...]
+
 `load_planner` returns a `Planner` with the exported module's interface (docs/export.md: `sample`, `plan`,
 `tcp`, `ik`, `clearance`, `cost`, `settings`, `state_dim`, ...). With the package's C++ part
 (`flowplan._flowplan`, built with flowplan) it runs the file's weights with flowplan's native kernels; with
 PyTorch alone it runs the file's own portable code. Either way every call runs without gradients and with
 TorchScript's graph executor optimisations off, so the first plan costs about what the later ones do.
 """
+import dataclasses
 import io
 import warnings
+from typing import List
 
 import torch
 
@@ -25,7 +34,8 @@ except ImportError as missing:  # PyTorch alone: the portable code of the files
 else:
     _why_portable = ""
 
-__all__ = ["Error", "Planner", "load_planner", "native_kernels"]
+__all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Verdict", "load_planner", "make_planner",
+           "native_kernels"]
 
 #: What flowplan raises for bad input (a file that is not a planner, a planner that cannot take the kernels);
 #: a RuntimeError. The message names the file.
@@ -109,3 +119,102 @@ def load_planner(path, native=None):
     if not hasattr(module, "format_version"):
         raise Error(f"{path}: not a flowplan planner (a TorchScript module without format_version)")
     return Planner(module, False, path)
+
+
+@dataclasses.dataclass
+class PlanResult:
+    """What InProcessPlanner.plan returns. B plans of T states of D values."""
+    plans: torch.Tensor    # (B, T, D) float32 raw states: positions, then velocities
+    found: torch.Tensor    # (B,) bool: a plan was found (a learned planner always finds one; check it)
+    refused: List[bool]    # (B) the start or goal cannot be planned from or to (RRT-Connect, the hybrid)
+    failure: List[str]     # (B) why a plan was not found or was refused; "" when found
+    route: List[str]       # (B) how the hybrid made each plan ("proposal 2 of 8", "rrt_connect"); else empty
+    seconds: List[float]   # (B) wall time per plan (a batch's time shared among its plans)
+
+
+@dataclasses.dataclass
+class Verdict:
+    """The plan checker's verdict on one plan (docs/planning.md, "The plan checker")."""
+    valid: bool
+    failure: str      # "none", "not_found", "start", "goal", "joint_limit", "speed_limit", "self_collision",
+                      # "floor", "collision" or "motion": the first that applies
+    reason: str       # one line naming the state, joint, sphere or obstacle at fault; "" when valid
+    clearance: float  # the smallest clearance of any collision sphere at any state (world units; inf: no obstacles)
+
+
+def _scene(spheres, boxes, cylinders, capsules):
+    return {"spheres": spheres, "boxes": boxes, "cylinders": cylinders, "capsules": capsules}
+
+
+class InProcessPlanner:
+    """A planner as `flowplan plan` makes it, planning in this process, with its plan checker (check.* of its
+    config). Made by make_planner.
+
+    Obstacles are keyword arguments of (K, columns) tensors, as the exported planner takes them (docs/export.md,
+    "Obstacles"); start and goal are (D,) or (B, D) raw states, or J joint positions (at rest).
+    """
+
+    def __init__(self, core):
+        self._core = core
+
+    kind = property(lambda self: self._core.kind, doc="learned, rrt_connect or hybrid")
+    horizon = property(lambda self: self._core.horizon, doc="T: states per plan")
+    state_dim = property(lambda self: self._core.state_dim, doc="D: values per state")
+    num_joints = property(lambda self: self._core.num_joints, doc="J: planned joints")
+    dt = property(lambda self: self._core.dt, doc="seconds between states")
+    source = property(lambda self: self._core.source, doc="what it was made from")
+    config = property(lambda self: self._core.config, doc="its resolved config (YAML)")
+
+    def _states(self, x, n, what):
+        x = torch.as_tensor(x, dtype=torch.float32)
+        if x.shape[-1] == self.num_joints and self.state_dim == 2 * self.num_joints:
+            x = torch.cat([x, torch.zeros_like(x)], dim=-1)  # positions at rest
+        if x.dim() == 1 and n != 0:
+            x = x.unsqueeze(0).expand(n or 1, -1)
+        elif n and x.shape[0] != n:
+            raise Error(f"plan: {what}: {x.shape[0]} states for n = {n} plans")
+        return x.contiguous()
+
+    def plan(self, start, goal, n=None, *, spheres=None, boxes=None, cylinders=None, capsules=None, seed=0,
+             floor_height=None):
+        """Plans from start to goal (n plans of one pair, or one plan per row of (B, D) starts and goals).
+
+        floor_height: the floor's height (z) for this call; None: the config's check.floor_height.
+        Returns a PlanResult. Raises flowplan.Error for bad shapes or obstacles.
+        """
+        start, goal = self._states(start, n, "start"), self._states(goal, n, "goal")
+        return PlanResult(**self._core.plan(start, goal, _scene(spheres, boxes, cylinders, capsules), int(seed),
+                                            floor_height))
+
+    def check(self, plans, start, goal, *, spheres=None, boxes=None, cylinders=None, capsules=None, found=None,
+              floor_height=None):
+        """The plan checker's verdicts on plans (N, T, D) from start to goal ((D,) or (N, D)) among the obstacles:
+        a list of N Verdicts."""
+        start, goal = self._states(start, 0, "start"), self._states(goal, 0, "goal")  # (D,) stays (D,)
+        return [Verdict(**v) for v in self._core.check(torch.as_tensor(plans), start, goal,
+                                                       _scene(spheres, boxes, cylinders, capsules), found,
+                                                       floor_height)]
+
+    def __repr__(self):
+        return f"<flowplan.InProcessPlanner {self.kind} from {self.source}: ({self.horizon}, {self.state_dim}) plans>"
+
+
+def make_planner(kind="learned", *, planner=None, ckpt=None, config=None, robot=None, overrides=()):
+    """A planner of `flowplan plan`, in-process: what `flowplan plan --planner-kind KIND` makes of the same
+    arguments (docs/planning.md).
+
+    Args:
+        kind: "learned", "rrt_connect" or "hybrid".
+        planner: an exported planner file (learned, hybrid); it runs flowplan's native kernels.
+        ckpt: a run folder or checkpoint instead of planner.
+        config: a config file (RRT-Connect: its robot, trajectories and check.*; else applied over the planner's).
+        robot: a robot folder (`flowplan robot import`) for RRT-Connect.
+        overrides: "key=value" strings, e.g. ["rrt_connect.range=1.0", "check.margin=0.01"].
+
+    Raises:
+        flowplan.Error naming what is wrong; RuntimeError if the package's C++ module is not importable.
+    """
+    if _flowplan is None:
+        raise RuntimeError(f"make_planner needs {_why_portable.replace('is not importable', 'importable')}")
+    return InProcessPlanner(_flowplan.InProcessPlanner(kind, str(planner or ""), str(ckpt or ""), str(config or ""),
+                                                       str(robot or ""), [str(o) for o in overrides]))

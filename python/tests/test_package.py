@@ -176,3 +176,71 @@ def test_without_the_cpp_module_the_files_own_code_plans(tmp_path):
     """)
     environment = dict(os.environ, PYTHONPATH=str(tmp_path))
     subprocess.run([sys.executable, "-c", script], check=True, env=environment, cwd=tmp_path)
+
+
+# The shelf scene of configs/scenes/franka_shelf.yaml as tensors: a table top, an upright board across the
+# base joint's path, a bottle.
+SHELF = {
+    "boxes": torch.tensor([[0.6, 0.0, 0.0, 0.5, 1.0, 0.04, 1.0, 0.0, 0.0, 0.0],
+                           [0.447, 0.176, 0.42, 0.2, 0.03, 0.22, 0.9825, 0.0, 0.0, 0.1864]]),
+    "cylinders": torch.tensor([[0.55, -0.2, 0.12, 0.04, 0.2, 1.0, 0.0, 0.0, 0.0]]),
+}
+SHELF_START = torch.tensor([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+SHELF_GOAL = torch.tensor([0.75, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+
+
+def straight_line(start, goal, horizon):
+    """(1, T, 14): the joint-space line at rest at both ends, velocities zero."""
+    s = torch.linspace(0, 1, horizon).unsqueeze(1)
+    return torch.cat([start + s * (goal - start), torch.zeros(horizon, 7)], dim=1).unsqueeze(0)
+
+
+def test_rrt_connect_in_process_plans_around_the_board_and_the_checker_says_why_a_line_does_not():
+    rrt = flowplan.make_planner("rrt_connect", config=os.path.join(SOURCE, "configs", "franka_joint.yaml"))
+    assert rrt.kind == "rrt_connect" and (rrt.state_dim, rrt.num_joints) == (14, 7)
+    line = straight_line(SHELF_START, SHELF_GOAL, rrt.horizon)
+    verdict, = rrt.check(line, SHELF_START, SHELF_GOAL, **SHELF)
+    assert not verdict.valid and verdict.failure in ("collision", "motion") and "boxes[1]" in verdict.reason
+    result = rrt.plan(SHELF_START, SHELF_GOAL, 3, seed=1, **SHELF)
+    assert result.plans.shape == (3, rrt.horizon, 14) and result.found.all() and not any(result.refused)
+    verdicts = rrt.check(result.plans, SHELF_START, SHELF_GOAL, found=result.found, **SHELF)
+    assert all(v.valid for v in verdicts), verdicts
+    assert all(v.clearance >= 0 for v in verdicts)
+    again = rrt.plan(SHELF_START, SHELF_GOAL, 3, seed=1, **SHELF)
+    assert torch.equal(again.plans, result.plans)  # same seed, same bytes
+    # Without the board the line is valid, and RRT-Connect's plans stay near it.
+    free = {"boxes": SHELF["boxes"][:1], "cylinders": SHELF["cylinders"]}
+    assert rrt.check(line, SHELF_START, SHELF_GOAL, **free)[0].valid
+    # A goal past a joint limit is refused, with its reason, not searched for.
+    past = SHELF_GOAL.clone()
+    past[3] = 0.5  # joint 4 stays below -0.0698 rad
+    refused = rrt.plan(SHELF_START, past, 1, **SHELF)
+    assert refused.refused == [True] and "goal" in refused.failure[0] and not refused.found.any()
+
+
+def test_hybrid_and_learned_in_process_with_the_shipped_planner():
+    hybrid = flowplan.make_planner("hybrid", planner=SPLIT, overrides=["hybrid.order=classical_first"])
+    result = hybrid.plan(SHELF_START, SHELF_GOAL, 2, **SHELF)
+    assert result.found.all() and len(result.route) == 2
+    assert all(v.valid for v in hybrid.check(result.plans, SHELF_START, SHELF_GOAL, **SHELF))
+    learned = flowplan.make_planner("learned", planner=REACH)
+    start, goal = paper_problem(flowplan.load_planner(REACH, native=False))
+    result = learned.plan(start, goal, 8, spheres=SPHERE, seed=3)
+    verdicts = learned.check(result.plans, start, goal, spheres=SPHERE)
+    assert sum(v.valid for v in verdicts) >= 6, verdicts
+    unguided = flowplan.make_planner("learned", planner=REACH, overrides=["guidance.scale=0"])
+    result = unguided.plan(start, goal, 8, spheres=SPHERE, seed=3)
+    assert sum(v.failure in ("collision", "motion") for v in unguided.check(result.plans, start, goal,
+                                                                              spheres=SPHERE)) >= 6
+
+
+def test_in_process_planners_say_what_is_wrong():
+    with pytest.raises(flowplan.Error, match="--planner-kind: expected one of"):
+        flowplan.make_planner("astar", config=os.path.join(SOURCE, "configs", "franka_joint.yaml"))
+    with pytest.raises(flowplan.Error, match="missing.pt"):
+        flowplan.make_planner("learned", planner="missing.pt")
+    rrt = flowplan.make_planner("rrt_connect", config=os.path.join(SOURCE, "configs", "franka_joint.yaml"))
+    with pytest.raises(flowplan.Error, match="boxes: .*row 0"):
+        rrt.plan(SHELF_START, SHELF_GOAL, 1, boxes=torch.tensor([[0.5, 0, 0, 0.1, 0.1, -0.1, 1, 0, 0, 0]]))
+    with pytest.raises(flowplan.Error, match="plan: start"):
+        rrt.plan(torch.zeros(5), SHELF_GOAL, 1)
