@@ -4,7 +4,8 @@
 //
 //   build/examples/plan_in_process [PLANNER.pt]   (default: the shipped reach planner)
 //
-// It links against flowplan_experiment, for ResolveRobot (the robot a file
+// It links against flowplan_experiment, for LoadExportedPlanner (the file's
+// weights with flowplan's native kernels), ResolveRobot (the robot a file
 // carries, with the built-in Franka's collision body) and the file's config.
 #include <torch/script.h>
 
@@ -16,6 +17,7 @@
 #include "core/error.h"
 #include "experiment/experiment_config.h"
 #include "experiment/plan.h"
+#include "experiment/trained_planner.h"
 #include "geometry/scene.h"
 #include "geometry/scene_rows.h"
 #include "kinematics/robot.h"
@@ -33,7 +35,8 @@ int main(int argc, char** argv) {
     const std::string file = argc > 1 ? argv[1] : FLOWPLAN_SOURCE_DIR "/pretrained/franka_reach_planner.pt";
     at::set_num_threads(2);
     torch::jit::setGraphExecutorOptimize(false);  // no profiling runs: the first plan is as fast as the next
-    std::unique_ptr<planning::LearnedPlanner> planner = planning::LearnedPlanner::Load(file);
+    // The file's planner with flowplan's native kernels (planning::LearnedPlanner::Load(file): its own code).
+    std::unique_ptr<planning::LearnedPlanner> planner = experiment::LoadExportedPlanner(file);
     const kinematics::TrajectoryInfo& info = planner->info();
     // The robot the file carries, with the Franka's collision body for checks.
     const auto robot = kinematics::MakeRobot(experiment::ResolveRobot(info.robot), file + ": robot");
