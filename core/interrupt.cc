@@ -24,6 +24,8 @@ void InstallInterruptHandler() {
 
 bool InterruptRequested() { return g_interrupted != 0; }
 
+void ClearInterrupt() { g_interrupted = 0; }
+
 void ThrowIfInterrupted() {
   if (g_interrupted) throw Error("interrupted");
 }

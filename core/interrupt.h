@@ -9,6 +9,9 @@ void InstallInterruptHandler();
 
 bool InterruptRequested();
 
+/// Lowers the flag again: for a process that goes on after an interrupted run (a Python session).
+void ClearInterrupt();
+
 /// @throws flowplan::Error("interrupted") once a signal has arrived.
 void ThrowIfInterrupted();
 

@@ -5,6 +5,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cstdint>
+#include <string>
 #include <vector>
 
 #include "experiment/command_line.h"
@@ -26,5 +28,20 @@ Command AddFkCommand(CLI::App& app);        // fk.cc: the Franka's TCP through M
 
 /// Every subcommand, in the order `flowplan --help` lists them.
 std::vector<Command> AddCommands(CLI::App& app);
+
+// The work of two commands as functions (the Python package calls them).
+
+/// `flowplan generate --config CONFIG OVERRIDES...`: the data set of the config
+/// (every episode, one file). Returns the file written (generate.out).
+/// @throws flowplan::Error as the command.
+std::string Generate(const std::string& config_path, const std::vector<std::string>& overrides);
+
+/// `flowplan train --config CONFIG OVERRIDES... [--until STEP]`, or with
+/// `resume_dir` set `flowplan train --resume RESUME_DIR OVERRIDES...`. Returns
+/// the run folder. Ctrl-C (SIGINT, SIGTERM: the caller's handlers must let
+/// core/interrupt.h's flag be raised) stops it with a checkpoint and an error
+/// that says how to resume.
+std::string Train(const std::string& config_path, const std::vector<std::string>& overrides,
+                  const std::string& resume_dir, int64_t until_step);
 
 }  // namespace flowplan::experiment

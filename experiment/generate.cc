@@ -37,7 +37,7 @@ std::pair<int, int> ParseShard(const std::string& text) {
   return {index, count};
 }
 
-void RunGenerate(const GenerateArgs& args) {
+std::string RunGenerate(const GenerateArgs& args) {
   const ExperimentConfig config = args.config.Load();
   const auto [shard_index, shard_count] = ParseShard(args.shard);
   const int threads = ResolveThreadCount(config.threads);
@@ -61,9 +61,17 @@ void RunGenerate(const GenerateArgs& args) {
   spdlog::info("wrote {}: {} episodes x {} states x {} dims ({} rejected, {} simulator warnings)", out,
                dataset.num_episodes, dataset.info.horizon, dataset.info.state_dim(), dataset.rejected_episodes,
                dataset.simulator_warnings);
+  return out;
 }
 
 }  // namespace
+
+std::string Generate(const std::string& config_path, const std::vector<std::string>& overrides) {
+  GenerateArgs args;
+  args.config.path = config_path;
+  args.config.overrides = overrides;
+  return RunGenerate(args);
+}
 
 Command AddGenerateCommand(CLI::App& app) {
   auto args = std::make_shared<GenerateArgs>();

@@ -167,6 +167,19 @@ void RunResume(const std::string& run_dir, const std::vector<std::string>& overr
 
 }  // namespace
 
+std::string Train(const std::string& config_path, const std::vector<std::string>& overrides,
+                  const std::string& resume_dir, int64_t until_step) {
+  if (!resume_dir.empty()) {
+    if (!config_path.empty()) throw Error("train: give either a config or a run folder to resume, not both");
+    RunResume(resume_dir, overrides, until_step);
+    return resume_dir;
+  }
+  if (config_path.empty()) throw Error("train: expected a config file or a run folder to resume");
+  const ExperimentConfig config = LoadExperiment(config_path, overrides);
+  RunTrain(config, trainer::TrainStart::kFresh, until_step);
+  return config.run_dir;
+}
+
 Command AddTrainCommand(CLI::App& app) {
   auto args = std::make_shared<TrainArgs>();
   CLI::App* command = app.add_subcommand("train", "train a planner (train.*, model.*, objective.*) or resume a run");
@@ -175,13 +188,13 @@ Command AddTrainCommand(CLI::App& app) {
   command->add_option("--until", args->until_step, "stop with a checkpoint at this step (0: train.steps)")
       ->check(CLI::NonNegativeNumber);
   return {command, [args] {
-            if (!args->resume.empty()) {
-              if (!args->config.path.empty()) throw Error("train: give either --config or --resume, not both");
-              RunResume(args->resume, args->config.overrides, args->until_step);
-              return;
+            if (!args->resume.empty() && !args->config.path.empty()) {
+              throw Error("train: give either --config or --resume, not both");
             }
-            if (args->config.path.empty()) throw Error("train: expected --config FILE or --resume RUN_DIR");
-            RunTrain(args->config.Load(), trainer::TrainStart::kFresh, args->until_step);
+            if (args->resume.empty() && args->config.path.empty()) {
+              throw Error("train: expected --config FILE or --resume RUN_DIR");
+            }
+            Train(args->config.path, args->config.overrides, args->resume, args->until_step);
           }};
 }
 

@@ -7,6 +7,7 @@
 #include <pybind11/stl.h>
 #include <torch/python.h>  // torch.Tensor <-> torch::Tensor, without copies
 
+#include <csignal>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -15,6 +16,9 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/interrupt.h"
+#include "core/logging.h"
+#include "experiment/commands.h"
 #include "experiment/plan.h"
 #include "experiment/trained_planner.h"
 #include "geometry/scene_rows.h"
@@ -132,10 +136,41 @@ class InProcessPlanner {
   std::unique_ptr<flowplan::validity::PlanChecker> checker_;
 };
 
+/// Runs `work` without the GIL, with flowplan's SIGINT/SIGTERM handlers in place of Python's (which cannot run
+/// while C++ works): Ctrl-C stops the work where flowplan's commands stop, and becomes KeyboardInterrupt.
+template <class Work>
+auto Interruptible(Work work) {
+  struct sigaction python_int {}, python_term {};
+  sigaction(SIGINT, nullptr, &python_int);
+  sigaction(SIGTERM, nullptr, &python_term);
+  auto restore = [&] {
+    sigaction(SIGINT, &python_int, nullptr);
+    sigaction(SIGTERM, &python_term, nullptr);
+  };
+  flowplan::ClearInterrupt();
+  flowplan::InstallInterruptHandler();
+  try {
+    py::gil_scoped_release unlocked;
+    auto result = work();
+    restore();
+    return result;
+  } catch (const flowplan::Error& e) {
+    restore();
+    if (!flowplan::InterruptRequested()) throw;
+    flowplan::ClearInterrupt();
+    PyErr_SetString(PyExc_KeyboardInterrupt, e.what());
+    throw py::error_already_set();
+  } catch (...) {
+    restore();
+    throw;
+  }
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_flowplan, m) {
   m.doc() = "flowplan's C++ library for the Python package `flowplan` (use the package, not this module).";
+  flowplan::SetUpLogging("info");  // the command line's format: "[12:00:01.234] [info] message"
   static py::exception<flowplan::Error> error(m, "Error", PyExc_RuntimeError);
   py::register_exception_translator([](std::exception_ptr thrown) {
     try {
@@ -148,6 +183,22 @@ PYBIND11_MODULE(_flowplan, m) {
         "The exported planner file at `path` assembled again with flowplan's native kernels: the bytes of its "
         "TorchScript module. Raises flowplan.Error naming the file if it is not a flowplan planner or cannot be "
         "assembled again.");
+  m.def("set_log_level", &flowplan::SetUpLogging, py::arg("level"),
+        "What flowplan logs: debug, info (the default), warn or error.");
+  m.def(
+      "generate",
+      [](const std::string& config, const std::vector<std::string>& overrides) {
+        return Interruptible([&] { return flowplan::experiment::Generate(config, overrides); });
+      },
+      py::arg("config"), py::arg("overrides"), "flowplan generate --config CONFIG OVERRIDES...: the file written");
+  m.def(
+      "train",
+      [](const std::string& config, const std::vector<std::string>& overrides, const std::string& resume,
+         int64_t until_step) {
+        return Interruptible([&] { return flowplan::experiment::Train(config, overrides, resume, until_step); });
+      },
+      py::arg("config"), py::arg("overrides"), py::arg("resume"), py::arg("until_step"),
+      "flowplan train (--config CONFIG | --resume RUN_DIR) OVERRIDES... [--until STEP]: the run folder");
   py::class_<InProcessPlanner>(m, "InProcessPlanner")
       .def(py::init<const std::string&, const std::string&, const std::string&, const std::string&,
                     const std::string&, const std::vector<std::string>&>(),

@@ -13,6 +13,12 @@ with the plan checker beside it:
     result = rrt.plan(start, goal, 4, spheres=sphere)                  # result.plans (4, 64, 14), result.found (4,)
     verdicts = rrt.check(result.plans, start, goal, spheres=sphere)    # [Verdict(valid=True, ...), ...]
 
+`generate` and `train` are `flowplan generate` and `flowplan train`:
+
+    data = flowplan.generate("configs/franka_joint.yaml", ["generate.episodes=2000"])
+    run = flowplan.train("configs/franka_joint.yaml", ["train.steps=1000"])   # logs its progress; Ctrl-C checkpoints
+    rrt_or_learned = flowplan.make_planner("learned", ckpt=run)
+
 `load_planner` returns a `Planner` with the exported module's interface (docs/export.md: `sample`, `plan`,
 `tcp`, `ik`, `clearance`, `cost`, `settings`, `state_dim`, ...). With the package's C++ part
 (`flowplan._flowplan`, built with flowplan) it runs the file's weights with flowplan's native kernels; with
@@ -34,8 +40,8 @@ except ImportError as missing:  # PyTorch alone: the portable code of the files
 else:
     _why_portable = ""
 
-__all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Verdict", "load_planner", "make_planner",
-           "native_kernels"]
+__all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Verdict", "generate", "load_planner",
+           "make_planner", "native_kernels", "set_log_level", "train"]
 
 #: What flowplan raises for bad input (a file that is not a planner, a planner that cannot take the kernels);
 #: a RuntimeError. The message names the file.
@@ -214,7 +220,36 @@ def make_planner(kind="learned", *, planner=None, ckpt=None, config=None, robot=
     Raises:
         flowplan.Error naming what is wrong; RuntimeError if the package's C++ module is not importable.
     """
-    if _flowplan is None:
-        raise RuntimeError(f"make_planner needs {_why_portable.replace('is not importable', 'importable')}")
-    return InProcessPlanner(_flowplan.InProcessPlanner(kind, str(planner or ""), str(ckpt or ""), str(config or ""),
+    return InProcessPlanner(_cpp("make_planner").InProcessPlanner(kind, str(planner or ""), str(ckpt or ""), str(config or ""),
                                                        str(robot or ""), [str(o) for o in overrides]))
+
+
+def _cpp(what):
+    if _flowplan is None:
+        raise RuntimeError(f"{what} needs {_why_portable.replace('is not importable', 'importable')}")
+    return _flowplan
+
+
+def generate(config, overrides=()):
+    """`flowplan generate --config CONFIG OVERRIDES...`: rolls out the config's data set (generate.*; threads from
+    `threads`) and returns the path of the HDF5 file written (generate.out). Progress goes to the log.
+
+    Raises flowplan.Error naming the file or key at fault; KeyboardInterrupt on Ctrl-C (nothing is left written).
+    """
+    return _cpp("generate").generate(str(config), [str(o) for o in overrides])
+
+
+def train(config=None, overrides=(), *, resume=None, until_step=0):
+    """`flowplan train --config CONFIG OVERRIDES...`, or with resume=RUN_DIR `flowplan train --resume RUN_DIR
+    OVERRIDES...`; until_step > 0 stops with a checkpoint at that step. Returns the run folder (config.yaml,
+    metrics.jsonl, checkpoints/; docs/getting_started.md). The loss and validation loss go to the log as it trains.
+
+    Raises flowplan.Error naming what is wrong; KeyboardInterrupt on Ctrl-C, after a checkpoint of the step reached
+    (resume=RUN_DIR continues the run exactly).
+    """
+    return _cpp("train").train(str(config or ""), [str(o) for o in overrides], str(resume or ""), int(until_step))
+
+
+def set_log_level(level):
+    """What flowplan logs (to the console, as the command line does): "debug", "info" (default), "warn", "error"."""
+    _cpp("set_log_level").set_log_level(str(level))

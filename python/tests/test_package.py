@@ -244,3 +244,56 @@ def test_in_process_planners_say_what_is_wrong():
         rrt.plan(SHELF_START, SHELF_GOAL, 1, boxes=torch.tensor([[0.5, 0, 0, 0.1, 0.1, -0.1, 1, 0, 0, 0]]))
     with pytest.raises(flowplan.Error, match="plan: start"):
         rrt.plan(torch.zeros(5), SHELF_GOAL, 1)
+
+
+def test_generate_train_resume_and_plan_from_python(tmp_path):
+    tiny = os.path.join(SOURCE, "tests", "cli", "tiny.yaml")
+    paths = [f"generate.out={tmp_path}/data.h5", f"data.path={tmp_path}/data.h5", f"run_dir={tmp_path}/run"]
+    assert flowplan.generate(tiny, paths) == f"{tmp_path}/data.h5"
+    run = flowplan.train(tiny, paths, until_step=3)
+    assert run == f"{tmp_path}/run"
+    assert sorted(os.listdir(os.path.join(run, "checkpoints"))) == ["step_00000003.pt"]
+    assert flowplan.train(resume=run) == run
+    assert "step_00000006.pt" in os.listdir(os.path.join(run, "checkpoints"))
+    learned = flowplan.make_planner("learned", ckpt=run)
+    result = learned.plan(torch.tensor([0.0, 0.0, 0.0, 0.0]), torch.tensor([1.0, 0.0, 0.0, 0.0]), 3,
+                          spheres=torch.tensor([[0.5, 0.3, 0.1]]))
+    assert result.plans.shape == (3, 16, 4)
+    with pytest.raises(flowplan.Error, match="train: give either a config or a run folder to resume, not both"):
+        flowplan.train(tiny, resume=run)
+    with pytest.raises(flowplan.Error, match="model.unet.down_dims"):
+        flowplan.train(resume=run, overrides=["model.unet.down_dims=[8,32]"])
+    with pytest.raises(flowplan.Error, match="loud"):
+        flowplan.set_log_level("loud")
+    flowplan.set_log_level("info")
+
+
+def test_ctrl_c_while_training_checkpoints_and_raises_keyboard_interrupt(tmp_path):
+    tiny = os.path.join(SOURCE, "tests", "cli", "tiny.yaml")
+    script = textwrap.dedent(f"""
+        import flowplan
+        paths = ["generate.out={tmp_path}/data.h5", "data.path={tmp_path}/data.h5", "run_dir={tmp_path}/run"]
+        flowplan.generate({tiny!r}, paths)
+        print("training", flush=True)
+        try:
+            flowplan.train({tiny!r}, paths + ["train.steps=1000000", "train.checkpoint_every=1000000",
+                                               "train.eval_every=1000000", "train.log_every=100"])
+        except KeyboardInterrupt as interrupt:
+            print("KeyboardInterrupt:", interrupt, flush=True)
+        print("after", flowplan.train(resume="{tmp_path}/run", overrides=["train.steps=3"]), flush=True)
+    """)
+    process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                               text=True, cwd=tmp_path)
+    lines = []
+    for line in process.stdout:
+        lines.append(line)
+        if "step 200" in line or "step=200" in line or ("step" in line and "loss" in line and len(lines) > 8):
+            process.send_signal(2)  # SIGINT
+            break
+    output = "".join(lines) + process.communicate(timeout=120)[0]
+    assert process.returncode == 0, output
+    assert "KeyboardInterrupt: interrupted at step" in output, output
+    assert "continue with: flowplan train --resume" in output
+    # The interrupted run resumes (here to a shorter end: nothing left to train), and Python went on.
+    assert f"after {tmp_path}/run" in output
+    assert any(name.startswith("step_") for name in os.listdir(tmp_path / "run" / "checkpoints"))
