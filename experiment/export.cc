@@ -55,21 +55,21 @@ Command AddExportCommand(CLI::App& app) {
             std::unique_ptr<planning::LearnedPlanner> planner;
             std::string source, out = args->out;
             if (!args->planner.empty()) {
+              if (out.empty()) throw Error("export --planner: give --out (the file is not written over)");
+              if (std::filesystem::exists(out) && std::filesystem::equivalent(out, args->planner)) {
+                throw Error(out + ": is the planner being read; give another --out");
+              }
               const auto file = planning::LearnedPlanner::Load(args->planner);
               ExperimentConfig config = LoadExperimentText(file->config_yaml(), args->planner + " (its config)",
                                                            args->overlay.path, overrides);
               config.scene = scene;
               planner = AssembleExported(*file, config);
               source = args->planner;
-              if (out.empty()) throw Error("export --planner: give --out (the file is not written over)");
             } else {
               TrainedPlanner loaded = LoadTrainedPlanner(args->ckpt, args->overlay.path, overrides, scene);
               source = loaded.checkpoint + " (step " + std::to_string(loaded.step) + ")";
               if (out.empty()) out = trainer::RunDir(RunFolderOf(loaded.checkpoint)).planner();
               planner = std::move(loaded.planner);
-            }
-            if (std::filesystem::exists(out) && std::filesystem::equivalent(out, args->planner.empty() ? out : args->planner)) {
-              throw Error(out + ": is the planner being read; give another --out");
             }
             EnsureParentFolder(out);
             planner->Save(out);

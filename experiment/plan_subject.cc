@@ -37,18 +37,26 @@ planning::PlanSettings CallSettings(const planning::LearnedPlanner& planner, con
 
 PlanSubject FromFile(const PlanArgs& args) {
   PlanSubject subject;
-  // The file's weights with flowplan's native kernels, unless the call asks for LibTorch's operators.
-  std::unique_ptr<planning::LearnedPlanner> planner = LoadExportedPlanner(args.planner_file);
+  std::unique_ptr<planning::LearnedPlanner> planner = planning::LearnedPlanner::Load(args.planner_file);
   const std::string where = args.planner_file + " (its config)";
   const ExperimentConfig exported = LoadExperimentText(planner->config_yaml(), where, "", {});
-  subject.config = LoadExperimentText(planner->config_yaml(), where, args.overlay_path, args.overrides);
+  // The file's weights with flowplan's native kernels, unless the call asks for the file's own code.
+  ExperimentConfig native = exported;
+  native.sampler.network_kernels = models::Kernels::kNative;
+  native.guidance.distance_kernels = models::Kernels::kNative;
+  subject.config = LoadExperimentText(ToYaml(native), where, args.overlay_path, args.overrides);
   CheckExportedKeys(exported, subject.config, args.planner_file);
   if (subject.config.sampler.network_kernels != exported.sampler.network_kernels ||
       subject.config.guidance.distance_kernels != exported.guidance.distance_kernels) {
     ExperimentConfig kernels = exported;
     kernels.sampler.network_kernels = subject.config.sampler.network_kernels;
     kernels.guidance.distance_kernels = subject.config.guidance.distance_kernels;
-    planner = AssembleExported(*planner, kernels);
+    bool assembled = false;
+    planner = AssembleOrKeep(std::move(planner), kernels, &assembled);
+    if (!assembled) {  // the report says what plans
+      subject.config.sampler.network_kernels = exported.sampler.network_kernels;
+      subject.config.guidance.distance_kernels = exported.guidance.distance_kernels;
+    }
   }
   subject.settings = CallSettings(*planner, subject.config);
   subject.trajectory = planner->info();

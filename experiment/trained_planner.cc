@@ -5,6 +5,7 @@
 #include "checkpoints/checkpoint.h"
 #include "core/error.h"
 #include "core/format.h"
+#include "jit/library.h"
 #include "models/conditioning.h"
 #include "models/device.h"
 #include "models/model_config.h"
@@ -72,7 +73,14 @@ TrainedPlanner LoadTrainedPlanner(const std::string& ckpt, const std::string& ov
 
 std::unique_ptr<planning::LearnedPlanner> AssembleExported(const planning::LearnedPlanner& file,
                                                            const ExperimentConfig& given) {
-  if (file.kind() == "latent") return std::make_unique<planning::LearnedPlanner>(file.module(), file.source());
+  if (file.kind() == "latent") {
+    throw Error(file.source() + ": a VAE planner has no native kernels; it plans with the file's own code");
+  }
+  if (!given.guidance.user_cost.empty()) {
+    // The cost is compiled into the file; assembling again would compile whatever is at its path now.
+    throw Error(file.source() + ": its user cost (" + given.guidance.user_cost +
+                ") is compiled into it; it plans with the file's own code");
+  }
   CheckExportedKeys(LoadExperimentText(file.config_yaml(), file.source() + " (its config)", "", {}), given,
                     file.source());
   ExperimentConfig config = given;
@@ -91,9 +99,28 @@ std::unique_ptr<planning::LearnedPlanner> AssembleExported(const planning::Learn
     if (trajectory_net == nullptr) throw Error(file.source() + ": its network is not a trajectory network");
     models::ReadScriptedWeights(*trajectory_net, exported, file.source());
     net->eval();
+    // The weights read back must make the file's network: its forward pass on one random input, against the
+    // network written again with the same (portable) code.
+    torch::NoGradGuard no_grad;
+    const int64_t T = file.info().horizon, C = trajectory_net->cond_dim();
+    auto generator = at::make_generator<at::CPUGeneratorImpl>(7);
+    const torch::Tensor x = torch::randn({2, T, D}, generator, torch::kFloat32);
+    const torch::Tensor t = torch::rand({2}, generator, torch::kFloat32);
+    const c10::IValue cond = C > 0 ? c10::IValue(torch::randn({2, C}, generator, torch::kFloat32)) : c10::IValue();
+    const torch::Tensor theirs = jit::Call(exported, "forward", {x, t, cond}).toTensor();
+    const torch::Tensor ours =
+        jit::Call(models::ScriptNetwork(*trajectory_net, models::Kernels::kPortable), "forward", {x, t, cond}).toTensor();
+    const double scale = std::max(1.0, theirs.abs().max().item<double>());
+    if (!((ours - theirs).abs().max().item<double>() <= 1e-5 * scale)) {
+      throw Error(file.source() + ": the network read back from it does not compute what its own does");
+    }
     parts.net = net;
   } catch (const c10::Error& e) {
     throw Error(file.source() + ": cannot read its network and normalizer: " + FirstLine(e.what_without_backtrace()));
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {  // torch::jit::ObjectAttributeError: a module without our submodules
+    throw Error(file.source() + ": cannot read its network and normalizer: " + FirstLine(e.what()));
   }
   parts.objective = config.objective;
   parts.sampler = config.sampler;
@@ -104,21 +131,44 @@ std::unique_ptr<planning::LearnedPlanner> AssembleExported(const planning::Learn
   return std::make_unique<planning::LearnedPlanner>(assembled->module(), file.source());
 }
 
-std::unique_ptr<planning::LearnedPlanner> AssembleNative(const planning::LearnedPlanner& file) {
+namespace {
+
+/// The file's config with flowplan's native kernels.
+ExperimentConfig NativeConfig(const planning::LearnedPlanner& file) {
   ExperimentConfig config = LoadExperimentText(file.config_yaml(), file.source() + " (its config)", "", {});
   config.sampler.network_kernels = models::Kernels::kNative;
   config.guidance.distance_kernels = models::Kernels::kNative;
-  return AssembleExported(file, config);
+  return config;
+}
+
+}  // namespace
+
+std::unique_ptr<planning::LearnedPlanner> AssembleNative(const planning::LearnedPlanner& file) {
+  return AssembleExported(file, NativeConfig(file));
+}
+
+std::unique_ptr<planning::LearnedPlanner> AssembleOrKeep(std::unique_ptr<planning::LearnedPlanner> file,
+                                                         const ExperimentConfig& config, bool* assembled) {
+  if (assembled != nullptr) *assembled = false;
+  try {
+    auto planner = AssembleExported(*file, config);
+    if (assembled != nullptr) *assembled = true;
+    return planner;
+  } catch (const Error& e) {
+    // A VAE and a compiled-in user cost are expected to plan so; anything else is worth a warning.
+    if (file->kind() == "latent" || !config.guidance.user_cost.empty()) {
+      spdlog::info("{}", e.what());
+    } else {
+      spdlog::warn("{}: plans with the file's own code, not flowplan's native kernels: {}", file->source(), e.what());
+    }
+    return file;
+  }
 }
 
 std::unique_ptr<planning::LearnedPlanner> LoadExportedPlanner(const std::string& path) {
   std::unique_ptr<planning::LearnedPlanner> file = planning::LearnedPlanner::Load(path);
-  try {
-    return AssembleNative(*file);
-  } catch (const Error& e) {
-    spdlog::warn("{}: plans with the file's own code, not flowplan's native kernels: {}", path, e.what());
-    return file;
-  }
+  const ExperimentConfig config = NativeConfig(*file);
+  return AssembleOrKeep(std::move(file), config);
 }
 
 }  // namespace flowplan::experiment

@@ -37,10 +37,13 @@ TrainedPlanner LoadTrainedPlanner(const std::string& ckpt, const std::string& ov
 /// into the file (CheckExportedKeys) but free in the kernels
 /// (sampler.network_kernels, guidance.distance_kernels), every per-call number
 /// and the scene. How flowplan plans with a portable file at the speed of its
-/// native operators. A VAE planner (no native network) comes back as loaded.
+/// native operators. The network read back is held to the file's: the same
+/// forward pass on a random input, to 1e-5.
 /// @throws flowplan::Error naming the file if its weights do not fit its
-///   config, a compiled-in key changed, or a user cost file it was compiled
-///   with is gone.
+///   config or do not compute what its network does, a compiled-in key
+///   changed, it is a VAE planner (no native kernels), or it carries a user
+///   cost (compiled into the file; assembling again would read the cost's
+///   file as it is now).
 std::unique_ptr<planning::LearnedPlanner> AssembleExported(const planning::LearnedPlanner& file,
                                                            const ExperimentConfig& config);
 
@@ -49,9 +52,14 @@ std::unique_ptr<planning::LearnedPlanner> AssembleExported(const planning::Learn
 /// @throws flowplan::Error as AssembleExported.
 std::unique_ptr<planning::LearnedPlanner> AssembleNative(const planning::LearnedPlanner& file);
 
+/// AssembleExported(*file, config), or `file` itself, with a log line saying
+/// why, when it cannot be assembled again (info for a VAE planner or a user
+/// cost, a warning for anything else). `assembled`, when given, says which.
+std::unique_ptr<planning::LearnedPlanner> AssembleOrKeep(std::unique_ptr<planning::LearnedPlanner> file,
+                                                         const ExperimentConfig& config, bool* assembled = nullptr);
+
 /// An exported planner file as flowplan plans with it: AssembleNative, or the
-/// file as written (and a warning saying why) when it cannot be assembled
-/// again.
+/// file as written when it cannot be assembled again (AssembleOrKeep).
 /// @throws flowplan::Error naming the file if it is not a flowplan planner.
 std::unique_ptr<planning::LearnedPlanner> LoadExportedPlanner(const std::string& path);
 

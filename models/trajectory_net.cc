@@ -1,5 +1,7 @@
 #include "models/trajectory_net.h"
 
+#include <map>
+
 #include "core/error.h"
 #include "core/format.h"
 #include "jit/script_writer.h"
@@ -56,51 +58,75 @@ void ReadScriptedWeights(TrajectoryNet& net, const torch::jit::Module& scripted,
   for (auto& entry : net.named_buffers(true)) weights.push_back(entry.value());
   int64_t count = 0;
   for (const torch::Tensor& w : weights) count += w.numel();
-  // Markers are whole numbers that float32 holds exactly, far from the small constants a script may carry.
-  constexpr double kFirst = 1 << 20, kEnd = 1 << 24;
-  if (kFirst + static_cast<double>(count) > kEnd) {
-    throw Error(where + ": a network of " + std::to_string(count) + " weights is too large to read back");
-  }
   torch::NoGradGuard no_grad;
+  // Markers are whole numbers that float32 holds exactly, far from the small constants a script may carry; a
+  // network of more elements than one pass can number is marked a window at a time (the rest set to zero).
+  constexpr int64_t kFirst = int64_t{1} << 20, kWindow = (int64_t{1} << 24) - kFirst;
   std::vector<torch::Tensor> kept;
-  int64_t next = 0;
-  for (torch::Tensor& w : weights) {
-    kept.push_back(w.clone());
-    w.copy_(torch::arange(kFirst + next, kFirst + next + w.numel(), torch::kFloat64).view(w.sizes()));
-    next += w.numel();
-  }
-  const torch::jit::Module marked = ScriptNetwork(net, Kernels::kPortable);
-  for (size_t i = 0; i < weights.size(); ++i) weights[i].copy_(kept[i]);
+  for (const torch::Tensor& w : weights) kept.push_back(w.clone());
+  struct Restore {  // the network's own weights back, however this ends
+    std::vector<torch::Tensor>& weights;
+    std::vector<torch::Tensor>& kept;
+    ~Restore() {
+      torch::NoGradGuard no_grad;
+      for (size_t i = 0; i < weights.size(); ++i) weights[i].copy_(kept[i]);
+    }
+  } restore{weights, kept};
   torch::Tensor values = torch::empty({count}, torch::kFloat64);
   torch::Tensor written = torch::zeros({count}, torch::kBool);
-  for (const auto& entry : marked.named_buffers(false)) {
-    const std::string& name = entry.name;
-    if (!scripted.hasattr(name) || !scripted.attr(name).isTensor()) {
-      throw Error(where + ": the network has no weight " + name + " that its config's model.* asks for");
+  std::map<std::string, torch::Tensor> marked_somewhere;  // per script tensor: elements that held a marker
+  std::map<std::string, torch::Tensor> constants;         // per script tensor: its values with every weight zero
+  for (int64_t window = 0; window < count; window += kWindow) {
+    int64_t next = 0;
+    for (torch::Tensor& w : weights) {
+      const torch::Tensor index = torch::arange(next, next + w.numel(), torch::kFloat64);
+      const torch::Tensor inside = (index >= window) & (index < window + kWindow);
+      w.copy_(torch::where(inside, index - window + kFirst, torch::zeros_like(index)).view(w.sizes()));
+      next += w.numel();
     }
-    const torch::Tensor given = scripted.attr(name).toTensor();
-    if (given.sizes() != entry.value.sizes()) {
-      throw Error(where + ": network weight " + name + " is " + ShapeString(given) + ", its config's model.* makes it " +
-                  ShapeString(entry.value));
+    const torch::jit::Module marked = ScriptNetwork(net, Kernels::kPortable);
+    for (const auto& entry : marked.named_buffers(false)) {
+      const std::string& name = entry.name;
+      if (!scripted.hasattr(name) || !scripted.attr(name).isTensor()) {
+        throw Error(where + ": the network has no weight " + name + " that its config's model.* asks for");
+      }
+      const torch::Tensor given = scripted.attr(name).toTensor();
+      if (given.sizes() != entry.value.sizes()) {
+        throw Error(where + ": network weight " + name + " is " + ShapeString(given) +
+                    ", its config's model.* makes it " + ShapeString(entry.value));
+      }
+      const torch::Tensor marker = entry.value.to(torch::kFloat64).flatten();
+      const torch::Tensor value = given.to(torch::kFloat64).flatten();
+      const torch::Tensor is_marker = (marker >= kFirst) & (marker < kFirst + kWindow) & (marker == marker.round());
+      auto [at, fresh] = marked_somewhere.emplace(name, is_marker.clone());
+      if (!fresh) at->second |= is_marker;
+      if (window == 0) constants[name] = marker.masked_fill(is_marker, 0.0);
+      const torch::Tensor index = (marker.masked_select(is_marker) - kFirst).to(torch::kLong) + window;
+      const torch::Tensor found = value.masked_select(is_marker);
+      // An element written to several places must hold one value in all of them.
+      const torch::Tensor before = values.index({index}), seen = written.index({index});
+      if (!torch::equal(before.masked_select(seen), found.masked_select(seen))) {
+        throw Error(where + ": network weight " + name + " holds one weight of the network twice, with two values");
+      }
+      values.index_put_({index}, found);
+      written.index_put_({index}, true);
     }
-    const torch::Tensor marker = entry.value.to(torch::kFloat64).flatten();
-    const torch::Tensor value = given.to(torch::kFloat64).flatten();
-    const torch::Tensor is_marker = (marker >= kFirst) & (marker < kFirst + count) & (marker == marker.round());
-    if (!torch::equal(marker.masked_select(~is_marker), value.masked_select(~is_marker))) {
+  }
+  // What is not a weight anywhere is a constant of the script: the file's must be the same.
+  for (const auto& [name, mask] : marked_somewhere) {
+    const torch::Tensor value = scripted.attr(name).toTensor().to(torch::kFloat64).flatten();
+    if (!torch::equal(value.masked_select(~mask), constants.at(name).masked_select(~mask))) {
       throw Error(where + ": network weight " + name + " is not a rearrangement of the network's weights");
     }
-    const torch::Tensor index = (marker.masked_select(is_marker) - kFirst).to(torch::kLong);
-    values.index_put_({index}, value.masked_select(is_marker));
-    written.index_put_({index}, true);
   }
   if (!written.all().item<bool>()) {
     throw Error(where + ": " + std::to_string(count - written.sum().item<int64_t>()) +
                 " of the network's weights are not in its script");
   }
-  next = 0;
-  for (torch::Tensor& w : weights) {
-    w.copy_(values.slice(0, next, next + w.numel()).view(w.sizes()));
-    next += w.numel();
+  int64_t next = 0;
+  for (torch::Tensor& kept_weight : kept) {  // what Restore writes back: the weights read
+    kept_weight.copy_(values.slice(0, next, next + kept_weight.numel()).view(kept_weight.sizes()));
+    next += kept_weight.numel();
   }
 }
 

@@ -69,6 +69,8 @@ class Planner:
         self.source = source
 
     def __getattr__(self, name):
+        if name.startswith("__") or name in ("module", "native", "source"):  # copy, pickle: not the module's
+            raise AttributeError(name)
         value = getattr(self.module, name)
         if not callable(value) or isinstance(value, torch.nn.Module):
             return value
@@ -80,6 +82,11 @@ class Planner:
         call.__name__ = name
         call.__doc__ = f"The exported planner's {name} (docs/export.md), without gradients."
         return call
+
+    def __dir__(self):
+        methods = [name for name in ("plan", "sample", "clearance", "tcp", "collision_spheres", "ik", "normalize",
+                                     "denormalize", "call_settings") if hasattr(self.module, name)]
+        return sorted(set(super().__dir__()) | set(methods))
 
     def __repr__(self):
         kernels = "native kernels" if self.native else "portable code"
@@ -149,7 +156,10 @@ class Verdict:
 
 
 def _scene(spheres, boxes, cylinders, capsules):
-    return {"spheres": spheres, "boxes": boxes, "cylinders": cylinders, "capsules": capsules}
+    """The obstacles as (K, columns) tensors (lists and arrays of rows too)."""
+    scene = {"spheres": spheres, "boxes": boxes, "cylinders": cylinders, "capsules": capsules}
+    return {kind: rows if rows is None or isinstance(rows, torch.Tensor) else torch.as_tensor(rows, dtype=torch.float64)
+            for kind, rows in scene.items()}
 
 
 class InProcessPlanner:

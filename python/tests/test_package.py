@@ -97,6 +97,16 @@ def test_any_arm_planner_loads_native():
     assert torch.allclose(plans[:, 0], start, atol=1e-5) and torch.allclose(plans[:, -1], goal, atol=1e-5)
 
 
+def test_a_planner_is_a_python_object_like_any_other():
+    import copy
+    planner = flowplan.load_planner(REACH)
+    assert "sample" in dir(planner) and "ik" in dir(planner)
+    shallow = copy.copy(planner)
+    assert shallow.module is planner.module and shallow.native
+    with pytest.raises(AttributeError):
+        planner.no_such_method
+
+
 def test_bad_files_are_one_clear_error(tmp_path):
     with pytest.raises(FileNotFoundError):
         flowplan.load_planner(tmp_path / "missing.pt")
@@ -257,8 +267,23 @@ def test_generate_train_resume_and_plan_from_python(tmp_path):
     assert "step_00000006.pt" in os.listdir(os.path.join(run, "checkpoints"))
     learned = flowplan.make_planner("learned", ckpt=run)
     result = learned.plan(torch.tensor([0.0, 0.0, 0.0, 0.0]), torch.tensor([1.0, 0.0, 0.0, 0.0]), 3,
-                          spheres=torch.tensor([[0.5, 0.3, 0.1]]))
+                          spheres=[[0.5, 0.3, 0.1]])  # rows as a list: the same as a tensor
     assert result.plans.shape == (3, 16, 4)
+    # A user cost is compiled into an exported file: the file plans with it even after its source changed
+    # (assembling the planner again would read the source as it is now).
+    cost = tmp_path / "above.py"
+    cost.write_text("def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
+                    "    return torch.relu(0.2 - self.robot.tcp(q)[:, :, 1]).sum(1)\n")
+    export("--ckpt", run, "--out", tmp_path / "costly.pt", f"guidance.user_cost={cost}",
+           "guidance.user_cost_weight=1", "guidance.scale=2")
+    ends = torch.tensor([0.0, 0.0, 0.0, 0.0]), torch.tensor([1.0, 0.0, 0.0, 0.0])
+    before = flowplan.make_planner("learned", planner=tmp_path / "costly.pt").plan(*ends, 3, seed=2).plans
+    cost.write_text("def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
+                    "    return torch.relu(self.robot.tcp(q)[:, :, 1] + 5.0).sum(1)\n")
+    after = flowplan.make_planner("learned", planner=tmp_path / "costly.pt").plan(*ends, 3, seed=2).plans
+    assert torch.equal(before, after)
+    with pytest.warns(UserWarning, match="user cost .* is compiled into it"):
+        assert not flowplan.load_planner(tmp_path / "costly.pt").native
     with pytest.raises(flowplan.Error, match="train: give either a config or a run folder to resume, not both"):
         flowplan.train(tiny, resume=run)
     with pytest.raises(flowplan.Error, match="model.unet.down_dims"):

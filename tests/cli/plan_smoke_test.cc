@@ -243,6 +243,10 @@ TEST(InstalledPlanTest, AnInstalledBinaryPlansAndDrawsFromAnotherFolder) {
   EXPECT_THAT(plan.output, HasSubstr("with " + prefix + "/share/flowplan/plot.py"));
   EXPECT_TRUE(fs::exists(work + "/p.png") && fs::exists(work + "/p.json") && fs::exists(work + "/p.h5"));
   ExpectOk(installed("export --ckpt run --log-level warn"));
+  ExpectOk(installed("export --ckpt run --log-level warn"));  // written again over the first
+  const Outcome onto_itself = installed("export --planner run/planner.pt --out run/planner.pt");
+  EXPECT_NE(onto_itself.exit_code, 0);
+  EXPECT_THAT(onto_itself.output, HasSubstr("run/planner.pt: is the planner being read; give another --out"));
   ExpectOk(installed("plan --planner run/planner.pt --start 0,0 --goal 1,0 --capsule 0.4,0.2,0.6,0.2,0.05 -n 2 --no-plot "
                      "--out q --log-level warn"));
   // The installed Python package plans with the exported particle planner through flowplan's native kernels.
