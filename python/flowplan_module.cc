@@ -7,7 +7,9 @@
 #include <pybind11/stl.h>
 #include <torch/python.h>  // torch.Tensor <-> torch::Tensor, without copies
 
+#include <cmath>
 #include <csignal>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -22,7 +24,9 @@
 #include "experiment/plan.h"
 #include "experiment/trained_planner.h"
 #include "geometry/scene_rows.h"
+#include "geometry/scene.h"
 #include "planning/learned_planner.h"
+#include "problems/problem.h"
 #include "validity/plan_check.h"
 
 namespace py = pybind11;
@@ -63,7 +67,7 @@ class InProcessPlanner {
   }
 
   py::dict Plan(const torch::Tensor& start, const torch::Tensor& goal, const py::dict& scene, uint64_t seed,
-                std::optional<double> floor_height) const {
+                std::optional<double> floor_height, const std::map<std::string, double>& held) const {
     flowplan::planning::PlanRequest request;
     request.start = start.to(torch::kFloat32).contiguous();
     request.goal = goal.to(torch::kFloat32).contiguous();
@@ -71,6 +75,7 @@ class InProcessPlanner {
     request.seed = seed;
     request.settings = subject_.settings;
     request.world.floor_height = floor_height;
+    request.world.held = held;
     flowplan::planning::PlanResult result;
     {
       py::gil_scoped_release unlocked;
@@ -92,9 +97,10 @@ class InProcessPlanner {
 
   std::vector<py::dict> Check(const torch::Tensor& plans, const torch::Tensor& start, const torch::Tensor& goal,
                               const py::dict& scene, const std::optional<torch::Tensor>& found,
-                              std::optional<double> floor_height) const {
+                              std::optional<double> floor_height, const std::map<std::string, double>& held) const {
     flowplan::collision::WorldOptions world;
     world.floor_height = floor_height;
+    world.held = held;
     const flowplan::geometry::SceneRows rows = Rows(scene);
     std::vector<flowplan::validity::PlanVerdict> verdicts;
     {
@@ -166,6 +172,41 @@ auto Interruptible(Work work) {
   }
 }
 
+/// A scene's obstacles as the planners take them: kind -> (K, columns) float64 rows.
+py::dict SceneDict(const flowplan::geometry::Scene& scene, int workspace_dim, const std::string& where) {
+  py::dict out;
+  for (const auto& entry : flowplan::geometry::Rows(scene, workspace_dim, where)) out[py::str(entry.key())] = entry.value();
+  return out;
+}
+
+py::dict LoadScene(const std::string& path, int workspace_dim) {
+  return SceneDict(flowplan::geometry::LoadScene(path), workspace_dim, path);
+}
+
+/// A problem file's problems, each a dict of Problem's fields (docs/planning.md, "Problem files").
+py::list LoadProblems(const std::string& path) {
+  const flowplan::problems::ProblemSet set = flowplan::problems::LoadProblemSet(path);
+  py::list out;
+  for (const flowplan::problems::Problem& p : set.problems) {
+    py::dict entry;
+    entry["name"] = p.name;
+    entry["start"] = torch::tensor(p.start_q, torch::kFloat64);
+    entry["goal"] = torch::tensor(p.goal_q, torch::kFloat64);
+    const int W = p.start_tcp.size() == 2 ? 2 : 3;
+    entry["scene"] = SceneDict(p.scene, W, path + ": " + p.name);
+    entry["obstacle_names"] = p.obstacle_names;
+    entry["floor_height"] = std::isinf(p.floor_height) ? py::none() : py::cast(p.floor_height);
+    std::map<std::string, double> held;
+    for (const auto& joint : p.held) held[joint.joint] = joint.value;
+    entry["held"] = held;
+    entry["status"] = p.status;
+    entry["reason"] = p.reason;
+    entry["notes"] = p.notes;
+    out.append(entry);
+  }
+  return out;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_flowplan, m) {
@@ -183,6 +224,9 @@ PYBIND11_MODULE(_flowplan, m) {
         "The exported planner file at `path` assembled again with flowplan's native kernels: the bytes of its "
         "TorchScript module. Raises flowplan.Error naming the file if it is not a flowplan planner or cannot be "
         "assembled again.");
+  m.def("load_scene", &LoadScene, py::arg("path"), py::arg("workspace_dim"),
+        "A scene file's obstacles: kind -> (K, columns) float64 rows.");
+  m.def("load_problems", &LoadProblems, py::arg("path"), "A problem file's problems, as dicts.");
   m.def("set_log_level", &flowplan::SetUpLogging, py::arg("level"),
         "What flowplan logs: debug, info (the default), warn or error.");
   m.def(
@@ -205,9 +249,9 @@ PYBIND11_MODULE(_flowplan, m) {
            py::arg("kind"), py::arg("planner"), py::arg("ckpt"), py::arg("config"), py::arg("robot"),
            py::arg("overrides"))
       .def("plan", &InProcessPlanner::Plan, py::arg("start"), py::arg("goal"), py::arg("scene"), py::arg("seed"),
-           py::arg("floor_height"))
+           py::arg("floor_height"), py::arg("held"))
       .def("check", &InProcessPlanner::Check, py::arg("plans"), py::arg("start"), py::arg("goal"), py::arg("scene"),
-           py::arg("found"), py::arg("floor_height"))
+           py::arg("found"), py::arg("floor_height"), py::arg("held"))
       .def_property_readonly("kind", &InProcessPlanner::kind)
       .def_property_readonly("horizon", &InProcessPlanner::horizon)
       .def_property_readonly("state_dim", &InProcessPlanner::state_dim)

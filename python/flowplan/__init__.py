@@ -40,8 +40,8 @@ except ImportError as missing:  # PyTorch alone: the portable code of the files
 else:
     _why_portable = ""
 
-__all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Verdict", "generate", "load_planner",
-           "make_planner", "native_kernels", "set_log_level", "train"]
+__all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Problem", "Verdict", "generate", "load_planner",
+           "load_problems", "load_scene", "make_planner", "native_kernels", "set_log_level", "train"]
 
 #: What flowplan raises for bad input (a file that is not a planner, a planner that cannot take the kernels);
 #: a RuntimeError. The message names the file.
@@ -192,24 +192,25 @@ class InProcessPlanner:
         return x.contiguous()
 
     def plan(self, start, goal, n=None, *, spheres=None, boxes=None, cylinders=None, capsules=None, seed=0,
-             floor_height=None):
+             floor_height=None, held=None):
         """Plans from start to goal (n plans of one pair, or one plan per row of (B, D) starts and goals).
 
-        floor_height: the floor's height (z) for this call; None: the config's check.floor_height.
+        floor_height: the floor's height (z) for this call, -inf for none; None: the config's check.floor_height.
+        held: joints that are not planned, by name, held at these values (a gripper's fingers); None: the robot's.
         Returns a PlanResult. Raises flowplan.Error for bad shapes or obstacles.
         """
         start, goal = self._states(start, n, "start"), self._states(goal, n, "goal")
         return PlanResult(**self._core.plan(start, goal, _scene(spheres, boxes, cylinders, capsules), int(seed),
-                                            floor_height))
+                                            floor_height, dict(held or {})))
 
     def check(self, plans, start, goal, *, spheres=None, boxes=None, cylinders=None, capsules=None, found=None,
-              floor_height=None):
+              floor_height=None, held=None):
         """The plan checker's verdicts on plans (N, T, D) from start to goal ((D,) or (N, D)) among the obstacles:
         a list of N Verdicts."""
         start, goal = self._states(start, 0, "start"), self._states(goal, 0, "goal")  # (D,) stays (D,)
         return [Verdict(**v) for v in self._core.check(torch.as_tensor(plans), start, goal,
                                                        _scene(spheres, boxes, cylinders, capsules), found,
-                                                       floor_height)]
+                                                       floor_height, dict(held or {}))]
 
     def __repr__(self):
         return f"<flowplan.InProcessPlanner {self.kind} from {self.source}: ({self.horizon}, {self.state_dim}) plans>"
@@ -263,3 +264,39 @@ def train(config=None, overrides=(), *, resume=None, until_step=0):
 def set_log_level(level):
     """What flowplan logs (to the console, as the command line does): "debug", "info" (default), "warn", "error"."""
     _cpp("set_log_level").set_log_level(str(level))
+
+
+@dataclasses.dataclass
+class Problem:
+    """One problem of a problem file (`flowplan problems`, `flowplan scenes import`; docs/planning.md)."""
+    name: str
+    start: torch.Tensor        # (J,) float64 joint positions
+    goal: torch.Tensor         # (J,)
+    scene: dict                # kind -> (K, columns) float64 rows: spheres=, boxes=, ... of plan() and check()
+    obstacle_names: List[str]  # (K) in the scene's numbering (spheres, boxes, cylinders, capsules), or empty
+    floor_height: float        # None: no floor
+    held: dict                 # joint name -> value held (a gripper's fingers)
+    status: str                # "ok", or "refused" (no plan can start or end there)
+    reason: str                # why it was refused
+    notes: List[str]           # what the import changed
+
+    def world(self):
+        """The keyword arguments of InProcessPlanner.plan and check for this problem: obstacles, floor, held joints."""
+        return dict(self.scene, floor_height=-float("inf") if self.floor_height is None else self.floor_height,
+                    held=self.held)
+
+
+def load_scene(path, workspace_dim=3):
+    """A scene file's obstacles (docs/planning.md, "Scenes") as the keyword arguments of plan() and check():
+    {"spheres": (K, 4), "boxes": (K, 10), ...} float64 rows, kinds without obstacles left out."""
+    return dict(_cpp("load_scene").load_scene(str(path), int(workspace_dim)))
+
+
+def load_problems(path):
+    """A problem file's problems: a list of Problem.
+
+        for problem in flowplan.load_problems("mbm/table_pick_val.yaml"):
+            if problem.status == "ok":
+                result = rrt.plan(problem.start, problem.goal, 1, **problem.world())
+    """
+    return [Problem(**entry) for entry in _cpp("load_problems").load_problems(str(path))]

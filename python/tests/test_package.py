@@ -322,3 +322,28 @@ def test_ctrl_c_while_training_checkpoints_and_raises_keyboard_interrupt(tmp_pat
     # The interrupted run resumes (here to a shorter end: nothing left to train), and Python went on.
     assert f"after {tmp_path}/run" in output
     assert any(name.startswith("step_") for name in os.listdir(tmp_path / "run" / "checkpoints"))
+
+
+def test_problem_files_and_scenes_plan_from_python(tmp_path):
+    import yaml
+    problems_file = tmp_path / "shelf.yaml"
+    subprocess.run([os.path.join(BINARY, "apps", "flowplan", "flowplan"), "problems", "--family", "shelf",
+                    "problems.count=2", "seed=3", "--out", str(problems_file), "--log-level", "warn"], check=True)
+    problems = flowplan.load_problems(problems_file)
+    written = yaml.safe_load(problems_file.read_text())["problems"]  # read by another YAML reader
+    assert [p.name for p in problems] == [w["name"] for w in written]
+    for problem, entry in zip(problems, written):
+        assert problem.start.tolist() == pytest.approx(entry["start_q"], abs=1e-12)
+        assert problem.goal.tolist() == pytest.approx(entry["goal_q"], abs=1e-12)
+        assert problem.scene["boxes"].shape == (len(entry["scene"]["boxes"]), 10)
+        assert problem.scene["boxes"][0, :3].tolist() == pytest.approx(entry["scene"]["boxes"][0]["centre"])
+    rrt = flowplan.make_planner("rrt_connect", config=os.path.join(SOURCE, "configs", "franka_joint.yaml"))
+    for problem in problems:
+        result = rrt.plan(problem.start, problem.goal, 1, **problem.world())
+        assert result.found.all(), result.failure
+        assert rrt.check(result.plans, problem.start, problem.goal, **problem.world())[0].valid
+    scene = flowplan.load_scene(os.path.join(SOURCE, "configs", "scenes", "franka_shelf.yaml"))
+    assert sorted(scene) == ["boxes", "cylinders"]
+    assert torch.allclose(scene["boxes"][:, :6].float(), SHELF["boxes"][:, :6])
+    with pytest.raises(flowplan.Error, match="nothing.yaml"):
+        flowplan.load_problems(tmp_path / "nothing.yaml")
