@@ -26,8 +26,9 @@ Command AddExportCommand(CLI::App& app) {
   CLI::Option* ckpt = command->add_option("--ckpt", args->ckpt, "checkpoint file, or a run folder");
   command
       ->add_option("--planner", args->planner,
-                   "an exported planner file instead of a checkpoint: written again with --kernels, --scene and "
-                   "the per-call settings of the overrides (what is compiled into it cannot change)")
+                   "an exported planner file instead of a checkpoint: written again with --kernels, --scene (default: "
+                   "the scene baked into it) and the per-call settings of the overrides (what is compiled into it "
+                   "cannot change)")
       ->check(CLI::ExistingFile)
       ->excludes(ckpt);
   command->add_option("--out", args->out, "output file (default: RUN_DIR/planner.pt)");
@@ -54,6 +55,7 @@ Command AddExportCommand(CLI::App& app) {
             const geometry::Scene scene = args->scene.empty() ? geometry::Scene{} : geometry::LoadScene(args->scene);
             std::unique_ptr<planning::LearnedPlanner> planner;
             std::string source, out = args->out;
+            std::string baked = args->scene.empty() ? std::string("none") : args->scene;
             if (!args->planner.empty()) {
               if (out.empty()) throw Error("export --planner: give --out (the file is not written over)");
               if (std::filesystem::exists(out) && std::filesystem::equivalent(out, args->planner)) {
@@ -62,7 +64,11 @@ Command AddExportCommand(CLI::App& app) {
               const auto file = planning::LearnedPlanner::Load(args->planner);
               ExperimentConfig config = LoadExperimentText(file->config_yaml(), args->planner + " (its config)",
                                                            args->overlay.path, overrides);
-              config.scene = scene;
+              if (!args->scene.empty()) {
+                config.scene = scene;
+              } else if (config.scene.size() > 0) {  // the scene baked into the file stays
+                baked = "the " + std::to_string(config.scene.size()) + " obstacles baked into " + args->planner;
+              }
               planner = AssembleExported(*file, config);
               source = args->planner;
             } else {
@@ -83,8 +89,7 @@ Command AddExportCommand(CLI::App& app) {
                 planner->renoise_shape().empty() ? "" : ", renoise " + batch_shape(planner->renoise_shape());
             spdlog::info("exported {} to {} ({} kernels): plan(start (B, {}), goal (B, {}), noise {}{}, scene...) -> "
                          "(B, {}, {}); baked scene: {}",
-                         source, out, args->kernels, D, D, batch_shape(planner->noise_shape()), renoise, T, D,
-                         args->scene.empty() ? std::string("none") : args->scene);
+                         source, out, args->kernels, D, D, batch_shape(planner->noise_shape()), renoise, T, D, baked);
           }};
 }
 

@@ -120,6 +120,10 @@ class InProcessPlanner {
   }
 
   const std::string& kind() const { return subject_.kind->name; }
+  /// Whether its network runs flowplan's native kernels (false without a network).
+  bool native() const {
+    return subject_.kind->network && subject_.config.sampler.network_kernels == flowplan::models::Kernels::kNative;
+  }
   int64_t horizon() const { return subject_.trajectory.horizon; }
   int64_t state_dim() const { return subject_.trajectory.state_dim(); }
   int64_t num_joints() const { return subject_.robot->num_joints(); }
@@ -253,6 +257,7 @@ PYBIND11_MODULE(_flowplan, m) {
       .def("check", &InProcessPlanner::Check, py::arg("plans"), py::arg("start"), py::arg("goal"), py::arg("scene"),
            py::arg("found"), py::arg("floor_height"), py::arg("held"))
       .def_property_readonly("kind", &InProcessPlanner::kind)
+      .def_property_readonly("native", &InProcessPlanner::native)
       .def_property_readonly("horizon", &InProcessPlanner::horizon)
       .def_property_readonly("state_dim", &InProcessPlanner::state_dim)
       .def_property_readonly("num_joints", &InProcessPlanner::num_joints)

@@ -174,6 +174,7 @@ class InProcessPlanner:
         self._core = core
 
     kind = property(lambda self: self._core.kind, doc="learned, rrt_connect or hybrid")
+    native = property(lambda self: self._core.native, doc="whether its network runs flowplan's native kernels")
     horizon = property(lambda self: self._core.horizon, doc="T: states per plan")
     state_dim = property(lambda self: self._core.state_dim, doc="D: values per state")
     num_joints = property(lambda self: self._core.num_joints, doc="J: planned joints")
@@ -231,8 +232,12 @@ def make_planner(kind="learned", *, planner=None, ckpt=None, config=None, robot=
     Raises:
         flowplan.Error naming what is wrong; RuntimeError if the package's C++ module is not importable.
     """
-    return InProcessPlanner(_cpp("make_planner").InProcessPlanner(kind, str(planner or ""), str(ckpt or ""), str(config or ""),
+    made = InProcessPlanner(_cpp("make_planner").InProcessPlanner(kind, str(planner or ""), str(ckpt or ""), str(config or ""),
                                                        str(robot or ""), [str(o) for o in overrides]))
+    asked_portable = any("kernels=portable" in str(o) for o in overrides)
+    if made.kind != "rrt_connect" and not made._core.native and not asked_portable:
+        warnings.warn(f"{made.source}: planning with the network's portable code (the log says why)", stacklevel=2)
+    return made
 
 
 def _cpp(what):

@@ -237,6 +237,8 @@ def test_hybrid_and_learned_in_process_with_the_shipped_planner():
     assert result.found.all() and len(result.route) == 2
     assert all(v.valid for v in hybrid.check(result.plans, SHELF_START, SHELF_GOAL, **SHELF))
     learned = flowplan.make_planner("learned", planner=REACH)
+    assert learned.native and not flowplan.make_planner("learned", planner=REACH, overrides=[
+        "sampler.network_kernels=portable", "guidance.distance_kernels=portable"]).native
     start, goal = paper_problem(flowplan.load_planner(REACH, native=False))
     result = learned.plan(start, goal, 8, spheres=SPHERE, seed=3)
     verdicts = learned.check(result.plans, start, goal, spheres=SPHERE)
@@ -280,10 +282,14 @@ def test_generate_train_resume_and_plan_from_python(tmp_path):
     export("--ckpt", run, "--out", tmp_path / "costly.pt", f"guidance.user_cost={cost}",
            "guidance.user_cost_weight=1", "guidance.scale=2")
     ends = torch.tensor([0.0, 0.0, 0.0, 0.0]), torch.tensor([1.0, 0.0, 0.0, 0.0])
-    before = flowplan.make_planner("learned", planner=tmp_path / "costly.pt").plan(*ends, 3, seed=2).plans
+    with pytest.warns(UserWarning, match="portable code"):
+        costly = flowplan.make_planner("learned", planner=tmp_path / "costly.pt")
+    assert not costly.native
+    before = costly.plan(*ends, 3, seed=2).plans
     cost.write_text("def cost(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor]) -> Tensor:\n"
                     "    return torch.relu(self.robot.tcp(q)[:, :, 1] + 5.0).sum(1)\n")
-    after = flowplan.make_planner("learned", planner=tmp_path / "costly.pt").plan(*ends, 3, seed=2).plans
+    with pytest.warns(UserWarning, match="portable code"):
+        after = flowplan.make_planner("learned", planner=tmp_path / "costly.pt").plan(*ends, 3, seed=2).plans
     assert torch.equal(before, after)
     with pytest.warns(UserWarning, match="user cost .* is compiled into it"):
         assert not flowplan.load_planner(tmp_path / "costly.pt").native
