@@ -4,7 +4,8 @@
     planner = flowplan.load_planner("pretrained/franka_reach_planner.pt")
     start = torch.cat([planner.ik(torch.tensor([0.5, -0.3, 0.2])), torch.zeros(7)])  # (14,) at rest
     goal = torch.cat([planner.ik(torch.tensor([0.5, 0.3, 0.2])), torch.zeros(7)])
-    plans = planner.sample(start, goal, 16, spheres=torch.tensor([[0.5, 0.0, 0.2, 0.1]]))  # (16, 64, 14)
+    sphere = torch.tensor([[0.5, 0.0, 0.2, 0.1]])                                    # (K, 4) centre, radius (m)
+    plans = planner.sample(start, goal, 16, spheres=sphere)                          # (16, 64, 14)
 
 `make_planner` makes any planner `flowplan plan` runs (the learned planner, RRT-Connect, the hybrid) in-process,
 with the plan checker beside it:
@@ -17,10 +18,10 @@ with the plan checker beside it:
 
     data = flowplan.generate("configs/franka_joint.yaml", ["generate.episodes=2000"])
     run = flowplan.train("configs/franka_joint.yaml", ["train.steps=1000"])   # logs its progress; Ctrl-C checkpoints
-    rrt_or_learned = flowplan.make_planner("learned", ckpt=run)
+    learned = flowplan.make_planner("learned", ckpt=run)
 
 `load_planner` returns a `Planner` with the exported module's interface (docs/export.md: `sample`, `plan`,
-`tcp`, `ik`, `clearance`, `cost`, `settings`, `state_dim`, ...). With the package's C++ part
+`tcp`, `ik`, `clearance`, `collision_spheres`, `settings`, `state_dim`, ...). With the package's C++ part
 (`flowplan._flowplan`, built with flowplan) it runs the file's weights with flowplan's native kernels; with
 PyTorch alone it runs the file's own portable code. Either way every call runs without gradients and with
 TorchScript's graph executor optimisations off, so the first plan costs about what the later ones do.
