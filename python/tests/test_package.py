@@ -356,3 +356,13 @@ def test_problem_files_and_scenes_plan_from_python(tmp_path):
     assert torch.allclose(scene["boxes"][:, :6].float(), SHELF["boxes"][:, :6])
     with pytest.raises(flowplan.Error, match="nothing.yaml"):
         flowplan.load_problems(tmp_path / "nothing.yaml")
+
+
+def test_rrt_connect_for_a_robot_folder():
+    rrt = flowplan.make_planner("rrt_connect", config=os.path.join(SOURCE, "configs", "robot_joint.yaml"),
+                                robot=os.path.join(SOURCE, "robots", "ur5"))
+    assert (rrt.num_joints, rrt.state_dim) == (6, 12) and not rrt.native
+    start, goal = torch.zeros(6), torch.tensor([1.0, -1.0, 1.0, 0.5, 0.5, 0.5])
+    ball = [[0.4, 0.2, 0.4, 0.1]]
+    result = rrt.plan(start, goal, 2, spheres=ball)
+    assert result.found.all() and all(v.valid for v in rrt.check(result.plans, start, goal, spheres=ball))
