@@ -64,7 +64,7 @@ for mode in unguided guided; do
   scale=$([ "$mode" = unguided ] && echo "guidance.scale=0" || echo "")
   "$FLOWPLAN" plan --ckpt "$run" --config configs/particle_cross.yaml --start 0,0 --goal 1,0 \
     --scene configs/scenes/particle_disc.yaml -n 64 \
-    --no-plot --out "$run/plan_$mode" sampler.splitting=midpoint $scale
+    --no-plot --out "$run/plan_$mode" --force sampler.splitting=midpoint $scale  # the demo's own outputs
 done
 "$PYTHON" scripts/plot.py scene "$run/plan_guided.h5" --compare "$run/plan_unguided.h5" --data "$data" \
   --out "$run/plan_guided.png" --title "particle: guided (blue) and unguided (grey) plans around a disc"
