@@ -29,12 +29,30 @@ Command AddFkCommand(CLI::App& app);        // fk.cc: the Franka's TCP through M
 /// Every subcommand, in the order `flowplan --help` lists them.
 std::vector<Command> AddCommands(CLI::App& app);
 
-// The work of two commands as functions (the Python package calls them).
+// The work of three commands as functions (the Python package calls them).
 
 /// `flowplan generate --config CONFIG OVERRIDES...`: the data set of the config
 /// (every episode, one file). Returns the file written (generate.out).
 /// @throws flowplan::Error as the command.
 std::string Generate(const std::string& config_path, const std::vector<std::string>& overrides);
+
+/// `flowplan scenes import`'s arguments.
+struct SceneImport {
+  std::vector<std::string> files;  // SCENE REQUEST pairs
+  std::string folder;              // --dir: a folder of sceneNNNN.yaml / requestNNNN.yaml pairs
+  std::string out;                 // --out: the problem file
+  std::string scenes_dir;          // --scenes-dir: also each problem's scene file (empty: none)
+  std::vector<std::string> frames; // --frame: the robot's base frame ids (empty: the robot's own)
+  std::string grasp = "touching-tcp";
+  double grasp_margin = 0.01;      // m
+  double limit_tolerance = 0.002;  // rad
+  std::string robot;               // --robot: a robot folder (empty: the built-in Franka)
+};
+
+/// `flowplan scenes import`: MoveIt scenes and requests into the problem file
+/// args.out; a pair that cannot be planned is a refused problem, a file that is
+/// not a MoveIt file an error naming it. @throws flowplan::Error as the command.
+void ImportScenes(const SceneImport& args);
 
 /// `flowplan train --config CONFIG OVERRIDES... [--until STEP]`, or with
 /// `resume_dir` set `flowplan train --resume RESUME_DIR OVERRIDES...`. Returns

@@ -18,21 +18,11 @@
 namespace flowplan::experiment {
 namespace {
 
-struct ImportArgs {
-  std::vector<std::string> files;  // SCENE REQUEST pairs
-  std::string folder;              // --dir
-  std::string out;
-  std::string scenes_dir;
-  std::vector<std::string> frames;
-  std::string grasp = "touching-tcp";
-  double grasp_margin = 0.01;
-  double limit_tolerance = 0.002;
-  std::string robot;  // --robot: a robot folder (default: the built-in Franka)
-};
-
 std::string Stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
 
-void RunImport(const ImportArgs& args) {
+}  // namespace
+
+void ImportScenes(const SceneImport& args) {
   std::vector<std::pair<std::string, std::string>> pairs;
   if (!args.folder.empty()) {
     if (!args.files.empty()) throw Error("scenes import: give --dir or SCENE REQUEST pairs, not both");
@@ -113,10 +103,8 @@ void RunImport(const ImportArgs& args) {
                args.scenes_dir.empty() ? "" : ", their scenes in " + args.scenes_dir);
 }
 
-}  // namespace
-
 Command AddScenesCommand(CLI::App& app) {
-  auto args = std::make_shared<ImportArgs>();
+  auto args = std::make_shared<SceneImport>();
   CLI::App* scenes = app.add_subcommand("scenes", "scenes from elsewhere");
   scenes->require_subcommand(1);
   CLI::App* import = scenes->add_subcommand(
@@ -141,7 +129,7 @@ Command AddScenesCommand(CLI::App& app) {
                      "is refused")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  return {import, [args] { RunImport(*args); }};
+  return {import, [args] { ImportScenes(*args); }};
 }
 
 }  // namespace flowplan::experiment

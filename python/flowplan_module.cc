@@ -231,6 +231,25 @@ PYBIND11_MODULE(_flowplan, m) {
   m.def("load_scene", &LoadScene, py::arg("path"), py::arg("workspace_dim"),
         "A scene file's obstacles: kind -> (K, columns) float64 rows.");
   m.def("load_problems", &LoadProblems, py::arg("path"), "A problem file's problems, as dicts.");
+  m.def(
+      "import_scenes",
+      [](const std::vector<std::string>& files, const std::string& folder, const std::string& out,
+         const std::string& robot, const std::vector<std::string>& frames, const std::string& grasp,
+         double grasp_margin, double limit_tolerance) {
+        flowplan::experiment::SceneImport args;
+        args.files = files;
+        args.folder = folder;
+        args.out = out;
+        args.robot = robot;
+        args.frames = frames;
+        args.grasp = grasp;
+        args.grasp_margin = grasp_margin;
+        args.limit_tolerance = limit_tolerance;
+        py::gil_scoped_release unlocked;
+        flowplan::experiment::ImportScenes(args);
+      },
+      py::arg("files"), py::arg("folder"), py::arg("out"), py::arg("robot"), py::arg("frames"), py::arg("grasp"),
+      py::arg("grasp_margin"), py::arg("limit_tolerance"), "flowplan scenes import: writes the problem file `out`");
   m.def("set_log_level", &flowplan::SetUpLogging, py::arg("level"),
         "What flowplan logs: debug, info (the default), warn or error.");
   m.def(

@@ -41,8 +41,8 @@ except ImportError as missing:  # PyTorch alone: the portable code of the files
 else:
     _why_portable = ""
 
-__all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Problem", "Verdict", "generate", "load_planner",
-           "load_problems", "load_scene", "make_planner", "native_kernels", "set_log_level", "train"]
+__all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Problem", "Verdict", "generate", "import_scenes",
+           "load_planner", "load_problems", "load_scene", "make_planner", "native_kernels", "set_log_level", "train"]
 
 #: What flowplan raises for bad input (a file that is not a planner, a planner that cannot take the kernels);
 #: a RuntimeError. The message names the file.
@@ -306,3 +306,25 @@ def load_problems(path):
                 result = rrt.plan(problem.start, problem.goal, 1, **problem.world())
     """
     return [Problem(**entry) for entry in _cpp("load_problems").load_problems(str(path))]
+
+
+def import_scenes(out, pairs=(), *, folder=None, robot=None, frames=(), grasped="touching-tcp", grasp_margin=0.01,
+                  limit_tolerance=0.002):
+    """`flowplan scenes import`: MoveIt planning scenes and motion-plan requests (MotionBenchMaker's format) into
+    the problem file `out`, whose problems it returns (load_problems).
+
+    Args:
+        out: the problem file to write.
+        pairs: (scene.yaml, request.yaml) pairs; or folder: a folder of sceneNNNN.yaml / requestNNNN.yaml pairs.
+        robot: a robot folder whose joints the requests set by name (default: the built-in Franka).
+        frames, grasped, grasp_margin, limit_tolerance: as the command's --frame, --grasped, --grasp-margin and
+            --limit-tolerance (docs/planning.md).
+
+    A pair that cannot be planned is a problem with status "refused" and its reason; a file that is not a MoveIt
+    file raises flowplan.Error naming it, and nothing is written.
+    """
+    files = [str(f) for pair in pairs for f in pair]
+    _cpp("import_scenes").import_scenes(files, str(folder or ""), str(out), str(robot or ""),
+                                        [str(f) for f in frames], str(grasped), float(grasp_margin),
+                                        float(limit_tolerance))
+    return load_problems(out)

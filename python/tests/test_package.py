@@ -366,3 +366,33 @@ def test_rrt_connect_for_a_robot_folder():
     ball = [[0.4, 0.2, 0.4, 0.1]]
     result = rrt.plan(start, goal, 2, spheres=ball)
     assert result.found.all() and all(v.valid for v in rrt.check(result.plans, start, goal, spheres=ball))
+
+
+def test_motionbenchmaker_files_are_imported_and_planned_from_python(tmp_path):
+    import tarfile
+    import yaml
+    tarball = os.path.join(SOURCE, "bench", "motionbenchmaker", "panda_problems.tar.bz2")
+    with tarfile.open(tarball) as archive:
+        members = [m for m in archive.getmembers()
+                   if "/box_panda/" in m.name and m.name.endswith(("scene0001.yaml", "request0001.yaml",
+                                                                  "scene0002.yaml", "request0002.yaml"))]
+        archive.extractall(tmp_path, members)
+    folder = next(p.parent for p in tmp_path.rglob("scene0001.yaml"))
+    problems = flowplan.import_scenes(tmp_path / "box.yaml", folder=folder)
+    assert [p.name for p in problems] == ["scene0001", "scene0002"] and (tmp_path / "box.yaml").exists()
+    request = yaml.safe_load((folder / "request0001.yaml").read_text())  # the published file, by another reader
+    joints = request["start_state"]["joint_state"]
+    published = dict(zip(joints["name"], joints["position"]))
+    assert problems[0].start.tolist() == pytest.approx([published[f"panda_joint{j}"] for j in range(1, 8)], abs=1e-9)
+    assert problems[0].floor_height is None  # MotionBenchMaker's world has no floor
+    rrt = flowplan.make_planner("rrt_connect", config=os.path.join(SOURCE, "configs", "franka_joint.yaml"),
+                                overrides=["rrt_connect.range=1.0"])
+    for problem in problems:
+        result = rrt.plan(problem.start, problem.goal, 1, **problem.world())
+        assert rrt.check(result.plans, problem.start, problem.goal, found=result.found, **problem.world())[0].valid
+    again = flowplan.import_scenes(tmp_path / "pairs.yaml", [(folder / "scene0002.yaml", folder / "request0002.yaml")])
+    assert again[0].start.tolist() == problems[1].start.tolist()
+    with pytest.raises(flowplan.Error, match="request0001.yaml"):
+        flowplan.import_scenes(tmp_path / "bad.yaml", [(folder / "scene0001.yaml", folder / "request0001.yaml"),
+                                                       (folder / "request0001.yaml", folder / "request0001.yaml")])
+    assert not (tmp_path / "bad.yaml").exists()
