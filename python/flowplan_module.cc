@@ -62,8 +62,7 @@ class InProcessPlanner {
     args.overrides = overrides;
     py::gil_scoped_release unlocked;
     subject_ = flowplan::experiment::LoadPlanSubject(args);
-    checker_ = std::make_unique<flowplan::validity::PlanChecker>(subject_.robot, subject_.trajectory.dt,
-                                                                 subject_.config.check);
+    checker_ = std::make_unique<flowplan::validity::PlanChecker>(flowplan::experiment::MakePlanChecker(subject_));
   }
 
   py::dict Plan(const torch::Tensor& start, const torch::Tensor& goal, const py::dict& scene, uint64_t seed,
