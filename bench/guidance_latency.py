@@ -12,7 +12,7 @@ usage: /usr/bin/python3 bench/guidance_latency.py --problems FILE [--count N]
 
 Exports with native kernels need libflowplan_kernels (`--kernels LIB`, default
 build/kernels/libflowplan_kernels.so). docs/performance.md ("The native
-collision cost") has the figures.
+guidance step") has the figures.
 """
 import argparse
 import statistics
