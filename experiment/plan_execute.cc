@@ -4,22 +4,12 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "experiment/plan.h"
+#include "collision/body_model.h"
+#include "robotfiles/robot_model.h"
+#include "sim/franka_execution.h"
 #include "sim/franka_model.h"
 
 namespace flowplan::experiment {
-namespace {
-
-/// Execution needs the built-in Franka: the planner's robot must have its kinematics and geometry (limits may differ).
-void CheckBuiltInFranka(const kinematics::Robot& robot) {
-  if (!IsBuiltInFranka(robot.description())) {
-    throw Error("--execute: execution in MuJoCo needs the built-in Franka; this planner's robot is \"" +
-                robot.description().name + "\"" +
-                (robot.description().name == "franka_panda" ? " with other kinematics" : ""));
-  }
-}
-
-}  // namespace
-
 namespace {
 
 /// The kinematic tree and TCP of a description, as text: what must match for a robot to move as another does.
@@ -62,15 +52,52 @@ validity::PlanChecker MakePlanChecker(const PlanSubject& subject) {
   return validity::PlanChecker(subject.robot, subject.trajectory.dt, subject.config.check);
 }
 
+namespace {
+
+/// The robot folder the subject's robot comes from, among `inputs`' obstacles, as a MuJoCo model with its drives.
+/// @throws flowplan::Error if the subject names no folder, or the folder's robot is not the one planned for.
+robotfiles::ExecutionModel FolderExecution(const PlanSubject& subject, const PlanInputs& inputs) {
+  const std::string& folder = subject.config.robot;
+  const std::string& name = subject.robot->description().name;
+  if (folder.empty()) {
+    throw Error("--execute: the planner's robot \"" + name + "\" is not the built-in Franka and its config names no "
+                "robot folder (robot: DIR) to simulate it from");
+  }
+  robotfiles::RobotFile file = robotfiles::LoadRobotFile(folder);
+  const std::string where = folder + "/robot.yaml";
+  if (Kinematics(file.Description(where)) != Kinematics(subject.robot->description())) {
+    throw Error("--execute: " + where + ": its robot \"" + file.robot.name + "\" does not move as the planner's \"" +
+                name + "\" does (another kinematic tree or TCP)");
+  }
+  if (!inputs.world.held.empty()) file.robot = collision::WithHeld(file.robot, inputs.world.held);
+  return robotfiles::LoadExecutionModel(file, folder, inputs.scene, subject.config.execute, where);
+}
+
+}  // namespace
+
 std::vector<sim::ExecutionResult> ExecutePlans(const torch::Tensor& plans, const PlanSubject& subject,
                                                const PlanInputs& inputs, int threads) {
-  CheckBuiltInFranka(*subject.robot);
   const sim::ExecutionConfig& config = subject.config.execute;
-  const sim::FrankaModel world = sim::MakeFrankaScene(inputs.scene, 1.0 / config.control_hz);
   const int K = static_cast<int>(inputs.scene.size());
-  std::vector<std::unique_ptr<sim::FrankaExecutor>> workers;
-  for (int w = 0; w < threads; ++w) workers.push_back(std::make_unique<sim::FrankaExecutor>(world, K, config));
+  // The built-in Franka tracks plans with its joint PD gains among its MJCF's capsules; a robot folder's arm with
+  // the computed-torque law among its collision geometry.
+  std::unique_ptr<sim::FrankaModel> franka;
+  robotfiles::ExecutionModel folder;
+  std::vector<std::unique_ptr<sim::ArmExecutor>> workers;
+  if (IsBuiltInFranka(subject.robot->description())) {
+    franka = std::make_unique<sim::FrankaModel>(sim::MakeFrankaScene(inputs.scene, 1.0 / config.control_hz));
+    for (int w = 0; w < threads; ++w) workers.push_back(std::make_unique<sim::FrankaExecutor>(*franka, K, config));
+  } else {
+    folder = FolderExecution(subject, inputs);
+    for (int w = 0; w < threads; ++w) {
+      workers.push_back(std::make_unique<sim::ArmExecutor>(*folder.model, folder.drives, K, config));
+    }
+  }
   const int64_t N = plans.size(0), T = plans.size(1), J = subject.robot->num_joints();
+  if (plans.size(2) < 2 * J) {
+    throw Error("--execute: the plans hold " + std::to_string(plans.size(2)) + " values a state; execution tracks " +
+                "positions and velocities (" + std::to_string(2 * J) + ")");
+  }
   std::vector<sim::ExecutionResult> executed(static_cast<size_t>(N));
   const Eigen::Vector3d target(inputs.goal_tcp[0].item<double>(), inputs.goal_tcp[1].item<double>(),
                                inputs.goal_tcp[2].item<double>());

@@ -86,7 +86,8 @@ PlanSubject FromConfig(const PlanArgs& args, const std::string& kind) {
   }
   PlanSubject subject;
   subject.config = LoadExperiment(args.overlay_path, args.overrides);
-  const std::string folder = !args.robot.empty() ? args.robot : subject.config.robot;
+  if (!args.robot.empty()) subject.config.robot = args.robot;
+  const std::string folder = subject.config.robot;  // what executing the plans simulates, too
   subject.source = kind;
   if (subject.config.generate.dataset == datasets::DatasetKind::kRobotJoint) {
     // The trajectories of the folder's robot_joint data, without building its simulator.

@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <sstream>
 
 #include "core/error.h"
 #include "sim/arm_xml.h"
+#include "spheres/mesh.h"
 
 namespace flowplan::robotfiles {
 namespace {
@@ -38,9 +40,9 @@ std::array<double, 6> SimulatedInertia(const LinkInertia& link, bool* fixed) {
   return {mean, mean, mean, 0.0, 0.0, 0.0};
 }
 
-}  // namespace
 
-std::string SimulationXml(const RobotFile& file, const DriveSettings& drives, const std::string& where) {
+/// SimulationXml's options: the drives and each link's inertial.
+sim::ArmXmlOptions SimulationOptions(const RobotFile& file, const DriveSettings& drives, const std::string& where) {
   const kinematics::RobotDescription d = file.Description(where);
   const int L = static_cast<int>(d.links.size());
   const int J = d.num_joints;
@@ -84,23 +86,107 @@ std::string SimulationXml(const RobotFile& file, const DriveSettings& drives, co
     options.body_elements[name] = "      <inertial pos=\"" + Numbers(in->com) + "\" mass=\"" + Number(in->mass) +
                                   "\" fullinertia=\"" + Numbers(moments) + "\"/>\n";
   }
-  return sim::ArmXml(d, options);
+  return options;
+}
+
+/// The joints of `model` named "q<j>" (SimulationXml's), into `qpos` and `dof`, and its site "tcp".
+void FindJoints(const mjModel& m, int J, std::vector<int>* qpos, std::vector<int>* dof, int* tcp_site) {
+  FLOWPLAN_DEMAND(m.nv == J && m.nu == J);
+  for (int j = 0; j < J; ++j) {
+    const int id = mj_name2id(&m, mjOBJ_JOINT, ("q" + std::to_string(j)).c_str());
+    FLOWPLAN_DEMAND(id >= 0);
+    qpos->push_back(m.jnt_qposadr[id]);
+    dof->push_back(m.jnt_dofadr[id]);
+  }
+  *tcp_site = mj_name2id(&m, mjOBJ_SITE, "tcp");
+  FLOWPLAN_DEMAND(*tcp_site >= 0);
+}
+
+/// The <geom> of one piece of collision geometry in its link's body; meshes add their <mesh> asset to `assets`.
+std::string CollisionGeomXml(const CollisionGeometry& g, const std::string& dir, const std::string& name,
+                             const std::string& attributes, std::string* assets, const std::string& where) {
+  const std::string placed = "pos=\"" + Numbers(g.pos) + "\" quat=\"" + Numbers(g.quat) + "\"";
+  std::string shape;
+  if (g.shape == "sphere") {
+    shape = "type=\"sphere\" size=\"" + Number(g.size[0]) + "\"";
+  } else if (g.shape == "box") {
+    shape = "type=\"box\" size=\"" + Number(0.5 * g.size[0]) + " " + Number(0.5 * g.size[1]) + " " +
+            Number(0.5 * g.size[2]) + "\"";
+  } else if (g.shape == "cylinder" || g.shape == "capsule") {
+    shape = "type=\"" + g.shape + "\" size=\"" + Number(g.size[0]) + " " + Number(0.5 * g.size[1]) + "\"";
+  } else if (g.shape == "ellipsoid") {
+    shape = "type=\"ellipsoid\" size=\"" + Numbers(g.size) + "\"";
+  } else if (g.shape == "mesh") {
+    // Read by flowplan's own mesh reader (the one the spheres were fitted with), given to MuJoCo as vertices:
+    // MuJoCo collides with their convex hull.
+    const spheres::Mesh mesh = spheres::LoadMesh((std::filesystem::path(dir) / g.mesh).string());
+    std::string vertices;
+    for (const auto& v : mesh.vertices) {
+      for (int i = 0; i < 3; ++i) vertices += (vertices.empty() ? "" : " ") + Number(v[i] * g.scale[i]);
+    }
+    *assets += "    <mesh name=\"" + name + "\" vertex=\"" + vertices + "\"/>\n";
+    shape = "type=\"mesh\" mesh=\"" + name + "\"";
+  } else {
+    throw Error(where + ": geometry: link \"" + g.link + "\": unknown shape \"" + g.shape + "\"");
+  }
+  return "      <geom name=\"" + name + "\" " + shape + " " + placed + " " + attributes + "/>\n";
+}
+
+}  // namespace
+
+std::string SimulationXml(const RobotFile& file, const DriveSettings& drives, const std::string& where) {
+  return sim::ArmXml(file.Description(where), SimulationOptions(file, drives, where));
 }
 
 SimulationModel LoadSimulationModel(const RobotFile& file, const DriveSettings& drives, const std::string& where) {
   SimulationModel out;
   out.model = sim::LoadModelFromXml(SimulationXml(file, drives, where), where);
-  const mjModel& m = *out.model;
-  const int J = file.robot.num_joints;
-  FLOWPLAN_DEMAND(m.njnt == J && m.nv == J && m.nu == J);
-  for (int j = 0; j < J; ++j) {
-    const int id = mj_name2id(&m, mjOBJ_JOINT, ("q" + std::to_string(j)).c_str());
-    FLOWPLAN_DEMAND(id >= 0);
-    out.qpos.push_back(m.jnt_qposadr[id]);
-    out.dof.push_back(m.jnt_dofadr[id]);
+  FindJoints(*out.model, file.robot.num_joints, &out.qpos, &out.dof, &out.tcp_site);
+  return out;
+}
+
+ExecutionModel LoadExecutionModel(const RobotFile& file, const std::string& dir, const geometry::Scene& scene,
+                                  const sim::ExecutionConfig& config, const std::string& where) {
+  scene.Validate(3, "execution scene");
+  sim::InstallExactConvexOverlaps();  // the margin below would make cylinders overlap what they do not touch
+  const kinematics::RobotDescription d = file.Description(where);
+  sim::ArmXmlOptions options = SimulationOptions(file, DriveSettings{}, where);
+  // The arm's geoms touch what has conaffinity 1 (the obstacles), not each other; they carry no mass.
+  const std::string arm = "contype=\"1\" conaffinity=\"0\" group=\"3\" mass=\"0\" rgba=\"0.7 0.7 0.7 1\"";
+  std::string assets;
+  std::map<std::string, int> pieces;  // per link, geoms so far
+  for (const CollisionGeometry& g : file.geometry) {
+    if (d.FindLink(g.link) < 0) throw Error(where + ": geometry: no link \"" + g.link + "\"");
+    const std::string name = g.link + "_g" + std::to_string(pieces[g.link]++);
+    options.body_elements[g.link] += CollisionGeomXml(g, dir, name, arm, &assets, where);
   }
-  out.tcp_site = mj_name2id(&m, mjOBJ_SITE, "tcp");
-  FLOWPLAN_DEMAND(out.tcp_site >= 0);
+  std::map<int, int> spheres;  // per link without geometry, its spheres so far
+  for (const kinematics::RobotSphere& sphere : d.spheres) {
+    const std::string& link = d.links[static_cast<size_t>(sphere.link)].name;
+    if (pieces.count(link)) continue;
+    options.body_elements[link] += "      <geom name=\"" + link + "_s" + std::to_string(spheres[sphere.link]++) +
+                                   "\" type=\"sphere\" pos=\"" + Numbers(sphere.centre) + "\" size=\"" +
+                                   Number(sphere.radius) + "\" " + arm + "/>\n";
+  }
+  // Contacts are detected within kMeasuredDistance (margin) and act only on overlaps (gap = margin).
+  const std::string obstacle = "margin=\"" + Number(sim::kMeasuredDistance) + "\" gap=\"" +
+                               Number(sim::kMeasuredDistance) + "\" contype=\"0\" conaffinity=\"1\" group=\"4\" "
+                               "rgba=\"0.8 0.2 0.2 0.5\"";
+  options.world_elements = sim::ObstacleGeomsXml(scene, obstacle);
+  options.model_elements = "  <size njmax=\"2000\" nconmax=\"1000\"/>\n" +
+                           (assets.empty() ? std::string() : "  <asset>\n" + assets + "  </asset>\n");
+  ExecutionModel out;
+  out.model = sim::LoadModelFromXml(sim::ArmXml(d, options), where + " among " + std::to_string(scene.size()) +
+                                                                 " obstacles");
+  mjModel& m = *out.model;
+  m.opt.timestep = 1.0 / config.control_hz;
+  m.opt.integrator = mjINT_EULER;
+  sim::ExecutionDrives& drives = out.drives;
+  FindJoints(m, d.num_joints, &drives.qpos, &drives.dof, &drives.tcp_site);
+  drives.effort_limit = file.effort_limit;
+  drives.law = sim::ExecutionDrives::Law::kComputedTorque;
+  drives.stiffness = config.stiffness;
+  drives.damping = 2.0 * config.damping_ratio * std::sqrt(config.stiffness);
   return out;
 }
 

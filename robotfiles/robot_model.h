@@ -6,11 +6,15 @@
 // inertia, one torque (or force) motor per planned joint limited to the joint's
 // effort limit, and a site "tcp" at the TCP. No geometry: rollouts do not
 // collide; configurations are checked against the robot's spheres instead.
+// For executing plans among obstacles (`flowplan plan --execute`), the same
+// model with the robot's collision geometry and the obstacles as geoms.
 
 #include <string>
 #include <vector>
 
+#include "geometry/scene.h"
 #include "robotfiles/robot_folder.h"
+#include "sim/arm_execution.h"
 #include "sim/mujoco_util.h"
 
 namespace flowplan::robotfiles {
@@ -39,5 +43,19 @@ struct SimulationModel {
 /// Compiles SimulationXml(file, drives, where).
 /// @throws flowplan::Error as SimulationXml, or if MuJoCo rejects the model.
 SimulationModel LoadSimulationModel(const RobotFile& file, const DriveSettings& drives, const std::string& where);
+
+/// The robot of the folder `dir` (robot.yaml read as `file`) among the obstacles of `scene` (3-D), for
+/// sim::ArmExecutor: SimulationXml's model, physics at `timestep` s, with each link's collision geometry (robot.yaml's
+/// geometry: primitives as MuJoCo's own shapes, meshes as their convex hulls; a link with spheres but no geometry
+/// carries its spheres) colliding with the obstacles ("obstacle0", … as sim::ObstacleGeomsXml numbers them) and not
+/// with itself; contacts reported within sim::kMeasuredDistance, forces only on overlaps.
+struct ExecutionModel {
+  sim::MjModelPtr model;
+  sim::ExecutionDrives drives;  // the planned joints, driven by the computed-torque law (execute.stiffness, .damping_ratio)
+};
+
+/// @throws flowplan::Error naming `where` as SimulationXml does, a mesh file that cannot be read, or MuJoCo's refusal.
+ExecutionModel LoadExecutionModel(const RobotFile& file, const std::string& dir, const geometry::Scene& scene,
+                                  const sim::ExecutionConfig& config, const std::string& where);
 
 }  // namespace flowplan::robotfiles

@@ -52,6 +52,7 @@ std::string ArmXml(const kinematics::RobotDescription& d, const ArmXmlOptions& o
   xml << "<mujoco model=\"" << Escaped(d.name) << "\">\n"
       << "  <compiler " << options.compiler << "/>\n"
       << "  <option gravity=\"0 0 -9.81\"/>\n"
+      << options.model_elements
       << "  <worldbody>\n"
       << options.world_elements;
   std::function<void(int, int)> body = [&](int l, int depth) {

@@ -18,6 +18,7 @@ namespace flowplan::sim {
 struct ArmXmlOptions {
   std::string compiler = "angle=\"radian\"";           // attributes of <compiler>
   std::map<std::string, std::string> body_elements;      // link name -> XML inside its body (inertial, geoms)
+  std::string model_elements;                            // XML inside <mujoco> before <worldbody> (<asset>, <size>)
   std::string world_elements;                            // XML inside <worldbody> besides the arm (obstacles)
   std::vector<double> effort_limit;                      // (J) torque or force limits: one motor per planned joint;
                                                          // empty: none

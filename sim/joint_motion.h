@@ -86,18 +86,26 @@ class BasicMinimumJerkMotion {
   double duration_;
 };
 
-/// The computed-torque law tracking `motion` at time t (s), before clamping:
+/// The computed-torque law tracking a reference (q_r, q̇_r, q̈_r), before clamping:
 ///   τ = M (q̈_r + kp (q_r − q) + kd (q̇_r − q̇)) + c(q, q̇) − τ_passive(q̇),
 /// with the joint-space inertia `mass` (J, J), `bias` = c (gravity, Coriolis:
 /// MuJoCo's qfrc_bias) and `passive` = the joints' damping (qfrc_passive), all
 /// in the joints' order.
 template <class Vector, class Matrix>
+Vector ComputedTorque(const Vector& position, const Vector& velocity, const Vector& acceleration, const Vector& q,
+                      const Vector& qdot, const Matrix& mass, const Vector& bias, const Vector& passive, double kp,
+                      double kd) {
+  const Vector command = acceleration + kp * (position - q) + kd * (velocity - qdot);
+  return mass * command + bias - passive;
+}
+
+/// ComputedTorque of `motion`'s reference at time t (s).
+template <class Vector, class Matrix>
 Vector TrackingTorque(const BasicMinimumJerkMotion<Vector>& motion, double t, const Vector& q, const Vector& qdot,
                       const Matrix& mass, const Vector& bias, const Vector& passive, double kp, double kd) {
   Vector position, velocity, acceleration;
   motion.Sample(t, &position, &velocity, &acceleration);
-  const Vector command = acceleration + kp * (position - q) + kd * (velocity - qdot);
-  return mass * command + bias - passive;
+  return ComputedTorque(position, velocity, acceleration, q, qdot, mass, bias, passive, kp, kd);
 }
 
 }  // namespace flowplan::sim

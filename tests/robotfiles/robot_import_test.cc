@@ -300,6 +300,54 @@ TEST_F(RobotImportTest, TheSimulationModelMovesAsTheKinematicsAndWeighsWhatTheUr
   for (int j = 0; j < 4; ++j) EXPECT_EQ(m.actuator_ctrlrange[2 * j + 1], file_->effort_limit[static_cast<size_t>(j)]);
 }
 
+TEST_F(RobotImportTest, ExecutionCollidesWithTheCollisionGeometryTheSpheresCover) {
+  // `plan --execute`'s model: the hand's mesh (MuJoCo collides with its hull; the prism is convex) and the
+  // primitives as geoms. The smallest distance MuJoCo reports from them to an obstacle lies between the spheres'
+  // clearance (they cover the geometry) and that plus the farthest the spheres reach outside it.
+  const std::string dir = (*root_ / "robot").string();
+  const kinematics::RobotDescription d = file_->Description("robot.yaml");
+  const collision::BodyModel body(d);
+  const std::vector<double> q = {0.15, 0.7, -0.4, 0.5};
+  double tcp[3];
+  body.Tcp(q.data(), tcp);
+  geometry::Scene scene;
+  double clearance = 0.0;
+  for (const double dx : {0.12, -0.12, 0.0}) {  // the first spot a few centimetres from the arm
+    scene.spheres = {{{tcp[0] + dx, tcp[1], tcp[2] + 0.05}, 0.03}};
+    const collision::Checker checker(std::make_shared<collision::BodyModel>(body),
+                                     std::make_shared<collision::World>(scene, 3), {});
+    clearance = checker.Clearance(q.data());
+    if (clearance > 0.005 && clearance < 0.1) break;
+  }
+  ASSERT_GT(clearance, 0.005);
+  ASSERT_LT(clearance, 0.1);
+  double outside = 0.0;
+  for (const LinkCover& cover : file_->cover) outside = std::max(outside, cover.largest_outside);
+
+  sim::ExecutionConfig config;
+  const ExecutionModel model = LoadExecutionModel(*file_, dir, scene, config, "robot.yaml");
+  int meshes = 0;
+  for (int g = 0; g < model.model->ngeom; ++g) meshes += model.model->geom_type[g] == mjGEOM_MESH;
+  EXPECT_EQ(meshes, 1);
+  sim::ArmExecutor executor(*model.model, model.drives, 1, config);
+  const int T = 8;
+  std::vector<double> plan(static_cast<size_t>(T * 8), 0.0);  // held at q, at rest
+  for (int t = 0; t < T; ++t) std::copy(q.begin(), q.end(), plan.begin() + t * 8);
+  const sim::ExecutionResult r = executor.Execute(plan, T, 0.1, Eigen::Vector3d(tcp[0], tcp[1], tcp[2]));
+  EXPECT_LT(r.max_tracking_error, 1e-6);
+  EXPECT_TRUE(r.contacts.empty());
+  EXPECT_GE(r.min_distance[0], clearance - 1e-6);
+  EXPECT_LE(r.min_distance[0], clearance + outside + 1e-6);
+
+  // A collision mesh that is gone is one error naming it.
+  RobotFile broken = *file_;
+  for (CollisionGeometry& g : broken.geometry) {
+    if (g.shape == "mesh") g.mesh = "meshes/gone.stl";
+  }
+  EXPECT_THAT([&] { LoadExecutionModel(broken, dir, scene, config, "robot.yaml"); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("meshes/gone.stl")));
+}
+
 TEST_F(RobotImportTest, RobotJointEpisodesTrackTheirReferenceInsideTheLimitsAndClearOfTheArm) {
   datasets::RobotJointTaskConfig config;
   config.rollout.horizon = 32;  // 2.07 s at 15 Hz

@@ -163,9 +163,9 @@ TEST(SmoothPlanTest, FiltersKeepLinesAndEnds) {
     }
   }
   for (PlanSmoothing s : {PlanSmoothing::kMovingAverage, PlanSmoothing::kSavitzkyGolay}) {
-    const std::vector<double> out = SmoothPlan(line, T, s, 5);
+    const std::vector<double> out = SmoothPlan(line, T, 14, s, 5);
     for (size_t k = 0; k < out.size(); ++k) EXPECT_NEAR(out[k], line[k], 1e-12);
-    const std::vector<double> smooth = SmoothPlan(bumpy, T, s, 5);
+    const std::vector<double> smooth = SmoothPlan(bumpy, T, 14, s, 5);
     EXPECT_EQ(smooth[0], 1.0);
     EXPECT_EQ(smooth[(T - 1) * 14], 1.0);
     EXPECT_LT(std::abs(smooth[4 * 14]), 1.0);
@@ -175,7 +175,7 @@ TEST(SmoothPlanTest, FiltersKeepLinesAndEnds) {
   for (int t = 0; t < T; ++t) {
     for (int i = 0; i < 14; ++i) parabola[t * 14 + i] = 0.3 * t * t - t;
   }
-  const std::vector<double> out = SmoothPlan(parabola, T, PlanSmoothing::kSavitzkyGolay, 5);
+  const std::vector<double> out = SmoothPlan(parabola, T, 14, PlanSmoothing::kSavitzkyGolay, 5);
   for (size_t k = 0; k < out.size(); ++k) EXPECT_NEAR(out[k], parabola[k], 1e-9);
   ExecutionConfig even;
   even.smoothing_window = 4;
