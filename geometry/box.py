@@ -4,6 +4,16 @@
 # lengths (2), angle (rad). The distances also take prepared rows, those
 # columns followed by the rotation matrix row by row (box_prepared).
 
+from typing import Tuple
+
+import torch
+from torch import Tensor
+
+from flowplan.script.geometry.frames import (
+    check_non_negative, check_quaternions, largest, lengths, shape_rotations, sign_of, to_local, to_world,
+    with_rotation_matrices,
+)
+
 
 def box_columns(W: int) -> int:
     return 10 if W == 3 else 5

@@ -2,6 +2,13 @@
 # (stadiums in 2-D), the points within `radius` of the segment a-b. Row layout
 # (K, 2W + 1): a (W), b (W), radius.
 
+from typing import Tuple
+
+import torch
+from torch import Tensor
+
+from flowplan.script.geometry.frames import check_non_negative, lengths
+
 
 def capsule_columns(W: int) -> int:
     return 2 * W + 1

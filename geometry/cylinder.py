@@ -6,6 +6,16 @@
 # angle (rad). The distances also take prepared rows, those columns followed
 # by the rotation matrix row by row (cylinder_prepared).
 
+from typing import Tuple
+
+import torch
+from torch import Tensor
+
+from flowplan.script.geometry.frames import (
+    check_non_negative, check_quaternions, lengths, shape_rotations, sign_of, to_local, to_world, unit_or,
+    with_rotation_matrices,
+)
+
 
 def cylinder_columns(W: int) -> int:
     return 9 if W == 3 else 5

@@ -1,6 +1,9 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): frames of
 # obstacle shapes. W is the workspace dimension (3, or 2 for the particle).
 
+import torch
+from torch import Tensor
+
 
 def rotation_matrices(rotation: Tensor) -> Tensor:
     """Rotations of K shapes, local to world: (K, 4) quaternions (w, x, y, z) of

@@ -10,6 +10,19 @@
 # The shapes: one line per shape in each of the dispatch functions below
 # (shape_distance_only: the shapes with a cheaper way to their distances alone).
 
+from typing import Dict, List, Optional, Tuple
+
+import torch
+from torch import Tensor
+
+from flowplan.script.geometry.frames import check_rows
+from flowplan.script.geometry.sphere import sphere_columns, sphere_distance, sphere_distance_only, sphere_problem
+from flowplan.script.geometry.box import box_columns, box_distance, box_distance_only, box_prepared, box_problem
+from flowplan.script.geometry.cylinder import (
+    cylinder_columns, cylinder_distance, cylinder_distance_only, cylinder_prepared, cylinder_problem,
+)
+from flowplan.script.geometry.capsule import capsule_columns, capsule_distance, capsule_problem
+
 
 def shape_kinds() -> List[str]:
     return ["spheres", "boxes", "cylinders", "capsules"]

@@ -1,6 +1,13 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): spherical
 # obstacles (discs in 2-D). Row layout (K, W + 1): centre (W), radius.
 
+from typing import Tuple
+
+import torch
+from torch import Tensor
+
+from flowplan.script.geometry.frames import check_non_negative, lengths
+
 
 def sphere_columns(W: int) -> int:
     return W + 1

@@ -2,6 +2,12 @@
 # native_gradient (guidance/guide.py) where it has none (portable kernels, a
 # robot other than an arm, or a user cost): the chain computes every gradient.
 
+from typing import Dict, Optional
 
-def native_gradient(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Optional[Tensor]:
-    return None
+import torch
+from torch import Tensor
+
+
+class ChainGradient:
+    def native_gradient(self, x: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Optional[Tensor]:
+        return None

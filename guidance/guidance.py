@@ -2,6 +2,11 @@
 # guidance (SPEC section 2). Settings travel as a Dict[str, float] `opts`
 # keyed by their config names ("guidance.scale", "guidance.clip", ...).
 
+from typing import List
+
+import torch
+from torch import Tensor
+
 
 def guidance_schedules() -> List[str]:
     return ["one_minus_t", "ratio", "rising", "constant"]

@@ -6,19 +6,23 @@
 # kernels/arm_guidance_kernel.cc computes this term too, for an arm with native
 # kernels (guidance/arm_guide.py): a change here is a change there.
 
+from typing import Dict, Tuple
 
-def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
-    return opts[self.weight_key] != 0.0
-
-
-def autograd_source(self, opts: Dict[str, float]) -> str:
-    return ""
+import torch
+from torch import Tensor
 
 
-def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tuple[Tensor, Tensor, Tensor]:
-    """q, qd (B, T, J) raw -> C (B,), dC/dq, dC/dqd (B, T, J), written out."""
-    margin = opts["guidance.joint_limit_margin"]
-    below = torch.relu(self.robot.lower.to(q.dtype) + margin - q)
-    above = torch.relu(q - self.robot.upper.to(q.dtype) + margin)
-    gradient = (above > 0).to(q.dtype) - (below > 0).to(q.dtype)
-    return (below + above).sum([1, 2]), gradient, torch.zeros_like(qd)
+class JointLimitCost:
+    def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
+        return opts[self.weight_key] != 0.0
+
+    def autograd_source(self, opts: Dict[str, float]) -> str:
+        return ""
+
+    def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tuple[Tensor, Tensor, Tensor]:
+        """q, qd (B, T, J) raw -> C (B,), dC/dq, dC/dqd (B, T, J), written out."""
+        margin = opts["guidance.joint_limit_margin"]
+        below = torch.relu(self.robot.lower.to(q.dtype) + margin - q)
+        above = torch.relu(q - self.robot.upper.to(q.dtype) + margin)
+        gradient = (above > 0).to(q.dtype) - (below > 0).to(q.dtype)
+        return (below + above).sum([1, 2]), gradient, torch.zeros_like(qd)

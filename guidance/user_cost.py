@@ -9,31 +9,37 @@
 # torch.no_grad(). Submodule robot (self.robot.tcp(q) and the rest of
 # kinematics/arm.py); attributes dt, source (the file), weight_key.
 
+from typing import Dict, Tuple
 
-def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
-    return opts[self.weight_key] != 0.0
+import torch
+from torch import Tensor
 
-
-def autograd_source(self, opts: Dict[str, float]) -> str:
-    """The file of this cost when it takes part (its gradient needs autograd), else ''."""
-    return self.source if opts[self.weight_key] != 0.0 else ""
+from flowplan.script.geometry.scene import given_scene
 
 
-def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tuple[Tensor, Tensor, Tensor]:
-    """q, qd (B, T, J) raw -> C (B,), dC/dq, dC/dqd (B, T, J), by autograd."""
-    assert not q.is_inference(), self.source + ": a user cost takes its gradient by autograd, which cannot run under torch.inference_mode(); plan under torch.no_grad() instead"
-    enabled = torch.is_grad_enabled()
-    torch.set_grad_enabled(True)
-    q_leaf = q.detach().requires_grad_(True)
-    qd_leaf = qd.detach().requires_grad_(True)
-    value = self.cost(q_leaf, qd_leaf, given_scene(scene, self.robot.workspace_dim))
-    assert value.dim() == 1 and value.size(0) == q.size(0), self.source + ": cost: expected a value per trajectory (" + str(q.size(0)) + ",), got " + str(value.shape)
-    gradients = torch.autograd.grad([value.sum()], [q_leaf, qd_leaf], allow_unused=True)
-    torch.set_grad_enabled(enabled)
-    grad_q = gradients[0]
-    grad_qd = gradients[1]
-    if grad_q is None:
-        grad_q = torch.zeros_like(q)
-    if grad_qd is None:
-        grad_qd = torch.zeros_like(qd)
-    return value.detach(), grad_q, grad_qd
+class UserCost:
+    def active(self, scene: Dict[str, Tensor], opts: Dict[str, float]) -> bool:
+        return opts[self.weight_key] != 0.0
+
+    def autograd_source(self, opts: Dict[str, float]) -> str:
+        """The file of this cost when it takes part (its gradient needs autograd), else ''."""
+        return self.source if opts[self.weight_key] != 0.0 else ""
+
+    def value_and_gradient(self, q: Tensor, qd: Tensor, scene: Dict[str, Tensor], opts: Dict[str, float]) -> Tuple[Tensor, Tensor, Tensor]:
+        """q, qd (B, T, J) raw -> C (B,), dC/dq, dC/dqd (B, T, J), by autograd."""
+        assert not q.is_inference(), self.source + ": a user cost takes its gradient by autograd, which cannot run under torch.inference_mode(); plan under torch.no_grad() instead"
+        enabled = torch.is_grad_enabled()
+        torch.set_grad_enabled(True)
+        q_leaf = q.detach().requires_grad_(True)
+        qd_leaf = qd.detach().requires_grad_(True)
+        value = self.cost(q_leaf, qd_leaf, given_scene(scene, self.robot.workspace_dim))
+        assert value.dim() == 1 and value.size(0) == q.size(0), self.source + ": cost: expected a value per trajectory (" + str(q.size(0)) + ",), got " + str(value.shape)
+        gradients = torch.autograd.grad([value.sum()], [q_leaf, qd_leaf], allow_unused=True)
+        torch.set_grad_enabled(enabled)
+        grad_q = gradients[0]
+        grad_qd = gradients[1]
+        if grad_q is None:
+            grad_q = torch.zeros_like(q)
+        if grad_qd is None:
+            grad_qd = torch.zeros_like(qd)
+        return value.detach(), grad_q, grad_qd

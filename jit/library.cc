@@ -49,6 +49,8 @@ class FunctionResolver : public torch::jit::Resolver {
   std::shared_ptr<torch::jit::CompilationUnit> unit_;
 };
 
+bool StartsWith(const std::string& line, const char* prefix) { return line.rfind(prefix, 0) == 0; }
+
 struct Library {
   std::shared_ptr<torch::jit::CompilationUnit> unit = std::make_shared<torch::jit::CompilationUnit>();
   torch::jit::ResolverPtr resolver = std::make_shared<FunctionResolver>(unit);
@@ -57,7 +59,7 @@ struct Library {
     for (const EmbeddedScript& script : EmbeddedScripts()) {
       if (!script.functions) continue;
       try {
-        unit->define(c10::QualifiedName(kScriptNamespace), script.text, resolver, nullptr);
+        unit->define(c10::QualifiedName(kScriptNamespace), ScriptText(script.path), resolver, nullptr);
       } catch (const std::exception& e) {
         throw InternalError(std::string(script.path) + ": does not compile: " + e.what());
       }
@@ -80,10 +82,37 @@ std::string StripPrefix(std::string line) {
 
 }  // namespace
 
+std::string CompiledSource(const std::string& text) {
+  std::string out;
+  bool in_import = false, in_class = false;
+  size_t begin = 0;
+  while (begin <= text.size()) {
+    size_t end = text.find('\n', begin);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(begin, end - begin);
+    if (in_import) {
+      in_import = line.find(')') == std::string::npos;
+      line.clear();
+    } else if (StartsWith(line, "import ") || StartsWith(line, "from ")) {
+      in_import = line.find('(') != std::string::npos && line.find(')') == std::string::npos;
+      line.clear();
+    } else if (StartsWith(line, "class ")) {
+      in_class = true;
+      line.clear();
+    } else if (in_class && StartsWith(line, "    ")) {
+      line.erase(0, 4);
+    }
+    out += line;
+    if (end < text.size()) out += '\n';
+    begin = end + 1;
+  }
+  return out;
+}
+
 const std::string& ScriptText(const std::string& path) {
   static const std::map<std::string, std::string> texts = [] {
     std::map<std::string, std::string> out;
-    for (const EmbeddedScript& script : EmbeddedScripts()) out.emplace(script.path, script.text);
+    for (const EmbeddedScript& script : EmbeddedScripts()) out.emplace(script.path, CompiledSource(script.text));
     return out;
   }();
   const auto found = texts.find(path);
@@ -124,7 +153,7 @@ ModuleBuilder& ModuleBuilder::Methods(const std::string& path) {
 }
 
 ModuleBuilder& ModuleBuilder::MethodsFromText(const std::string& text, const std::string& where) {
-  sources_.emplace_back(where, text);
+  sources_.emplace_back(where, CompiledSource(text));
   user_.push_back(true);
   return *this;
 }

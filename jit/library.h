@@ -2,16 +2,22 @@
 
 // flowplan's planning-time computations are written once, as TorchScript
 // source files kept in the repository (`*.py` beside the C++ of their folder)
-// and embedded in the binary at build time (cmake/embed_scripts.cmake). Two
-// kinds of file:
+// and embedded in the binary at build time (cmake/embed_scripts.cmake). The
+// same files are the Python package `flowplan.script` (python/: each file a
+// module, `flowplan.script.geometry.box` for geometry/box.py), importable and
+// tested with pytest. Two kinds of file:
 //  - function files: free functions (geometry, costs' formulas, the normalizer's
 //    maps), compiled once per process into one compilation unit, in the order
 //    the folders register them, so that a file may call the functions of any
-//    file registered before it by name;
-//  - class files: the methods of one module class (a robot, a cost term, a
-//    sampler, the planner), compiled onto a torch::jit::Module that
-//    ModuleBuilder fills with buffers, attributes and submodules. Methods may
-//    call every library function by name and their submodules' methods.
+//    file registered before it by name (and imports them by name for Python);
+//  - class files: one class whose methods are those of a module class (a
+//    robot, a cost term, a sampler, the planner), compiled onto a
+//    torch::jit::Module that ModuleBuilder fills with buffers, attributes and
+//    submodules. Methods may call every library function by name and their
+//    submodules' methods.
+// Before compiling, flowplan blanks the imports and a class file's `class`
+// line and takes its body out of the class (CompiledSource), so line numbers
+// in compiler messages are the file's.
 // The module a planner is built from is what runs in-process and what
 // `flowplan export` saves: the exported file carries the printed code of every
 // method and function it calls, and loads with nothing but LibTorch or PyTorch.
@@ -36,7 +42,11 @@ struct EmbeddedScript {
 /// Every embedded file: the function files in compilation order, then the class files.
 const std::vector<EmbeddedScript>& EmbeddedScripts();
 
-/// The text of the embedded file `path`. @throws flowplan::InternalError if there is none.
+/// The source TorchScript compiles from a `flowplan.script` file's text: the import statements blanked, and a
+/// class file's `class Name:` line blanked and its body dedented by one level (4 spaces).
+std::string CompiledSource(const std::string& text);
+
+/// CompiledSource of the embedded file `path`. @throws flowplan::InternalError if there is none.
 const std::string& ScriptText(const std::string& path);
 
 /// The namespace of every flowplan class and function in TorchScript ("__torch__.flowplan").

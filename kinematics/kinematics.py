@@ -1,6 +1,13 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): kinematic
 # helpers shared by every robot class.
 
+from typing import Dict
+
+import torch
+from torch import Tensor
+
+from flowplan.script.geometry.scene import scene_distance_only
+
 
 def rotation_vector(m: Tensor) -> Tensor:
     """Rotation vectors (M, 3), axis times angle, of rotations m (M, 3, 3)."""
@@ -21,5 +28,3 @@ def sphere_clearance(centres: Tensor, radii: Tensor, scene: Dict[str, Tensor]) -
     distance = scene_distance_only(centres.reshape(M * S, -1), scene)
     clearance = distance.view(M, S, -1) - radii.to(distance.dtype).view(1, S, 1)
     return clearance.min(1)[0]
-
-

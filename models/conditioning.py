@@ -1,6 +1,11 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): how start and
 # goal reach a trajectory network (SPEC section 2).
 
+from typing import Optional
+
+import torch
+from torch import Tensor
+
 
 def inpaint(x: Tensor, start: Tensor, goal: Tensor) -> Tensor:
     """x (B, T, D) with state 0 replaced by start (B, D) and state T - 1 by goal

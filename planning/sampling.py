@@ -1,6 +1,13 @@
 # TorchScript (compiled by flowplan at run time, jit/library.h): helpers of
 # the trajectory samplers. Shapes: B plans, T states, D state dims.
 
+from typing import Dict, List
+
+import torch
+from torch import Tensor
+
+from flowplan.script.models.conditioning import inpaint
+
 
 def conditioned(x: Tensor, start: Tensor, goal: Tensor, inpainting: bool) -> Tensor:
     """x (B, T, D) with its ends overwritten under inpainting, unchanged otherwise."""
