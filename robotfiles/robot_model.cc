@@ -184,9 +184,11 @@ ExecutionModel LoadExecutionModel(const RobotFile& file, const std::string& dir,
   sim::ExecutionDrives& drives = out.drives;
   FindJoints(m, d.num_joints, &drives.qpos, &drives.dof, &drives.tcp_site);
   drives.effort_limit = file.effort_limit;
-  drives.law = sim::ExecutionDrives::Law::kComputedTorque;
-  drives.stiffness = config.stiffness;
-  drives.damping = 2.0 * config.damping_ratio * std::sqrt(config.stiffness);
+  if (config.controller == sim::TrackingLaw::kJointPd) {
+    throw Error("execute.controller: joint_pd tracks with execute.kp and execute.kd, the Franka's gains; " + where +
+                "'s arm tracks with computed_torque");
+  }
+  drives.UseComputedTorque(config);
   return out;
 }
 

@@ -24,6 +24,12 @@ void ExecutionConfig::Validate() const {
   }
 }
 
+void ExecutionDrives::UseComputedTorque(const ExecutionConfig& config) {
+  law = Law::kComputedTorque;
+  stiffness = config.stiffness;
+  damping = 2.0 * config.damping_ratio * std::sqrt(config.stiffness);
+}
+
 std::vector<double> SmoothPlan(const std::vector<double>& plan, int64_t T, int64_t D, PlanSmoothing smoothing,
                                int window) {
   if (smoothing == PlanSmoothing::kNone || window <= 1) return plan;

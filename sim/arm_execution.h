@@ -39,12 +39,28 @@ inline const config::EnumNames<PlanSmoothing>& EnumEntries(PlanSmoothing) {
   return names;
 }
 
+/// Which law tracks a plan.
+enum class TrackingLaw {
+  kDefault,         // the built-in Franka: joint PD; a robot folder's arm: computed torque
+  kJointPd,         // joint PD with gravity compensation, execute.kp and execute.kd (the Franka's 7 joints)
+  kComputedTorque,  // the computed-torque law on the simulated arm's own inertia, execute.stiffness and .damping_ratio
+};
+
+inline const config::EnumNames<TrackingLaw>& EnumEntries(TrackingLaw) {
+  static const config::EnumNames<TrackingLaw> names = {{TrackingLaw::kDefault, "default"},
+                                                       {TrackingLaw::kJointPd, "joint_pd"},
+                                                       {TrackingLaw::kComputedTorque, "computed_torque"}};
+  return names;
+}
+
 /// The `execute` section of an experiment config.
 struct ExecutionConfig {
+  TrackingLaw controller = TrackingLaw::kDefault;
   // The Franka: joint PD with gravity compensation, libfranka's joint impedance example gains.
   std::array<double, 7> kp = {600.0, 600.0, 600.0, 600.0, 250.0, 150.0, 50.0};  // N·m/rad
   std::array<double, 7> kd = {50.0, 50.0, 50.0, 50.0, 30.0, 25.0, 15.0};       // N·m·s/rad
-  // Any other arm (a robot folder): the computed-torque law on its own inertia, the same for every joint.
+  // The computed-torque law on the arm's own inertia, the same for every joint (a robot folder's arm, or the Franka
+  // with controller: computed_torque).
   double stiffness = 400.0;    // 1/s², kp of the tracking error dynamics
   double damping_ratio = 1.0;  // kd = 2 · ratio · sqrt(stiffness)
   int control_hz = 1000;       // control and physics rate
@@ -54,12 +70,15 @@ struct ExecutionConfig {
 
   template <class V>
   void Visit(V& v) {
+    v.Field("controller", controller,
+            "tracking law: default (the Franka: joint_pd; a robot folder: computed_torque), joint_pd (the Franka "
+            "only) or computed_torque");
     v.Field("kp", kp, "the Franka's joint PD stiffness (N m/rad)", config::NonNegative());
     v.Field("kd", kd, "the Franka's joint PD damping (N m s/rad)", config::NonNegative());
     v.Field("stiffness", stiffness,
-            "a robot folder's arm: computed-torque tracking stiffness, the same for every joint (1/s^2)",
+            "computed-torque tracking stiffness, the same for every joint (1/s^2)",
             config::Positive());
-    v.Field("damping_ratio", damping_ratio, "a robot folder's arm: computed-torque damping ratio (1: critical)",
+    v.Field("damping_ratio", damping_ratio, "computed-torque damping ratio (1: critical)",
             config::NonNegative());
     v.Field("control_hz", control_hz, "control and physics rate (Hz)", config::Positive());
     v.Field("settle_time", settle_time, "seconds the last state is held after the plan", config::NonNegative());
@@ -112,6 +131,9 @@ struct ExecutionDrives {
   std::vector<double> kp, kd;  // kJointPd: (J,) N·m/rad and N·m·s/rad
   double stiffness = 0.0;      // kComputedTorque: 1/s²
   double damping = 0.0;        // kComputedTorque: 1/s
+
+  /// The computed-torque law with `config`'s stiffness and damping ratio.
+  void UseComputedTorque(const ExecutionConfig& config);
 };
 
 /// Tracks plans in one scene; owns its mjData (one per worker thread).

@@ -41,6 +41,10 @@ ExecutionDrives FrankaDrives(const FrankaModel& scene, const ExecutionConfig& co
     drives.effort_limit.push_back(scene.limits().torque[j]);
   }
   drives.tcp_site = scene.tcp_site();
+  if (config.controller == TrackingLaw::kComputedTorque) {
+    drives.UseComputedTorque(config);
+    return drives;
+  }
   drives.law = ExecutionDrives::Law::kJointPd;
   drives.kp.assign(config.kp.begin(), config.kp.end());
   drives.kd.assign(config.kd.begin(), config.kd.end());

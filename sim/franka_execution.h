@@ -20,7 +20,8 @@ namespace flowplan::sim {
 /// @throws flowplan::Error if MuJoCo rejects the model.
 FrankaModel MakeFrankaScene(const geometry::Scene& scene, double timestep);
 
-/// The Franka's 7 joints in MakeFrankaScene's model, driven by joint PD with execute.kp and execute.kd.
+/// The Franka's 7 joints in MakeFrankaScene's model, driven by joint PD with execute.kp and execute.kd (or, with
+/// execute.controller: computed_torque, by the computed-torque law).
 ExecutionDrives FrankaDrives(const FrankaModel& scene, const ExecutionConfig& config);
 
 /// Tracks plans (T, 14) of the Franka in one scene of MakeFrankaScene(obstacles, 1 / config.control_hz) with

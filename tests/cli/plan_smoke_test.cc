@@ -257,6 +257,13 @@ TEST(InstalledPlanTest, AnInstalledBinaryPlansAndDrawsFromAnotherFolder) {
       "spheres=torch.tensor([[0.5, 0.3, 0.1]])); print(p.native, x.shape[0], x.shape[2], flowplan.__file__)\"");
   ExpectOk(python);
   EXPECT_THAT(python.output, HasSubstr("True 3 4 " + prefix + "/lib/python3/dist-packages/flowplan/__init__.py"));
+  // So do the planning math's TorchScript files, as Python modules: the particle's point robot from its own source.
+  const Outcome script = RunCommand(
+      "cd " + work + " && PYTHONPATH=" + prefix + "/lib/python3/dist-packages " + FLOWPLAN_PYTHON +
+      " -c \"import torch; from flowplan.script.kinematics.point import Point; p = torch.jit.load('run/planner.pt'); "
+      "q = torch.tensor([[0.25, -0.5]]); print(torch.equal(Point.tcp(p.robot, q), p.robot.tcp(q)))\"");
+  ExpectOk(script);
+  EXPECT_THAT(script.output, HasSubstr("True"));
 }
 
 /// A Franka reach model trained for two steps: enough to exercise IK, FK, guidance and execution.

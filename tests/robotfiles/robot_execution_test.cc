@@ -4,6 +4,7 @@
 // distances between the arm's spheres and an obstacle equal the ones flowplan's
 // own collision checker computes.
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +12,7 @@
 
 #include "collision/body_model.h"
 #include "collision/checker.h"
+#include "core/error.h"
 #include "robotfiles/robot_model.h"
 #include "sim/arm_execution.h"
 
@@ -118,6 +120,14 @@ TEST_F(RobotExecutionTest, MujocoMeasuresTheSpheresAsTheCollisionCheckerDoes) {
     ASSERT_LT(clearance, 0.2) << "obstacle " << k << " is too far from the arm to test anything";
     EXPECT_NEAR(r.min_distance[k], clearance, 1e-6) << "obstacle " << k;
   }
+}
+
+TEST_F(RobotExecutionTest, JointPdIsTheFrankasGainsAndRefusedForAFolder) {
+  config_.controller = sim::TrackingLaw::kJointPd;
+  EXPECT_THAT([&] { LoadExecutionModel(file_, Ur5Folder(), {}, config_, "robots/ur5/robot.yaml"); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr(
+                  "execute.controller: joint_pd tracks with execute.kp and execute.kd, the Franka's gains; "
+                  "robots/ur5/robot.yaml's arm tracks with computed_torque")));
 }
 
 }  // namespace

@@ -56,6 +56,20 @@ TEST_F(FrankaExecutionTest, TracksASmoothMoveToTheGoalWithoutObstacles) {
   EXPECT_NEAR(r.tcp[32 * 3 + 1], Tcp(Eigen::Map<const JointVector>(&SmoothMove(q0, q1, 64)[32 * 14]))[1], 0.01);
 }
 
+TEST_F(FrankaExecutionTest, TheComputedTorqueLawTracksTheSameMoveOnTheModelsOwnInertia) {
+  const JointVector q0 = Ik({0.5, -0.3, 0.3}), q1 = Ik({0.5, 0.3, 0.3});
+  ExecutionConfig config = config_;
+  config.controller = TrackingLaw::kComputedTorque;
+  const FrankaModel scene = MakeFrankaScene({}, 1.0 / config.control_hz);
+  FrankaExecutor pd(scene, 0, config_), computed(scene, 0, config);
+  const ExecutionResult by_pd = pd.Execute(SmoothMove(q0, q1, 64), 64, kDt, Tcp(q1));
+  const ExecutionResult by_model = computed.Execute(SmoothMove(q0, q1, 64), 64, kDt, Tcp(q1));
+  // Feedforward on the arm's own mass matrix leaves only the spline's and the integrator's errors.
+  EXPECT_LT(by_model.max_tracking_error, 1e-3);
+  EXPECT_LT(by_model.max_tracking_error, 0.2 * by_pd.max_tracking_error);
+  EXPECT_LT(by_model.goal_distance, 1e-4);
+}
+
 TEST_F(FrankaExecutionTest, APlanThroughAnObstacleMakesContactAndFarOnesDoNot) {
   const JointVector q0 = Ik({0.5, -0.3, 0.2}), q1 = Ik({0.5, 0.3, 0.2});
   geometry::Scene obstacles;
