@@ -40,8 +40,8 @@ void RunPlan(const PlanArgs& args) {
   }
   const PlanInputs inputs = ResolvePlanInputs(args, subject);
   if (args.execute && (!subject.robot->is_arm() || subject.robot->workspace_dim() != 3)) {
-    throw Error("--execute: execution in MuJoCo needs the Franka; this planner's robot is \"" +
-                subject.robot->description().name + "\"");
+    throw Error("--execute: execution in MuJoCo needs an arm in 3-D (the Franka or a robot folder); this planner's "
+                "robot is \"" + subject.robot->description().name + "\"");
   }
   const std::string prefix = args.out.empty() ? "plan" : args.out;
   CheckOutputsFree(prefix, args.force);

@@ -13,7 +13,10 @@ namespace flowplan::experiment {
 namespace {
 
 /// The kinematic tree and TCP of a description, as text: what must match for a robot to move as another does.
-std::string Kinematics(const kinematics::RobotDescription& d) {
+/// `complete` adds what only simulating it needs to agree on too: each joint's type, every link's axis and the
+/// values held joints are held at (a file made before the Franka's description carried its fingers' values is still
+/// the built-in Franka without them).
+std::string Kinematics(const kinematics::RobotDescription& d, bool complete = false) {
   std::string text = d.name + " " + std::to_string(d.num_joints) + " " + std::to_string(d.tcp_link);
   auto numbers = [&](const auto& values) {
     for (double v : values) text += " " + config::internal::FormatDouble(v);
@@ -22,7 +25,11 @@ std::string Kinematics(const kinematics::RobotDescription& d) {
     text += " | " + link.name + " " + std::to_string(link.parent) + " " + std::to_string(link.joint);
     numbers(link.pos);
     numbers(link.quat);
-    if (link.joint >= 0) numbers(link.axis);  // a link that no planned joint moves has no axis that matters
+    if (link.joint >= 0 || complete) numbers(link.axis);  // a link that no planned joint moves has no axis that matters
+    if (complete) {
+      text += link.type == kinematics::JointType::kPrismatic ? " slide " : " hinge ";
+      numbers(std::vector<double>{link.offset});
+    }
   }
   numbers(d.tcp_pos);
   numbers(d.tcp_quat);
@@ -65,12 +72,19 @@ robotfiles::ExecutionModel FolderExecution(const PlanSubject& subject, const Pla
   }
   robotfiles::RobotFile file = robotfiles::LoadRobotFile(folder);
   const std::string where = folder + "/robot.yaml";
-  if (Kinematics(file.Description(where)) != Kinematics(subject.robot->description())) {
-    throw Error("--execute: " + where + ": its robot \"" + file.robot.name + "\" does not move as the planner's \"" +
-                name + "\" does (another kinematic tree or TCP)");
+  // Both with the problem's held joints (a gripper's fingers) at the problem's values.
+  kinematics::RobotDescription planned = subject.robot->description();
+  if (!inputs.world.held.empty()) {
+    file.robot = collision::WithHeld(file.robot, inputs.world.held);
+    planned = collision::WithHeld(planned, inputs.world.held);
   }
-  if (!inputs.world.held.empty()) file.robot = collision::WithHeld(file.robot, inputs.world.held);
-  return robotfiles::LoadExecutionModel(file, folder, inputs.scene, subject.config.execute, where);
+  if (Kinematics(file.Description(where), true) != Kinematics(planned, true)) {
+    throw Error("--execute: " + where + ": its robot \"" + file.robot.name + "\" does not move as the planner's \"" +
+                name + "\" does (another kinematic tree, joint type, held value or TCP)");
+  }
+  // The drives `generate` simulates the robot with.
+  return robotfiles::LoadExecutionModel(file, folder, inputs.scene, subject.config.generate.robot_joint.drives,
+                                        subject.config.execute, where);
 }
 
 }  // namespace

@@ -71,8 +71,8 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
                 "--start-tcp, --goal-tcp, --scene and the obstacle options");
   }
   if (args.execute && (!subject.robot->is_arm() || subject.robot->workspace_dim() != 3)) {
-    throw Error("--execute: execution in MuJoCo needs the Franka; this planner's robot is \"" +
-                subject.robot->description().name + "\"");
+    throw Error("--execute: execution in MuJoCo needs an arm in 3-D (the Franka or a robot folder); this planner's "
+                "robot is \"" + subject.robot->description().name + "\"");
   }
   const problems::ProblemSet set = problems::LoadProblemSet(args.problems);
   const int64_t count = args.limit > 0 ? std::min<int64_t>(args.limit, static_cast<int64_t>(set.problems.size()))

@@ -102,6 +102,21 @@ void FindJoints(const mjModel& m, int J, std::vector<int>* qpos, std::vector<int
   FLOWPLAN_DEMAND(*tcp_site >= 0);
 }
 
+/// `text` for an XML attribute value.
+std::string XmlEscaped(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
 /// The <geom> of one piece of collision geometry in its link's body; meshes add their <mesh> asset to `assets`.
 std::string CollisionGeomXml(const CollisionGeometry& g, const std::string& dir, const std::string& name,
                              const std::string& attributes, std::string* assets, const std::string& where) {
@@ -112,6 +127,8 @@ std::string CollisionGeomXml(const CollisionGeometry& g, const std::string& dir,
   } else if (g.shape == "box") {
     shape = "type=\"box\" size=\"" + Number(0.5 * g.size[0]) + " " + Number(0.5 * g.size[1]) + " " +
             Number(0.5 * g.size[2]) + "\"";
+  } else if (g.shape == "capsule" && !(g.size[1] > 0.0)) {
+    shape = "type=\"sphere\" size=\"" + Number(g.size[0]) + "\"";  // MuJoCo needs a capsule of non-zero length
   } else if (g.shape == "cylinder" || g.shape == "capsule") {
     shape = "type=\"" + g.shape + "\" size=\"" + Number(g.size[0]) + " " + Number(0.5 * g.size[1]) + "\"";
   } else if (g.shape == "ellipsoid") {
@@ -124,12 +141,12 @@ std::string CollisionGeomXml(const CollisionGeometry& g, const std::string& dir,
     for (const auto& v : mesh.vertices) {
       for (int i = 0; i < 3; ++i) vertices += (vertices.empty() ? "" : " ") + Number(v[i] * g.scale[i]);
     }
-    *assets += "    <mesh name=\"" + name + "\" vertex=\"" + vertices + "\"/>\n";
-    shape = "type=\"mesh\" mesh=\"" + name + "\"";
+    *assets += "    <mesh name=\"" + XmlEscaped(name) + "\" vertex=\"" + vertices + "\"/>\n";
+    shape = "type=\"mesh\" mesh=\"" + XmlEscaped(name) + "\"";
   } else {
     throw Error(where + ": geometry: link \"" + g.link + "\": unknown shape \"" + g.shape + "\"");
   }
-  return "      <geom name=\"" + name + "\" " + shape + " " + placed + " " + attributes + "/>\n";
+  return "      <geom name=\"" + XmlEscaped(name) + "\" " + shape + " " + placed + " " + attributes + "/>\n";
 }
 
 }  // namespace
@@ -146,11 +163,16 @@ SimulationModel LoadSimulationModel(const RobotFile& file, const DriveSettings& 
 }
 
 ExecutionModel LoadExecutionModel(const RobotFile& file, const std::string& dir, const geometry::Scene& scene,
-                                  const sim::ExecutionConfig& config, const std::string& where) {
+                                  const DriveSettings& drive_settings, const sim::ExecutionConfig& config,
+                                  const std::string& where) {
+  if (config.controller == sim::TrackingLaw::kJointPd) {
+    throw Error("execute.controller: joint_pd tracks with execute.kp and execute.kd, the Franka's gains; " + where +
+                "'s arm tracks with computed_torque");
+  }
   scene.Validate(3, "execution scene");
   sim::InstallExactConvexOverlaps();  // the margin below would make cylinders overlap what they do not touch
   const kinematics::RobotDescription d = file.Description(where);
-  sim::ArmXmlOptions options = SimulationOptions(file, DriveSettings{}, where);
+  sim::ArmXmlOptions options = SimulationOptions(file, drive_settings, where);
   // The arm's geoms touch what has conaffinity 1 (the obstacles), not each other; they carry no mass.
   const std::string arm = "contype=\"1\" conaffinity=\"0\" group=\"3\" mass=\"0\" rgba=\"0.7 0.7 0.7 1\"";
   std::string assets;
@@ -164,16 +186,22 @@ ExecutionModel LoadExecutionModel(const RobotFile& file, const std::string& dir,
   for (const kinematics::RobotSphere& sphere : d.spheres) {
     const std::string& link = d.links[static_cast<size_t>(sphere.link)].name;
     if (pieces.count(link)) continue;
-    options.body_elements[link] += "      <geom name=\"" + link + "_s" + std::to_string(spheres[sphere.link]++) +
-                                   "\" type=\"sphere\" pos=\"" + Numbers(sphere.centre) + "\" size=\"" +
-                                   Number(sphere.radius) + "\" " + arm + "/>\n";
+    const std::string name = link + "_s" + std::to_string(spheres[sphere.link]++);
+    options.body_elements[link] += "      <geom name=\"" + XmlEscaped(name) + "\" type=\"sphere\" pos=\"" +
+                                   Numbers(sphere.centre) + "\" size=\"" + Number(sphere.radius) + "\" " + arm + "/>\n";
   }
   // Contacts are detected within kMeasuredDistance (margin) and act only on overlaps (gap = margin).
   const std::string obstacle = "margin=\"" + Number(sim::kMeasuredDistance) + "\" gap=\"" +
                                Number(sim::kMeasuredDistance) + "\" contype=\"0\" conaffinity=\"1\" group=\"4\" "
                                "rgba=\"0.8 0.2 0.2 0.5\"";
   options.world_elements = sim::ObstacleGeomsXml(scene, obstacle);
-  options.model_elements = "  <size njmax=\"2000\" nconmax=\"1000\"/>\n" +
+  // Room for every arm geom near every obstacle, several contacts each (MuJoCo drops what does not fit).
+  int arm_geoms = 0;
+  for (const auto& [link, count] : pieces) arm_geoms += count;
+  for (const auto& [link, count] : spheres) arm_geoms += count;
+  const int contacts = std::max(1000, 4 * arm_geoms * static_cast<int>(std::max<size_t>(scene.size(), 1)));
+  options.model_elements = "  <size njmax=\"" + std::to_string(2 * contacts) + "\" nconmax=\"" +
+                           std::to_string(contacts) + "\"/>\n" +
                            (assets.empty() ? std::string() : "  <asset>\n" + assets + "  </asset>\n");
   ExecutionModel out;
   out.model = sim::LoadModelFromXml(sim::ArmXml(d, options), where + " among " + std::to_string(scene.size()) +
@@ -184,10 +212,6 @@ ExecutionModel LoadExecutionModel(const RobotFile& file, const std::string& dir,
   sim::ExecutionDrives& drives = out.drives;
   FindJoints(m, d.num_joints, &drives.qpos, &drives.dof, &drives.tcp_site);
   drives.effort_limit = file.effort_limit;
-  if (config.controller == sim::TrackingLaw::kJointPd) {
-    throw Error("execute.controller: joint_pd tracks with execute.kp and execute.kd, the Franka's gains; " + where +
-                "'s arm tracks with computed_torque");
-  }
   drives.UseComputedTorque(config);
   return out;
 }

@@ -45,10 +45,12 @@ struct SimulationModel {
 SimulationModel LoadSimulationModel(const RobotFile& file, const DriveSettings& drives, const std::string& where);
 
 /// The robot of the folder `dir` (robot.yaml read as `file`) among the obstacles of `scene` (3-D), for
-/// sim::ArmExecutor: SimulationXml's model, physics at `timestep` s, with each link's collision geometry (robot.yaml's
-/// geometry: primitives as MuJoCo's own shapes, meshes as their convex hulls; a link with spheres but no geometry
-/// carries its spheres) colliding with the obstacles ("obstacle0", … as sim::ObstacleGeomsXml numbers them) and not
-/// with itself; contacts reported within sim::kMeasuredDistance, forces only on overlaps.
+/// sim::ArmExecutor: SimulationXml(file, drives)'s model, physics at 1 / config.control_hz s, with each link's
+/// collision geometry (robot.yaml's geometry: primitives as MuJoCo's own shapes, meshes as their convex hulls; a
+/// link with spheres but no geometry carries its spheres) colliding with the obstacles ("obstacle0", … as
+/// sim::ObstacleGeomsXml numbers them) and not with itself; contacts reported within sim::kMeasuredDistance, forces
+/// only on overlaps. Links welded to the world (the base) are static in MuJoCo, which checks no static geom against
+/// another: they never touch an obstacle there.
 struct ExecutionModel {
   sim::MjModelPtr model;
   sim::ExecutionDrives drives;  // the planned joints, driven by the computed-torque law (execute.stiffness, .damping_ratio)
@@ -56,6 +58,7 @@ struct ExecutionModel {
 
 /// @throws flowplan::Error naming `where` as SimulationXml does, a mesh file that cannot be read, or MuJoCo's refusal.
 ExecutionModel LoadExecutionModel(const RobotFile& file, const std::string& dir, const geometry::Scene& scene,
-                                  const sim::ExecutionConfig& config, const std::string& where);
+                                  const DriveSettings& drives, const sim::ExecutionConfig& config,
+                                  const std::string& where);
 
 }  // namespace flowplan::robotfiles

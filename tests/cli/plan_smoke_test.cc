@@ -257,11 +257,14 @@ TEST(InstalledPlanTest, AnInstalledBinaryPlansAndDrawsFromAnotherFolder) {
       "spheres=torch.tensor([[0.5, 0.3, 0.1]])); print(p.native, x.shape[0], x.shape[2], flowplan.__file__)\"");
   ExpectOk(python);
   EXPECT_THAT(python.output, HasSubstr("True 3 4 " + prefix + "/lib/python3/dist-packages/flowplan/__init__.py"));
-  // So do the planning math's TorchScript files, as Python modules: the particle's point robot from its own source.
+  // So do the planning math's TorchScript files, as Python modules, compiled by PyTorch itself: a point 0.3 from the
+  // centre of a sphere of radius 0.1 is 0.2 from it.
   const Outcome script = RunCommand(
       "cd " + work + " && PYTHONPATH=" + prefix + "/lib/python3/dist-packages " + FLOWPLAN_PYTHON +
-      " -c \"import torch; from flowplan.script.kinematics.point import Point; p = torch.jit.load('run/planner.pt'); "
-      "q = torch.tensor([[0.25, -0.5]]); print(torch.equal(Point.tcp(p.robot, q), p.robot.tcp(q)))\"");
+      " -c \"import torch; from flowplan.script.geometry.scene import prepared_scene, scene_distance; "
+      "s = prepared_scene({'spheres': torch.tensor([[0.5, 0.0, 0.2, 0.1]], dtype=torch.float64)}, 3); "
+      "d = torch.jit.script(scene_distance)(torch.tensor([[0.5, 0.3, 0.2]], dtype=torch.float64), s)[0]; "
+      "print(abs(d.item() - 0.2) < 1e-12)\"");
   ExpectOk(script);
   EXPECT_THAT(script.output, HasSubstr("True"));
 }

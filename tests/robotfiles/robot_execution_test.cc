@@ -52,7 +52,7 @@ class RobotExecutionTest : public ::testing::Test {
   }
   sim::ExecutionResult Execute(const RobotFile& file, const geometry::Scene& scene, const std::vector<double>& plan,
                                const Eigen::Vector3d& goal) {
-    const ExecutionModel model = LoadExecutionModel(file, Ur5Folder(), scene, config_, "ur5");
+    const ExecutionModel model = LoadExecutionModel(file, Ur5Folder(), scene, DriveSettings{}, config_, "ur5");
     sim::ArmExecutor executor(*model.model, model.drives, static_cast<int>(scene.size()), config_);
     return executor.Execute(plan, kT, kDt, goal);
   }
@@ -124,7 +124,7 @@ TEST_F(RobotExecutionTest, MujocoMeasuresTheSpheresAsTheCollisionCheckerDoes) {
 
 TEST_F(RobotExecutionTest, JointPdIsTheFrankasGainsAndRefusedForAFolder) {
   config_.controller = sim::TrackingLaw::kJointPd;
-  EXPECT_THAT([&] { LoadExecutionModel(file_, Ur5Folder(), {}, config_, "robots/ur5/robot.yaml"); },
+  EXPECT_THAT([&] { LoadExecutionModel(file_, Ur5Folder(), {}, DriveSettings{}, config_, "robots/ur5/robot.yaml"); },
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr(
                   "execute.controller: joint_pd tracks with execute.kp and execute.kd, the Franka's gains; "
                   "robots/ur5/robot.yaml's arm tracks with computed_torque")));

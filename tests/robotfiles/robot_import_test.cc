@@ -325,7 +325,7 @@ TEST_F(RobotImportTest, ExecutionCollidesWithTheCollisionGeometryTheSpheresCover
   for (const LinkCover& cover : file_->cover) outside = std::max(outside, cover.largest_outside);
 
   sim::ExecutionConfig config;
-  const ExecutionModel model = LoadExecutionModel(*file_, dir, scene, config, "robot.yaml");
+  const ExecutionModel model = LoadExecutionModel(*file_, dir, scene, DriveSettings{}, config, "robot.yaml");
   int meshes = 0;
   for (int g = 0; g < model.model->ngeom; ++g) meshes += model.model->geom_type[g] == mjGEOM_MESH;
   EXPECT_EQ(meshes, 1);
@@ -344,7 +344,7 @@ TEST_F(RobotImportTest, ExecutionCollidesWithTheCollisionGeometryTheSpheresCover
   for (CollisionGeometry& g : broken.geometry) {
     if (g.shape == "mesh") g.mesh = "meshes/gone.stl";
   }
-  EXPECT_THAT([&] { LoadExecutionModel(broken, dir, scene, config, "robot.yaml"); },
+  EXPECT_THAT([&] { LoadExecutionModel(broken, dir, scene, DriveSettings{}, config, "robot.yaml"); },
               ::testing::ThrowsMessage<Error>(HasSubstr("meshes/gone.stl")));
 }
 
