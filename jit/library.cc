@@ -5,6 +5,7 @@
 #include <torch/csrc/jit/runtime/graph_executor.h>
 
 #include <map>
+#include <regex>
 #include <memory>
 
 #include "core/error.h"
@@ -51,6 +52,23 @@ class FunctionResolver : public torch::jit::Resolver {
 
 bool StartsWith(const std::string& line, const char* prefix) { return line.rfind(prefix, 0) == 0; }
 
+/// The compiler's complaint in one line: its first non-empty line, and the line of the source it points at
+/// ("undefined value undefined_name, line 5").
+std::string CompileError(const std::string& message) {
+  std::string first;
+  size_t begin = 0;
+  while (first.empty() && begin < message.size()) {
+    size_t end = message.find('\n', begin);
+    if (end == std::string::npos) end = message.size();
+    first = message.substr(begin, end - begin);
+    while (!first.empty() && (first.back() == ':' || first.back() == ' ')) first.pop_back();
+    begin = end + 1;
+  }
+  std::smatch line;
+  if (std::regex_search(message, line, std::regex(R"(, line (\d+))"))) first += ", line " + line[1].str();
+  return first;
+}
+
 struct Library {
   std::shared_ptr<torch::jit::CompilationUnit> unit = std::make_shared<torch::jit::CompilationUnit>();
   torch::jit::ResolverPtr resolver = std::make_shared<FunctionResolver>(unit);
@@ -84,23 +102,43 @@ std::string StripPrefix(std::string line) {
 
 std::string CompiledSource(const std::string& text) {
   std::string out;
-  bool in_import = false, in_class = false;
+  enum { kNone, kParenthesised, kContinued } import = kNone;  // an import statement going on past its first line
+  bool in_class = false;
+  int quotes = 0;  // 0 outside a triple-quoted string, else 1 (""") or 2 (''')
   size_t begin = 0;
   while (begin <= text.size()) {
     size_t end = text.find('\n', begin);
     if (end == std::string::npos) end = text.size();
     std::string line = text.substr(begin, end - begin);
-    if (in_import) {
-      in_import = line.find(')') == std::string::npos;
+    const std::string code = line.substr(0, line.find('#'));  // the line without its comment
+    const bool continued = !code.empty() && code.find_last_not_of(" \t") != std::string::npos &&
+                           code[code.find_last_not_of(" \t")] == '\\';
+    if (quotes == 0 && import != kNone) {
+      if (import == kParenthesised && code.find(')') != std::string::npos) import = kNone;
+      if (import == kContinued && !continued) import = kNone;
       line.clear();
-    } else if (StartsWith(line, "import ") || StartsWith(line, "from ")) {
-      in_import = line.find('(') != std::string::npos && line.find(')') == std::string::npos;
+    } else if (quotes == 0 && (StartsWith(line, "import ") || StartsWith(line, "from "))) {
+      import = continued                                                                           ? kContinued
+               : code.find('(') != std::string::npos && code.find(')') == std::string::npos ? kParenthesised
+                                                                                             : kNone;
       line.clear();
-    } else if (StartsWith(line, "class ")) {
+    } else if (quotes == 0 && StartsWith(line, "class ")) {
       in_class = true;
       line.clear();
-    } else if (in_class && StartsWith(line, "    ")) {
-      line.erase(0, 4);
+    } else if (quotes == 0 && in_class && !line.empty() && line[0] != ' ' && line[0] != '#') {
+      in_class = false;  // back at module level
+    }
+    if (in_class && StartsWith(line, "    ")) line.erase(0, 4);
+    // Triple-quoted strings that open or close on this line.
+    for (size_t at = 0; at + 3 <= line.size(); ++at) {
+      const bool double_quotes = line.compare(at, 3, "\"\"\"") == 0, single = line.compare(at, 3, "'''") == 0;
+      if (quotes == 0 && (double_quotes || single) && line.substr(0, at).find('#') == std::string::npos) {
+        quotes = double_quotes ? 1 : 2;
+        at += 2;
+      } else if ((quotes == 1 && double_quotes) || (quotes == 2 && single)) {
+        quotes = 0;
+        at += 2;
+      }
     }
     out += line;
     if (end < text.size()) out += '\n';
@@ -179,7 +217,7 @@ torch::jit::Module ModuleBuilder::Build() {
       if (user_[i]) users += (users.empty() ? "" : ", ") + sources_[i].first;
     }
     const std::string message = e.what();
-    if (!users.empty()) throw Error(users + ": does not compile as TorchScript: " + FirstLine(message));
+    if (!users.empty()) throw Error(users + ": does not compile as TorchScript: " + CompileError(message));
     std::string files;
     for (const auto& source : sources_) files += (files.empty() ? "" : ", ") + source.first;
     throw InternalError(module_.type()->name()->qualifiedName() + " (" + files + "): does not compile: " + message);
