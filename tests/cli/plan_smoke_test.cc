@@ -192,7 +192,7 @@ TEST_F(ParticlePlanTest, BadInputsEndInOneClearLine) {
   std::ofstream(Path("nan_radius.yaml")) << "spheres:\n  - {centre: [0.5, 0.3], radius: .nan}\n";
   ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --scene " + Path("nan_radius.yaml")),
                      "spheres[0].radius: expected a number");
-  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --execute"), "execution in MuJoCo needs the Franka");
+  ExpectCleanFailure(Flowplan(run + "--start 0,0 --goal 1,0 --execute"), "execution in MuJoCo needs an arm in 3-D (the Franka or a robot folder); this planner's robot is \"particle_disc\"");
   ExpectCleanFailure(Flowplan("plan --planner " + Path("run/planner.pt") + " --start 0,0 --goal 1,0 sampler.splitting=midpoint"),
                      "sampler.splitting: is compiled into");
   ExpectCleanFailure(Flowplan("plan --planner " + Path("run/planner.pt") + " --start 0,0 --goal 1,0 model.unet.groups=4"),
