@@ -9,6 +9,7 @@
 #include <torch/torch.h>
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "kinematics/trajectory_info.h"
 #include "datasets/h5.h"
 #include "planning/planner.h"
+#include "robotfiles/robot_model.h"
 #include "sim/franka_execution.h"
 #include "validity/plan_check.h"
 #include "validity/plan_quality.h"
@@ -131,8 +133,16 @@ kinematics::RobotDescription ResolveRobot(const kinematics::RobotDescription& ca
 /// The plan checker of `subject` (its robot, dt, check.* and configuration check).
 validity::PlanChecker MakePlanChecker(const PlanSubject& subject);
 
-/// plan_execute.cc: tracks every plan in MuJoCo, on `threads` workers.
-/// @throws flowplan::Error unless the robot is the built-in Franka.
+/// plan_execute.cc: the robot folder `folder` among the obstacles of `scene`, as a MuJoCo model with its drives,
+/// for executing plans of `planned` (with the joints of `held` held at those values); execute.* and
+/// generate.robot_joint's drives from `config`.
+/// @throws flowplan::Error if `folder` is empty, or its robot does not move as `planned` does.
+robotfiles::ExecutionModel FolderExecution(const std::string& folder, const kinematics::RobotDescription& planned,
+                                           const geometry::Scene& scene, const std::map<std::string, double>& held,
+                                           const ExperimentConfig& config);
+
+/// plan_execute.cc: tracks every plan in MuJoCo, on `threads` workers: the built-in Franka, or the robot folder of
+/// the subject's config (FolderExecution).
 std::vector<sim::ExecutionResult> ExecutePlans(const torch::Tensor& plans, const PlanSubject& subject,
                                                const PlanInputs& inputs, int threads);
 

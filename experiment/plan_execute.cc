@@ -59,13 +59,10 @@ validity::PlanChecker MakePlanChecker(const PlanSubject& subject) {
   return validity::PlanChecker(subject.robot, subject.trajectory.dt, subject.config.check);
 }
 
-namespace {
-
-/// The robot folder the subject's robot comes from, among `inputs`' obstacles, as a MuJoCo model with its drives.
-/// @throws flowplan::Error if the subject names no folder, or the folder's robot is not the one planned for.
-robotfiles::ExecutionModel FolderExecution(const PlanSubject& subject, const PlanInputs& inputs) {
-  const std::string& folder = subject.config.robot;
-  const std::string& name = subject.robot->description().name;
+robotfiles::ExecutionModel FolderExecution(const std::string& folder, const kinematics::RobotDescription& planned_robot,
+                                           const geometry::Scene& scene, const std::map<std::string, double>& held,
+                                           const ExperimentConfig& config) {
+  const std::string& name = planned_robot.name;
   if (folder.empty()) {
     throw Error("--execute: the planner's robot \"" + name + "\" is not the built-in Franka and its config names no "
                 "robot folder (robot: DIR) to simulate it from");
@@ -73,21 +70,18 @@ robotfiles::ExecutionModel FolderExecution(const PlanSubject& subject, const Pla
   robotfiles::RobotFile file = robotfiles::LoadRobotFile(folder);
   const std::string where = folder + "/robot.yaml";
   // Both with the problem's held joints (a gripper's fingers) at the problem's values.
-  kinematics::RobotDescription planned = subject.robot->description();
-  if (!inputs.world.held.empty()) {
-    file.robot = collision::WithHeld(file.robot, inputs.world.held);
-    planned = collision::WithHeld(planned, inputs.world.held);
+  kinematics::RobotDescription planned = planned_robot;
+  if (!held.empty()) {
+    file.robot = collision::WithHeld(file.robot, held);
+    planned = collision::WithHeld(planned, held);
   }
   if (Kinematics(file.Description(where), true) != Kinematics(planned, true)) {
     throw Error("--execute: " + where + ": its robot \"" + file.robot.name + "\" does not move as the planner's \"" +
                 name + "\" does (another kinematic tree, joint type, held value or TCP)");
   }
   // The drives `generate` simulates the robot with.
-  return robotfiles::LoadExecutionModel(file, folder, inputs.scene, subject.config.generate.robot_joint.drives,
-                                        subject.config.execute, where);
+  return robotfiles::LoadExecutionModel(file, folder, scene, config.generate.robot_joint.drives, config.execute, where);
 }
-
-}  // namespace
 
 std::vector<sim::ExecutionResult> ExecutePlans(const torch::Tensor& plans, const PlanSubject& subject,
                                                const PlanInputs& inputs, int threads) {
@@ -102,7 +96,8 @@ std::vector<sim::ExecutionResult> ExecutePlans(const torch::Tensor& plans, const
     franka = std::make_unique<sim::FrankaModel>(sim::MakeFrankaScene(inputs.scene, 1.0 / config.control_hz));
     for (int w = 0; w < threads; ++w) workers.push_back(std::make_unique<sim::FrankaExecutor>(*franka, K, config));
   } else {
-    folder = FolderExecution(subject, inputs);
+    folder = FolderExecution(subject.config.robot, subject.robot->description(), inputs.scene, inputs.world.held,
+                             subject.config);
     for (int w = 0; w < threads; ++w) {
       workers.push_back(std::make_unique<sim::ArmExecutor>(*folder.model, folder.drives, K, config));
     }

@@ -3,8 +3,9 @@
 // shapes, offscreen: PREFIX.gif, frame by frame at the plan's rate with the
 // TCP's trail, and PREFIX.png, the arm at four states of the plan, one picture
 // each, with the planned TCP path. The built-in Franka's plan is executed in
-// MuJoCo first and the gif shows the execution; any other arm (drawn by its
-// collision spheres) is shown as planned.
+// MuJoCo first and the gif shows the execution; so is a robot folder's, given
+// its folder (--robot); any other arm (drawn by its collision spheres) is
+// shown as planned.
 
 #include <spdlog/spdlog.h>
 
@@ -32,6 +33,7 @@ struct RenderArgs {
   int64_t index = 0;                   // --index: which plan
   std::string out;                     // --out: PREFIX.gif and PREFIX.png
   std::string config_path;             // --config: render.* and execute.*
+  std::string robot;                   // --robot: the robot folder of the plans, to execute them
   std::vector<std::string> overrides;  // key=value
 };
 
@@ -93,14 +95,31 @@ void RunRender(const RenderArgs& args) {
     }
     shown = fmt::format("the plan executed in MuJoCo: {} contact{}, goal {:.3g} m away", executed.contacts.size(),
                         executed.contacts.size() == 1 ? "" : "s", executed.goal_distance);
+  } else if (!args.robot.empty()) {
+    // A robot folder's plan, executed in MuJoCo; the arm drawn by its collision spheres.
+    if (D != 2 * J) {
+      throw Error(where + "plans: executing needs positions and velocities (" + std::to_string(2 * J) + " values a "
+                  "state), got " + std::to_string(D));
+    }
+    const robotfiles::ExecutionModel world = FolderExecution(args.robot, robot, scene, {}, config);
+    sim::ArmExecutor executor(*world.model, world.drives, static_cast<int>(scene.size()), config.execute);
+    const sim::ExecutionResult executed = executor.Execute(plan, T, dt, Eigen::Vector3d(goal[0], goal[1], goal[2]));
+    renderer = std::make_unique<render::ArmRenderer>(robot, scene, config.render);
+    for (int64_t t = 0; t < executed.num_states; ++t) {
+      trail.emplace_back(executed.tcp[3 * t], executed.tcp[3 * t + 1], executed.tcp[3 * t + 2]);
+      frames.push_back(renderer->Render(joints(&executed.states[static_cast<size_t>(t * 2 * J)]), trail));
+    }
+    shown = fmt::format("the plan executed in MuJoCo: {} contact{}, goal {:.3g} m away; the {} drawn by its collision "
+                        "spheres", executed.contacts.size(), executed.contacts.size() == 1 ? "" : "s",
+                        executed.goal_distance, robot.name);
   } else {
-    // Execution in MuJoCo needs the built-in Franka: the plan as planned, the arm drawn by its collision spheres.
+    // Without its folder, a robot other than the built-in Franka is shown as planned, drawn by its collision spheres.
     renderer = std::make_unique<render::ArmRenderer>(robot, scene, config.render);
     for (int64_t t = 0; t < T; ++t) {
       trail.push_back(path[static_cast<size_t>(t)]);
       frames.push_back(renderer->Render(joints(&plan[static_cast<size_t>(t * D)]), trail));
     }
-    shown = "the plan as planned, the " + robot.name + " drawn by its collision spheres";
+    shown = "the plan as planned, the " + robot.name + " drawn by its collision spheres (--robot DIR executes it)";
   }
   const std::string prefix =
       !args.out.empty() ? args.out
@@ -126,14 +145,17 @@ void RunRender(const RenderArgs& args) {
 Command AddRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* command = app.add_subcommand(
-      "render", "draw one plan of a plan file among its scene's shapes (the built-in Franka's executed in MuJoCo "
-                "first): PREFIX.gif (a video, offscreen through OSMesa) and PREFIX.png (the plan at four states, two to a "
+      "render", "draw one plan of a plan file among its scene's shapes (the built-in Franka's, and with --robot a "
+                "robot folder's, executed in MuJoCo first): PREFIX.gif (a video, offscreen through OSMesa) and PREFIX.png (the plan at four states, two to a "
                 "row) (render.*, execute.*)");
   command->add_option("plans", args->plans, "a plan file of `flowplan plan` (PREFIX.h5)")->required()->check(CLI::ExistingFile);
   command->add_option("--problem", args->problem, "the problem, in a file of `flowplan plan --problems`");
   command->add_option("--index", args->index, "which plan of the file (or of the problem)")->capture_default_str();
   command->add_option("--out", args->out, "output prefix (default: the plan file's, with the problem and index)");
   command->add_option("--config", args->config_path, "YAML with render.* and execute.* settings")->check(CLI::ExistingFile);
+  command->add_option("--robot", args->robot,
+                      "the robot folder of the plans (`flowplan robot import`), to execute them in MuJoCo first")
+      ->check(CLI::ExistingDirectory);
   command->add_option("overrides", args->overrides, kOverrideHelp);
   return {command, [args] { RunRender(*args); }};
 }

@@ -191,13 +191,23 @@ train: {steps: 3, batch_size: 4, eval_every: 0, checkpoint_every: 3}
                                            " -n 2 --out " + (dir / "hybrid").string());
   ASSERT_EQ(hybrid.exit_code, 0) << hybrid.output;
   EXPECT_THAT(hybrid.output, HasSubstr("success 2/2"));
-  // The hybrid's plan drawn: the arm by its collision spheres, as planned (execution needs the built-in Franka).
+  // The hybrid's plan drawn: the arm by its collision spheres, as planned (without --robot).
   const testing::Outcome drawn = Flowplan("render " + (dir / "hybrid.h5").string() + " --out " + (dir / "drawn").string() +
                                           " render.width=160 render.height=120");
   ASSERT_EQ(drawn.exit_code, 0) << drawn.output;
   EXPECT_THAT(drawn.output, HasSubstr("32 frames of 160 x 120, the plan as planned, the lift_arm drawn by its collision spheres"));
   EXPECT_GT(fs::file_size(dir / "drawn.gif"), 1000u);
   EXPECT_GT(fs::file_size(dir / "drawn.png"), 1000u);
+  // Executed in MuJoCo, from the folder the planner's config names: in the report, and drawn with --robot.
+  const testing::Outcome executed = Flowplan("plan --ckpt " + (dir / "run").string() + " --planner-kind hybrid" +
+                                             problem + " -n 2 --execute --out " + (dir / "executed").string());
+  ASSERT_EQ(executed.exit_code, 0) << executed.output;
+  EXPECT_THAT(executed.output, HasSubstr("success 2/2 (passed the plan checker: check.*), executed"));
+  const testing::Outcome replayed = Flowplan("render " + (dir / "hybrid.h5").string() + " --robot " + robot +
+                                             " --out " + (dir / "replayed").string() + " render.width=160 render.height=120");
+  ASSERT_EQ(replayed.exit_code, 0) << replayed.output;
+  EXPECT_THAT(replayed.output, HasSubstr("of 160 x 120, the plan executed in MuJoCo: "));
+  EXPECT_GT(fs::file_size(dir / "replayed.gif"), 1000u);
   const testing::Outcome learned = Flowplan("plan --planner " + planner + problem + " -n 2 --out " + (dir / "learned").string());
   ASSERT_EQ(learned.exit_code, 0) << learned.output;
   std::ifstream report(dir / "learned.json");
