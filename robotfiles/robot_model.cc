@@ -102,21 +102,6 @@ void FindJoints(const mjModel& m, int J, std::vector<int>* qpos, std::vector<int
   FLOWPLAN_DEMAND(*tcp_site >= 0);
 }
 
-/// `text` for an XML attribute value.
-std::string XmlEscaped(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 /// The <geom> of one piece of collision geometry in its link's body; meshes add their <mesh> asset to `assets`.
 std::string CollisionGeomXml(const CollisionGeometry& g, const std::string& dir, const std::string& name,
                              const std::string& attributes, std::string* assets, const std::string& where) {
@@ -141,12 +126,12 @@ std::string CollisionGeomXml(const CollisionGeometry& g, const std::string& dir,
     for (const auto& v : mesh.vertices) {
       for (int i = 0; i < 3; ++i) vertices += (vertices.empty() ? "" : " ") + Number(v[i] * g.scale[i]);
     }
-    *assets += "    <mesh name=\"" + XmlEscaped(name) + "\" vertex=\"" + vertices + "\"/>\n";
-    shape = "type=\"mesh\" mesh=\"" + XmlEscaped(name) + "\"";
+    *assets += "    <mesh name=\"" + sim::XmlEscaped(name) + "\" vertex=\"" + vertices + "\"/>\n";
+    shape = "type=\"mesh\" mesh=\"" + sim::XmlEscaped(name) + "\"";
   } else {
     throw Error(where + ": geometry: link \"" + g.link + "\": unknown shape \"" + g.shape + "\"");
   }
-  return "      <geom name=\"" + XmlEscaped(name) + "\" " + shape + " " + placed + " " + attributes + "/>\n";
+  return "      <geom name=\"" + sim::XmlEscaped(name) + "\" " + shape + " " + placed + " " + attributes + "/>\n";
 }
 
 }  // namespace
@@ -187,7 +172,7 @@ ExecutionModel LoadExecutionModel(const RobotFile& file, const std::string& dir,
     const std::string& link = d.links[static_cast<size_t>(sphere.link)].name;
     if (pieces.count(link)) continue;
     const std::string name = link + "_s" + std::to_string(spheres[sphere.link]++);
-    options.body_elements[link] += "      <geom name=\"" + XmlEscaped(name) + "\" type=\"sphere\" pos=\"" +
+    options.body_elements[link] += "      <geom name=\"" + sim::XmlEscaped(name) + "\" type=\"sphere\" pos=\"" +
                                    Numbers(sphere.centre) + "\" size=\"" + Number(sphere.radius) + "\" " + arm + "/>\n";
   }
   // Contacts are detected within kMeasuredDistance (margin) and act only on overlaps (gap = margin).

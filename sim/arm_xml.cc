@@ -15,8 +15,15 @@ std::string Numbers(const Values& values) {
   return text;
 }
 
-/// XML attribute text: the characters XML reserves, escaped.
-std::string Escaped(const std::string& text) {
+
+/// The orientation attribute of a box or cylinder (MuJoCo normalises the quaternion).
+std::string Orientation(const std::vector<double>& quaternion) {
+  return quaternion.empty() ? std::string() : " quat=\"" + Numbers(quaternion) + "\"";
+}
+
+}  // namespace
+
+std::string XmlEscaped(const std::string& text) {
   std::string out;
   for (const char c : text) {
     switch (c) {
@@ -30,13 +37,6 @@ std::string Escaped(const std::string& text) {
   return out;
 }
 
-/// The orientation attribute of a box or cylinder (MuJoCo normalises the quaternion).
-std::string Orientation(const std::vector<double>& quaternion) {
-  return quaternion.empty() ? std::string() : " quat=\"" + Numbers(quaternion) + "\"";
-}
-
-}  // namespace
-
 std::string XmlNumber(double value) {
   char buffer[40];
   std::snprintf(buffer, sizeof(buffer), "%.17g", value);
@@ -49,7 +49,7 @@ std::string ArmXml(const kinematics::RobotDescription& d, const ArmXmlOptions& o
   std::vector<int> roots;
   for (int l = 0; l < L; ++l) (d.links[l].parent < 0 ? roots : children[d.links[l].parent]).push_back(l);
   std::ostringstream xml;
-  xml << "<mujoco model=\"" << Escaped(d.name) << "\">\n"
+  xml << "<mujoco model=\"" << XmlEscaped(d.name) << "\">\n"
       << "  <compiler " << options.compiler << "/>\n"
       << "  <option gravity=\"0 0 -9.81\"/>\n"
       << options.model_elements
@@ -63,7 +63,7 @@ std::string ArmXml(const kinematics::RobotDescription& d, const ArmXmlOptions& o
     if (link.joint < 0) kinematics::FixedPose(link, pos, quat);  // a held joint is welded at its value
     // MuJoCo's world body is "world"; a URDF's root link often has that name too.
     const std::string body_name = link.name == "world" ? "world (link)" : link.name;
-    xml << indent << "<body name=\"" << Escaped(body_name) << "\" pos=\"" << Numbers(pos) << "\" quat=\""
+    xml << indent << "<body name=\"" << XmlEscaped(body_name) << "\" pos=\"" << Numbers(pos) << "\" quat=\""
         << Numbers(quat) << "\">\n";
     const auto elements = options.body_elements.find(link.name);
     if (elements != options.body_elements.end()) xml << elements->second;

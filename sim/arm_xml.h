@@ -39,6 +39,9 @@ std::string ArmXml(const kinematics::RobotDescription& d, const ArmXmlOptions& o
 /// each carrying `attributes` (e.g. contact and colour settings).
 std::string ObstacleGeomsXml(const geometry::Scene& scene, const std::string& attributes);
 
+/// XML attribute text: the characters XML reserves, escaped.
+std::string XmlEscaped(const std::string& text);
+
 /// A number as MJCF text, exactly (17 significant digits).
 std::string XmlNumber(double value);
 
