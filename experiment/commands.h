@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "experiment/command_line.h"
+#include "robotfiles/urdf_import.h"
 
 namespace flowplan::experiment {
 
@@ -29,7 +30,7 @@ Command AddFkCommand(CLI::App& app);        // fk.cc: the Franka's TCP through M
 /// Every subcommand, in the order `flowplan --help` lists them.
 std::vector<Command> AddCommands(CLI::App& app);
 
-// The work of three commands as functions (the Python package calls them).
+// The work of four commands as functions (the Python package calls them).
 
 /// `flowplan generate --config CONFIG OVERRIDES...`: the data set of the config
 /// (every episode, one file). Returns the file written (generate.out).
@@ -53,6 +54,14 @@ struct SceneImport {
 /// args.out; a pair that cannot be planned is a refused problem, a file that is
 /// not a MoveIt file an error naming it. @throws flowplan::Error as the command.
 void ImportScenes(const SceneImport& args);
+
+/// `flowplan robot import MODEL --out DIR`: the robot folder DIR (DIR/meshes/,
+/// then DIR/robot.yaml) from a URDF (.urdf) or an MJCF (.xml), each decision of
+/// the import and each link's sphere cover logged in one line. Returns what was
+/// written. @throws flowplan::Error if DIR/robot.yaml exists and not `force`,
+/// and as robotfiles::ImportRobot (naming the file and element at fault).
+robotfiles::ImportResult ImportRobotFolder(const std::string& model, const robotfiles::ImportOptions& options,
+                                           const std::string& out, bool force);
 
 /// `flowplan train --config CONFIG OVERRIDES... [--until STEP]`, or with
 /// `resume_dir` set `flowplan train --resume RESUME_DIR OVERRIDES...`. Returns

@@ -60,11 +60,18 @@ void RunRobotImport(const RobotImportArgs& args) {
   options.overshoot = args.overshoot;
   options.max_spheres = args.max_spheres;
   options.pair_samples = args.pair_samples;
-  const std::filesystem::path robot_yaml = std::filesystem::path(args.out) / "robot.yaml";
-  if (std::filesystem::exists(robot_yaml) && !args.force) {
+  ImportRobotFolder(args.model, options, args.out, args.force);
+}
+
+}  // namespace
+
+robotfiles::ImportResult ImportRobotFolder(const std::string& model, const robotfiles::ImportOptions& options,
+                                           const std::string& out, bool force) {
+  const std::filesystem::path robot_yaml = std::filesystem::path(out) / "robot.yaml";
+  if (std::filesystem::exists(robot_yaml) && !force) {
     throw Error(robot_yaml.string() + " exists (--force replaces it)");
   }
-  const robotfiles::ImportResult result = robotfiles::ImportRobot(args.model, options, args.out);
+  robotfiles::ImportResult result = robotfiles::ImportRobot(model, options, out);
   for (const std::string& note : result.notes) spdlog::info("{}", note);
   const kinematics::RobotDescription& d = result.file.robot;
   std::string joints;
@@ -82,9 +89,9 @@ void RunRobotImport(const RobotImportArgs& args) {
   spdlog::info("wrote {}: {} links, {} collision spheres, {} link pairs not checked, {} meshes", robot_yaml.string(),
                d.links.size(), result.file.collision.spheres.size(), result.file.collision.self_collision_ignore.size(),
                result.meshes.size() + result.mesh_files.size());
+  return result;
 }
 
-}  // namespace
 
 Command AddRobotCommand(CLI::App& app) {
   auto args = std::make_shared<RobotImportArgs>();

@@ -14,6 +14,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/config.h"
@@ -210,6 +211,69 @@ py::list LoadProblems(const std::string& path) {
   return out;
 }
 
+/// `flowplan robot import`: the folder written, summarised as a dict (python/flowplan/__init__.py, RobotFolder).
+py::dict ImportRobot(const std::string& model, const std::string& out, const std::string& srdf,
+                     const std::string& package_dir, const std::string& base, const std::string& tip,
+                     const std::vector<double>& tcp_offset, const std::vector<std::string>& joints,
+                     const std::map<std::string, double>& hold, double overshoot, int max_spheres,
+                     int64_t pair_samples, const std::vector<double>& velocity_limit, int collision_group, bool force) {
+  flowplan::robotfiles::ImportOptions options;
+  options.srdf = srdf;
+  options.package_dir = package_dir;
+  options.base = base;
+  options.tip = tip;
+  if (!tcp_offset.empty()) {
+    if (tcp_offset.size() != 3) throw flowplan::Error("tcp_offset: expected (x, y, z)");
+    options.tcp_offset = {tcp_offset[0], tcp_offset[1], tcp_offset[2]};
+  }
+  options.joints = joints;
+  options.hold = hold;
+  if (!(overshoot > 0)) throw flowplan::Error("overshoot: expected a positive distance (m)");
+  if (max_spheres < 1) throw flowplan::Error("max_spheres: expected at least 1");
+  if (pair_samples < 1) throw flowplan::Error("pair_samples: expected at least 1");
+  options.overshoot = overshoot;
+  options.max_spheres = max_spheres;
+  options.pair_samples = pair_samples;
+  options.velocity_limit = velocity_limit;
+  options.collision_group = collision_group;
+  flowplan::robotfiles::ImportResult result;
+  {
+    py::gil_scoped_release unlocked;
+    result = flowplan::experiment::ImportRobotFolder(model, options, out, force);
+  }
+  const flowplan::kinematics::RobotDescription& d = result.file.robot;
+  py::dict entry;
+  entry["path"] = out;
+  entry["name"] = d.name;
+  std::vector<std::string> names;
+  for (int j = 0; j < d.num_joints; ++j) names.push_back(d.JointName(j));
+  entry["joints"] = names;
+  entry["lower"] = torch::tensor(d.joint_lower, torch::kFloat64);
+  entry["upper"] = torch::tensor(d.joint_upper, torch::kFloat64);
+  entry["velocity_limit"] = torch::tensor(d.velocity_limit, torch::kFloat64);
+  entry["effort_limit"] = torch::tensor(result.file.effort_limit, torch::kFloat64);
+  entry["spheres"] = static_cast<int64_t>(result.file.collision.spheres.size());
+  std::vector<std::tuple<std::string, std::string, std::string>> ignored;
+  for (const auto& pair : result.file.collision.self_collision_ignore) {
+    ignored.emplace_back(pair.links[0], pair.links[1], pair.reason);
+  }
+  entry["ignored_pairs"] = ignored;
+  py::list cover;
+  for (const flowplan::robotfiles::LinkCover& c : result.file.cover) {
+    py::dict link;
+    link["link"] = c.link;
+    link["spheres"] = c.spheres;
+    link["samples"] = c.samples;
+    link["largest_uncovered"] = c.largest_uncovered;
+    link["largest_outside"] = c.largest_outside;
+    link["overshoot_ratio"] = c.overshoot_ratio;
+    cover.append(link);
+  }
+  entry["cover"] = cover;
+  entry["notes"] = result.notes;
+  return entry;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_flowplan, m) {
@@ -249,6 +313,10 @@ PYBIND11_MODULE(_flowplan, m) {
       },
       py::arg("files"), py::arg("folder"), py::arg("out"), py::arg("robot"), py::arg("frames"), py::arg("grasp"),
       py::arg("grasp_margin"), py::arg("limit_tolerance"), "flowplan scenes import: writes the problem file `out`");
+  m.def("import_robot", &ImportRobot, py::arg("model"), py::arg("out"), py::arg("srdf"), py::arg("package_dir"),
+        py::arg("base"), py::arg("tip"), py::arg("tcp_offset"), py::arg("joints"), py::arg("hold"),
+        py::arg("overshoot"), py::arg("max_spheres"), py::arg("pair_samples"), py::arg("velocity_limit"),
+        py::arg("collision_group"), py::arg("force"), "flowplan robot import: writes the robot folder `out`");
   m.def("set_log_level", &flowplan::SetUpLogging, py::arg("level"),
         "What flowplan logs: debug, info (the default), warn or error.");
   m.def(

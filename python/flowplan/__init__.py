@@ -14,7 +14,9 @@ with the plan checker beside it:
     result = rrt.plan(start, goal, 4, spheres=sphere)                  # result.plans (4, 64, 14), result.found (4,)
     verdicts = rrt.check(result.plans, start, goal, spheres=sphere)    # [Verdict(valid=True, ...), ...]
 
-`generate` and `train` are `flowplan generate` and `flowplan train`:
+`import_robot` is `flowplan robot import` (a robot folder from a URDF or an MJCF, for make_planner's robot=);
+`import_scenes` and `load_problems` are MoveIt and problem files. `generate` and `train` are `flowplan generate`
+and `flowplan train`:
 
     data = flowplan.generate("configs/franka_joint.yaml", ["generate.episodes=2000"])
     run = flowplan.train("configs/franka_joint.yaml", ["train.steps=1000"])   # logs its progress; Ctrl-C checkpoints
@@ -41,8 +43,8 @@ except ImportError as missing:  # PyTorch alone: the portable code of the files
 else:
     _why_portable = ""
 
-__all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Problem", "Verdict", "generate", "import_scenes",
-           "load_planner", "load_problems", "load_scene", "make_planner", "native_kernels", "set_log_level", "train"]
+__all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Problem", "RobotFolder", "Verdict", "generate",
+           "import_robot", "import_scenes", "load_planner", "load_problems", "load_scene", "make_planner", "native_kernels", "set_log_level", "train"]
 
 #: What flowplan raises for bad input (a file that is not a planner, a planner that cannot take the kernels);
 #: a RuntimeError. The message names the file.
@@ -328,3 +330,52 @@ def import_scenes(out, pairs=(), *, folder=None, robot=None, frames=(), grasped=
                                         [str(f) for f in frames], str(grasped), float(grasp_margin),
                                         float(limit_tolerance))
     return load_problems(out)
+
+
+@dataclasses.dataclass
+class RobotFolder:
+    """A robot folder `import_robot` wrote (docs/robots.md): pass `path` as robot= to make_planner, or to the
+    commands' --robot."""
+    path: str                     # the folder: robot.yaml, meshes/
+    name: str                     # the robot's name
+    joints: List[str]             # (J) the planned joints, in order
+    lower: torch.Tensor           # (J,) float64 position limits (rad, or m for a prismatic joint)
+    upper: torch.Tensor           # (J,)
+    velocity_limit: torch.Tensor  # (J,) rad/s or m/s
+    effort_limit: torch.Tensor    # (J,) N·m or N
+    spheres: int                  # collision spheres, all links
+    ignored_pairs: List[tuple]    # (link, link, reason): pairs never checked against each other
+    cover: List[dict]             # per link: spheres, samples, largest_uncovered and largest_outside (m), overshoot_ratio
+    notes: List[str]              # what the import decided, one line each
+
+
+def import_robot(model, out, *, srdf=None, package_dir=None, base=None, tip=None, tcp_offset=None, joints=(),
+                 hold=None, overshoot=0.01, max_spheres=64, pair_samples=10000, velocity_limit=None,
+                 collision_group=None, force=False):
+    """`flowplan robot import`: a robot folder `out` (robot.yaml and meshes/) from a URDF (.urdf) or an MJCF (.xml),
+    with collision spheres fitted to the collision geometry. Returns a RobotFolder.
+
+        arm = flowplan.import_robot("examples/lift_arm/lift_arm.urdf", "robots/lift_arm", package_dir="examples",
+                                    tip="tool")
+        rrt = flowplan.make_planner("rrt_connect", robot=arm.path, config="configs/robot_joint.yaml")
+
+    Args (as the command's options, docs/robots.md):
+        srdf: an SRDF whose disable_collisions are the link pairs not checked.
+        package_dir: the folder package://NAME/... paths resolve in.
+        base, tip: the link fixed to the world and the link carrying the TCP; tcp_offset: (x, y, z) in the tip (m).
+        joints: the planned joints in order (default: from base to tip); hold: {joint: value} held joints.
+        overshoot: how far a sphere may reach outside the geometry (m); max_spheres: most spheres per link.
+        pair_samples: random configurations that decide which link pairs always touch (without srdf).
+        velocity_limit, collision_group: for an MJCF, as --velocity-limit and --collision-group.
+        force: replace an existing out/robot.yaml.
+
+    Raises flowplan.Error naming the file and element at fault (a malformed URDF, a joint without limits, a tip that
+    does not exist, a missing collision mesh) or an existing robot.yaml without force.
+    """
+    entry = _cpp("import_robot").import_robot(
+        str(model), str(out), str(srdf or ""), str(package_dir or ""), str(base or ""), str(tip or ""),
+        [float(v) for v in tcp_offset] if tcp_offset is not None else [], [str(j) for j in joints],
+        {str(k): float(v) for k, v in (hold or {}).items()}, float(overshoot), int(max_spheres), int(pair_samples),
+        [float(v) for v in velocity_limit] if velocity_limit is not None else [],
+        -1 if collision_group is None else int(collision_group), bool(force))
+    return RobotFolder(**entry)

@@ -368,6 +368,38 @@ def test_rrt_connect_for_a_robot_folder():
     assert result.found.all() and all(v.valid for v in rrt.check(result.plans, start, goal, spheres=ball))
 
 
+def test_a_robot_imported_from_python_plans_and_its_limits_are_the_urdfs(tmp_path):
+    import xml.etree.ElementTree as ElementTree
+    urdf = os.path.join(SOURCE, "examples", "lift_arm", "lift_arm.urdf")
+    arm = flowplan.import_robot(urdf, tmp_path / "lift_arm", package_dir=os.path.join(SOURCE, "examples"), tip="tool",
+                                pair_samples=2000)
+    assert (tmp_path / "lift_arm" / "robot.yaml").exists() and arm.path == str(tmp_path / "lift_arm")
+    # The planned joints, limits and efforts as the URDF states them, read by another reader.
+    limits = {j.get("name"): j.find("limit") for j in ElementTree.parse(urdf).getroot().iter("joint")
+              if j.get("type") != "fixed"}
+    assert arm.joints == ["lift", "shoulder", "elbow", "wrist"]
+    for key, values in (("lower", arm.lower), ("upper", arm.upper), ("velocity", arm.velocity_limit),
+                        ("effort", arm.effort_limit)):
+        assert values.tolist() == pytest.approx([float(limits[j].get(key)) for j in arm.joints], abs=1e-12)
+    # Adjacent links are never checked against each other; every link's surface is covered.
+    ignored = {frozenset(pair[:2]) for pair in arm.ignored_pairs}
+    assert {frozenset(("base", "column")), frozenset(("column", "upper")), frozenset(("upper", "fore"))} <= ignored
+    assert arm.spheres == sum(c["spheres"] for c in arm.cover) and all(c["largest_uncovered"] == 0 for c in arm.cover)
+    assert 0 < max(c["largest_outside"] for c in arm.cover) < 0.02  # about the overshoot asked for (0.01)
+    rrt = flowplan.make_planner("rrt_connect", config=os.path.join(SOURCE, "configs", "robot_joint.yaml"),
+                                robot=arm.path)
+    start, goal = torch.tensor([0.0, -1.0, 0.5, 0.0]), torch.tensor([0.25, 1.5, -0.5, 1.0])
+    ball = [[0.0, 0.45, 0.6, 0.1]]
+    result = rrt.plan(start, goal, 1, spheres=ball)
+    assert result.found.all() and rrt.check(result.plans, start, goal, spheres=ball)[0].valid
+    # Again without force: one error naming the file; a URDF that is not there: one error naming it.
+    with pytest.raises(flowplan.Error, match="robot.yaml exists"):
+        flowplan.import_robot(urdf, tmp_path / "lift_arm", package_dir=os.path.join(SOURCE, "examples"), tip="tool")
+    with pytest.raises(flowplan.Error, match="missing.urdf"):
+        flowplan.import_robot(tmp_path / "missing.urdf", tmp_path / "other")
+    assert not (tmp_path / "other" / "robot.yaml").exists()
+
+
 def test_motionbenchmaker_files_are_imported_and_planned_from_python(tmp_path):
     import tarfile
     import yaml
