@@ -30,7 +30,7 @@ Command AddFkCommand(CLI::App& app);        // fk.cc: the Franka's TCP through M
 /// Every subcommand, in the order `flowplan --help` lists them.
 std::vector<Command> AddCommands(CLI::App& app);
 
-// The work of four commands as functions (the Python package calls them).
+// The work of five commands as functions (the Python package calls them).
 
 /// `flowplan generate --config CONFIG OVERRIDES...`: the data set of the config
 /// (every episode, one file). Returns the file written (generate.out).
@@ -62,6 +62,30 @@ void ImportScenes(const SceneImport& args);
 /// and as robotfiles::ImportRobot (naming the file and element at fault).
 robotfiles::ImportResult ImportRobotFolder(const std::string& model, const robotfiles::ImportOptions& options,
                                            const std::string& out, bool force);
+
+/// `flowplan render`'s arguments.
+struct RenderArgs {
+  std::string plans;                   // the plan file (HDF5)
+  std::string problem;                 // --problem: a problem of a --problems file
+  int64_t index = 0;                   // --index: which plan
+  std::string out;                     // --out: PREFIX.gif and PREFIX.png (empty: the plan file's, problem, index)
+  std::string config_path;             // --config: render.* and execute.*
+  std::string robot;                   // --robot: the robot folder of the plans, to execute them
+  std::vector<std::string> overrides;  // key=value
+};
+
+/// What `flowplan render` wrote.
+struct Rendered {
+  std::string gif, png;  // the video (one frame a state) and the plan at four states
+  int64_t frames = 0;
+  std::string shown;     // what the video shows: the plan executed in MuJoCo (contacts, goal distance) or as planned
+};
+
+/// `flowplan render PLANS`: one plan of a plan file drawn among its scene's
+/// shapes, executed in MuJoCo first for the built-in Franka and, given its
+/// folder, any robot. @throws flowplan::Error naming the file, problem, index
+/// or setting at fault.
+Rendered Render(const RenderArgs& args);
 
 /// `flowplan train --config CONFIG OVERRIDES... [--until STEP]`, or with
 /// `resume_dir` set `flowplan train --resume RESUME_DIR OVERRIDES...`. Returns

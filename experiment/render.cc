@@ -11,6 +11,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "core/error.h"
 #include "core/format.h"
@@ -25,19 +26,8 @@
 #include "sim/franka_execution.h"
 
 namespace flowplan::experiment {
-namespace {
 
-struct RenderArgs {
-  std::string plans;                   // the plan file (HDF5)
-  std::string problem;                 // --problem: a problem of a --problems file
-  int64_t index = 0;                   // --index: which plan
-  std::string out;                     // --out: PREFIX.gif and PREFIX.png
-  std::string config_path;             // --config: render.* and execute.*
-  std::string robot;                   // --robot: the robot folder of the plans, to execute them
-  std::vector<std::string> overrides;  // key=value
-};
-
-void RunRender(const RenderArgs& args) {
+Rendered Render(const RenderArgs& args) {
   const ExperimentConfig config = LoadExperiment(args.config_path, args.overrides);
   config.execute.Validate();
   const auto file = datasets::h5::File::OpenReadOnly(args.plans);
@@ -80,45 +70,47 @@ void RunRender(const RenderArgs& args) {
   for (int64_t t = 0; t < T; ++t) path.emplace_back(tcp[t][0].item<double>(), tcp[t][1].item<double>(), tcp[t][2].item<double>());
   auto joints = [J](const double* state) { return std::vector<double>(state, state + J); };
 
+  // The built-in Franka's plans, and with its folder a robot's, are executed in MuJoCo and the execution drawn; the
+  // Franka among its MJCF's shapes, a folder's robot by its collision spheres. Without its folder, a robot other than
+  // the built-in Franka is drawn as planned.
+  const bool execute = franka || !args.robot.empty();
+  if (execute && D != 2 * J) {
+    throw Error(where + "plans: executing needs positions and velocities (" + std::to_string(2 * J) + " values a "
+                "state), got " + std::to_string(D));
+  }
+  const Eigen::Vector3d target(goal[0], goal[1], goal[2]);
+  std::optional<sim::ExecutionResult> executed;
   std::unique_ptr<render::ArmRenderer> renderer;
-  std::vector<render::Image> frames;
-  std::vector<Eigen::Vector3d> trail;
-  std::string shown;
   if (franka) {
     const sim::FrankaModel world = sim::MakeFrankaScene(scene, 1.0 / config.execute.control_hz);
     sim::FrankaExecutor executor(world, static_cast<int>(scene.size()), config.execute);
-    const sim::ExecutionResult executed = executor.Execute(plan, T, dt, Eigen::Vector3d(goal[0], goal[1], goal[2]));
+    executed = executor.Execute(plan, T, dt, target);
     renderer = std::make_unique<render::ArmRenderer>(scene, config.render);
-    for (int64_t t = 0; t < executed.num_states; ++t) {
-      trail.emplace_back(executed.tcp[3 * t], executed.tcp[3 * t + 1], executed.tcp[3 * t + 2]);
-      frames.push_back(renderer->Render(joints(&executed.states[static_cast<size_t>(t * D)]), trail));
-    }
-    shown = fmt::format("the plan executed in MuJoCo: {} contact{}, goal {:.3g} m away", executed.contacts.size(),
-                        executed.contacts.size() == 1 ? "" : "s", executed.goal_distance);
-  } else if (!args.robot.empty()) {
-    // A robot folder's plan, executed in MuJoCo; the arm drawn by its collision spheres.
-    if (D != 2 * J) {
-      throw Error(where + "plans: executing needs positions and velocities (" + std::to_string(2 * J) + " values a "
-                  "state), got " + std::to_string(D));
-    }
-    const robotfiles::ExecutionModel world = FolderExecution(args.robot, robot, scene, {}, config);
-    sim::ArmExecutor executor(*world.model, world.drives, static_cast<int>(scene.size()), config.execute);
-    const sim::ExecutionResult executed = executor.Execute(plan, T, dt, Eigen::Vector3d(goal[0], goal[1], goal[2]));
-    renderer = std::make_unique<render::ArmRenderer>(robot, scene, config.render);
-    for (int64_t t = 0; t < executed.num_states; ++t) {
-      trail.emplace_back(executed.tcp[3 * t], executed.tcp[3 * t + 1], executed.tcp[3 * t + 2]);
-      frames.push_back(renderer->Render(joints(&executed.states[static_cast<size_t>(t * 2 * J)]), trail));
-    }
-    shown = fmt::format("the plan executed in MuJoCo: {} contact{}, goal {:.3g} m away; the {} drawn by its collision "
-                        "spheres", executed.contacts.size(), executed.contacts.size() == 1 ? "" : "s",
-                        executed.goal_distance, robot.name);
   } else {
-    // Without its folder, a robot other than the built-in Franka is shown as planned, drawn by its collision spheres.
-    renderer = std::make_unique<render::ArmRenderer>(robot, scene, config.render);
-    for (int64_t t = 0; t < T; ++t) {
-      trail.push_back(path[static_cast<size_t>(t)]);
-      frames.push_back(renderer->Render(joints(&plan[static_cast<size_t>(t * D)]), trail));
+    if (execute) {
+      const robotfiles::ExecutionModel world = FolderExecution(args.robot, robot, scene, {}, config);
+      sim::ArmExecutor executor(*world.model, world.drives, static_cast<int>(scene.size()), config.execute);
+      executed = executor.Execute(plan, T, dt, target);
     }
+    renderer = std::make_unique<render::ArmRenderer>(robot, scene, config.render);
+  }
+  // One frame a state: the executed states (T_exec, 2J) and their TCPs, or the plan's (T, D) and the planned path.
+  std::vector<render::Image> frames;
+  std::vector<Eigen::Vector3d> trail;
+  const int64_t shown_states = executed ? executed->num_states : T;
+  for (int64_t t = 0; t < shown_states; ++t) {
+    trail.push_back(executed ? Eigen::Vector3d(executed->tcp[3 * t], executed->tcp[3 * t + 1], executed->tcp[3 * t + 2])
+                             : path[static_cast<size_t>(t)]);
+    frames.push_back(renderer->Render(
+        joints(executed ? &executed->states[static_cast<size_t>(t * 2 * J)] : &plan[static_cast<size_t>(t * D)]),
+        trail));
+  }
+  std::string shown;
+  if (executed) {
+    shown = fmt::format("the plan executed in MuJoCo: {} contact{}, goal {:.3g} m away", executed->contacts.size(),
+                        executed->contacts.size() == 1 ? "" : "s", executed->goal_distance);
+    if (!franka) shown += "; the " + robot.name + " drawn by its collision spheres";
+  } else {
     shown = "the plan as planned, the " + robot.name + " drawn by its collision spheres (--robot DIR executes it)";
   }
   const std::string prefix =
@@ -138,9 +130,8 @@ void RunRender(const RenderArgs& args) {
   render::WritePng(prefix + ".png", render::Tile(stills, 2));
   spdlog::info("wrote {}.gif ({} frames of {} x {}, {}) and {}.png (the plan at {} states, two to a row)", prefix,
                frames.size(), config.render.width, config.render.height, shown, prefix, kPoses);
+  return {prefix + ".gif", prefix + ".png", static_cast<int64_t>(frames.size()), shown};
 }
-
-}  // namespace
 
 Command AddRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
@@ -157,7 +148,7 @@ Command AddRenderCommand(CLI::App& app) {
                       "the robot folder of the plans (`flowplan robot import`), to execute them in MuJoCo first")
       ->check(CLI::ExistingDirectory);
   command->add_option("overrides", args->overrides, kOverrideHelp);
-  return {command, [args] { RunRender(*args); }};
+  return {command, [args] { Render(*args); }};
 }
 
 }  // namespace flowplan::experiment

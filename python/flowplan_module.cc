@@ -28,6 +28,7 @@
 #include "geometry/scene.h"
 #include "planning/learned_planner.h"
 #include "problems/problem.h"
+#include "sim/mujoco_util.h"
 #include "validity/plan_check.h"
 
 namespace py = pybind11;
@@ -279,6 +280,8 @@ py::dict ImportRobot(const std::string& model, const std::string& out, const std
 PYBIND11_MODULE(_flowplan, m) {
   m.doc() = "flowplan's C++ library for the Python package `flowplan` (use the package, not this module).";
   flowplan::SetUpLogging("info");  // the command line's format: "[12:00:01.234] [info] message"
+  // MuJoCo's errors as flowplan::Error (flowplan.Error here), not MuJoCo's default: print, wait for Enter, exit.
+  flowplan::sim::InstallMujocoHandlers();
   static py::exception<flowplan::Error> error(m, "Error", PyExc_RuntimeError);
   py::register_exception_translator([](std::exception_ptr thrown) {
     try {
@@ -317,6 +320,32 @@ PYBIND11_MODULE(_flowplan, m) {
         py::arg("base"), py::arg("tip"), py::arg("tcp_offset"), py::arg("joints"), py::arg("hold"),
         py::arg("overshoot"), py::arg("max_spheres"), py::arg("pair_samples"), py::arg("velocity_limit"),
         py::arg("collision_group"), py::arg("force"), "flowplan robot import: writes the robot folder `out`");
+  m.def(
+      "render",
+      [](const std::string& plans, const std::string& out, const std::string& problem, int64_t index,
+         const std::string& robot, const std::string& config, const std::vector<std::string>& overrides) {
+        flowplan::experiment::RenderArgs args;
+        args.plans = plans;
+        args.out = out;
+        args.problem = problem;
+        args.index = index;
+        args.robot = robot;
+        args.config_path = config;
+        args.overrides = overrides;
+        flowplan::experiment::Rendered rendered;
+        {
+          py::gil_scoped_release unlocked;
+          rendered = flowplan::experiment::Render(args);
+        }
+        py::dict entry;
+        entry["gif"] = rendered.gif;
+        entry["png"] = rendered.png;
+        entry["frames"] = rendered.frames;
+        entry["shown"] = rendered.shown;
+        return entry;
+      },
+      py::arg("plans"), py::arg("out"), py::arg("problem"), py::arg("index"), py::arg("robot"), py::arg("config"),
+      py::arg("overrides"), "flowplan render: writes PREFIX.gif and PREFIX.png");
   m.def("set_log_level", &flowplan::SetUpLogging, py::arg("level"),
         "What flowplan logs: debug, info (the default), warn or error.");
   m.def(

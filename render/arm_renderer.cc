@@ -1,6 +1,7 @@
 #include "render/arm_renderer.h"
 
 #include <GL/osmesa.h>
+#include <dlfcn.h>
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
@@ -14,6 +15,18 @@ namespace flowplan::render {
 namespace {
 
 constexpr int kMaxGeoms = 20000;
+
+/// MuJoCo looks OpenGL's functions up among the process's global symbols. A program linked with flowplan has
+/// OSMesa's there; a process that loaded flowplan as a library (the Python package's module, opened with
+/// RTLD_LOCAL) has them only in that library's scope: OSMesa is made global, once.
+void ExposeOpenGl() {
+  static const bool exposed = [] {
+    Dl_info info;
+    if (dladdr(reinterpret_cast<void*>(&OSMesaCreateContextExt), &info) == 0 || info.dli_fname == nullptr) return false;
+    return dlopen(info.dli_fname, RTLD_NOW | RTLD_GLOBAL | RTLD_NOLOAD) != nullptr;
+  }();
+  (void)exposed;
+}
 
 /// The lowest point (m) of any obstacle of `scene`, bounded from below by its bounding sphere; +inf for none.
 double LowestObstaclePoint(const geometry::Scene& scene) {
@@ -112,6 +125,7 @@ ArmRenderer::ArmRenderer(sim::MjModelPtr model, std::vector<int> qpos, const geo
   m.vis.global.offheight = config.height;
   m.vis.quality.shadowsize = 2048;
 
+  ExposeOpenGl();
   gl_ = std::make_unique<Gl>();
   mjv_defaultScene(&gl_->scene);
   mjr_defaultContext(&gl_->render);

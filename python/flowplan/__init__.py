@@ -44,7 +44,7 @@ else:
     _why_portable = ""
 
 __all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Problem", "RobotFolder", "Verdict", "generate",
-           "import_robot", "import_scenes", "load_planner", "load_problems", "load_scene", "make_planner", "native_kernels", "set_log_level", "train"]
+           "import_robot", "import_scenes", "load_planner", "render", "load_problems", "load_scene", "make_planner", "native_kernels", "set_log_level", "train"]
 
 #: What flowplan raises for bad input (a file that is not a planner, a planner that cannot take the kernels);
 #: a RuntimeError. The message names the file.
@@ -379,3 +379,16 @@ def import_robot(model, out, *, srdf=None, package_dir=None, base=None, tip=None
         [float(v) for v in velocity_limit] if velocity_limit is not None else [],
         -1 if collision_group is None else int(collision_group), bool(force))
     return RobotFolder(**entry)
+
+
+def render(plans, out=None, *, problem=None, index=0, robot=None, config=None, overrides=()):
+    """`flowplan render`: plan `index` of the plan file `plans` (PREFIX.h5 of `flowplan plan`, or of `--problems`
+    with problem=NAME) drawn among its scene's shapes, as out.gif (a frame a state) and out.png (four states). The
+    built-in Franka's plans, and given robot=FOLDER a robot folder's, are executed in MuJoCo first and the execution
+    drawn. config and overrides set render.* (size, camera) and execute.* (docs/planning.md).
+
+    Returns {"gif": path, "png": path, "frames": n, "shown": what the video shows (contacts, goal distance)}.
+    Raises flowplan.Error naming the file, problem, index or setting at fault.
+    """
+    return _cpp("render").render(str(plans), str(out or ""), str(problem or ""), int(index), str(robot or ""),
+                                 str(config or ""), [str(o) for o in overrides])

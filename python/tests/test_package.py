@@ -400,6 +400,29 @@ def test_a_robot_imported_from_python_plans_and_its_limits_are_the_urdfs(tmp_pat
     assert not (tmp_path / "other" / "robot.yaml").exists()
 
 
+def test_render_executes_a_robot_folders_plan_and_draws_it(tmp_path):
+    from PIL import Image
+    flowplan_binary = os.path.join(BINARY, "apps", "flowplan", "flowplan")
+    ur5 = os.path.join(SOURCE, "robots", "ur5")
+    subprocess.run([flowplan_binary, "plan", "--rrt-connect", "--robot", ur5, "--config",
+                    os.path.join(SOURCE, "configs", "robot_joint.yaml"), "--start", "0,-1,1,0,0,0",
+                    "--goal", "1,-1,1,0.5,0.5,0.5", "--sphere", "0.4,0.2,0.4,0.1", "-n", "2", "--no-plot",
+                    "--out", str(tmp_path / "ur5")], check=True, capture_output=True)
+    drawn = flowplan.render(tmp_path / "ur5.h5", tmp_path / "ur5_1", index=1, robot=ur5,
+                            overrides=["render.width=160", "render.height=120"])
+    assert drawn["gif"] == str(tmp_path / "ur5_1.gif") and "executed in MuJoCo: 0 contacts" in drawn["shown"]
+    with Image.open(drawn["gif"]) as gif:
+        assert gif.size == (160, 120) and gif.n_frames == drawn["frames"] > 64  # the plan's states and the settling
+    with Image.open(drawn["png"]) as png:
+        assert png.size == (320, 240)  # four states, two to a row
+    # Without the folder the plan is drawn as planned, a frame a state.
+    assert flowplan.render(tmp_path / "ur5.h5", tmp_path / "planned", overrides=["render.width=160",
+                                                                                  "render.height=120"])["frames"] == 64
+    with pytest.raises(flowplan.Error, match="--index"):
+        flowplan.render(tmp_path / "ur5.h5", tmp_path / "bad", index=2)
+    assert not (tmp_path / "bad.gif").exists()
+
+
 def test_motionbenchmaker_files_are_imported_and_planned_from_python(tmp_path):
     import tarfile
     import yaml
