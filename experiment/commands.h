@@ -30,7 +30,7 @@ Command AddFkCommand(CLI::App& app);        // fk.cc: the Franka's TCP through M
 /// Every subcommand, in the order `flowplan --help` lists them.
 std::vector<Command> AddCommands(CLI::App& app);
 
-// The work of five commands as functions (the Python package calls them).
+// The work of six commands as functions (the Python package calls them).
 
 /// `flowplan generate --config CONFIG OVERRIDES...`: the data set of the config
 /// (every episode, one file). Returns the file written (generate.out).
@@ -86,6 +86,19 @@ struct Rendered {
 /// folder, any robot. @throws flowplan::Error naming the file, problem, index
 /// or setting at fault.
 Rendered Render(const RenderArgs& args);
+
+/// `flowplan problems`'s arguments.
+struct ProblemsArgs {
+  ConfigArgs config;   // --config and key=value: problems.*, seed, threads, robot
+  std::string out;     // --out: the problem file
+  std::string family;  // --family: a procedural scene family of the built-in Franka (empty: blocked problems)
+  std::string robot;   // --robot: a robot folder to draw the blocked problems for (empty: config.robot, or the Franka)
+};
+
+/// `flowplan problems`: random planning problems written to args.out, either
+/// spheres blocking the straight TCP path (problems.*) or a scene family's.
+/// @throws flowplan::Error naming the setting or folder at fault.
+void MakeProblems(const ProblemsArgs& args);
 
 /// `flowplan train --config CONFIG OVERRIDES... [--until STEP]`, or with
 /// `resume_dir` set `flowplan train --resume RESUME_DIR OVERRIDES...`. Returns

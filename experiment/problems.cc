@@ -17,14 +17,45 @@
 
 namespace flowplan::experiment {
 
+void MakeProblems(const ProblemsArgs& args) {
+  const ExperimentConfig config = args.config.Load();
+  const int threads = ConfigureThreads(config);
+  const std::string folder = !args.robot.empty() ? args.robot : config.robot;
+  const kinematics::Robot arm = folder.empty() ? kinematics::Robot(sim::LoadFrankaModel().description(), "the Franka")
+                                               : kinematics::Robot(robotfiles::LoadRobot(folder), folder);
+  if (!args.family.empty()) {
+    if (!folder.empty()) {
+      throw Error("--family: the scene families are laid out for the built-in Franka; a robot folder's problems are "
+                  "the blocked ones (problems.*) or MoveIt files (`flowplan scenes import`)");
+    }
+    const problems::ProblemSet set = problems::MakeFamilyProblems(
+        arm, args.family, static_cast<uint64_t>(config.seed), config.problems.count, config.problems.clearance, threads);
+    EnsureParentFolder(args.out);
+    WriteFileAtomically(args.out, problems::ProblemSetYaml(set));
+    size_t obstacles = 0;
+    for (const auto& problem : set.problems) obstacles += static_cast<size_t>(problem.scene.size());
+    spdlog::info("wrote {}: {} {} problems, {} obstacles", args.out, set.problems.size(), args.family, obstacles);
+    return;
+  }
+  problems::ProblemSet set;
+  try {
+    set = problems::MakeBlockedProblems(arm, config.problems, static_cast<uint64_t>(config.seed));
+  } catch (const Error& e) {
+    throw Error(std::string("problems.") + e.what());
+  }
+  EnsureParentFolder(args.out);
+  WriteFileAtomically(args.out, problems::ProblemSetYaml(set));
+  size_t spheres = 0, boxes = 0;
+  for (const auto& problem : set.problems) {
+    spheres += problem.scene.spheres.size();
+    boxes += problem.scene.boxes.size();
+  }
+  spdlog::info("wrote {}: {} problems, {} spheres and {} boxes, each blocking the straight TCP path with its first "
+               "sphere", args.out, set.problems.size(), spheres, boxes);
+}
+
 Command AddProblemsCommand(CLI::App& app) {
-  struct Args {
-    ConfigArgs config;
-    std::string out;
-    std::string family;
-    std::string robot;
-  };
-  auto args = std::make_shared<Args>();
+  auto args = std::make_shared<ProblemsArgs>();
   CLI::App* command =
       app.add_subcommand("problems", "draw random problems: spheres blocking the straight path (problems.*), for the "
                                      "Franka or a robot folder (--robot), or a scene family of the Franka (--family)");
@@ -36,46 +67,7 @@ Command AddProblemsCommand(CLI::App& app) {
   for (const auto& name : problems::SceneFamilies()) families += (families.empty() ? "" : ", ") + name;
   command->add_option("--family", args->family,
                       "a procedural scene family (" + families + "); problems.count and problems.clearance apply");
-  return {command, [args] {
-            const ExperimentConfig config = args->config.Load();
-            const int threads = ConfigureThreads(config);
-            const std::string folder = !args->robot.empty() ? args->robot : config.robot;
-            const kinematics::Robot arm = folder.empty()
-                                              ? kinematics::Robot(sim::LoadFrankaModel().description(), "the Franka")
-                                              : kinematics::Robot(robotfiles::LoadRobot(folder), folder);
-            if (!args->family.empty()) {
-              if (!folder.empty()) {
-                throw Error("--family: the scene families are laid out for the built-in Franka; a robot folder's "
-                            "problems are the blocked ones (problems.*) or MoveIt files (`flowplan scenes import`)");
-              }
-              const problems::ProblemSet set = problems::MakeFamilyProblems(
-                  arm, args->family, static_cast<uint64_t>(config.seed), config.problems.count,
-                  config.problems.clearance, threads);
-              EnsureParentFolder(args->out);
-              WriteFileAtomically(args->out, problems::ProblemSetYaml(set));
-              size_t obstacles = 0;
-              for (const auto& problem : set.problems) obstacles += static_cast<size_t>(problem.scene.size());
-              spdlog::info("wrote {}: {} {} problems, {} obstacles", args->out, set.problems.size(), args->family,
-                           obstacles);
-              return;
-            }
-            problems::ProblemSet set;
-            try {
-              set = problems::MakeBlockedProblems(arm, config.problems, static_cast<uint64_t>(config.seed));
-            } catch (const Error& e) {
-              throw Error(std::string("problems.") + e.what());
-            }
-            EnsureParentFolder(args->out);
-            WriteFileAtomically(args->out, problems::ProblemSetYaml(set));
-            size_t spheres = 0, boxes = 0;
-            for (const auto& problem : set.problems) {
-              spheres += problem.scene.spheres.size();
-              boxes += problem.scene.boxes.size();
-            }
-            spdlog::info("wrote {}: {} problems, {} spheres and {} boxes, each blocking the straight TCP path with its "
-                         "first sphere",
-                         args->out, set.problems.size(), spheres, boxes);
-          }};
+  return {command, [args] { MakeProblems(*args); }};
 }
 
 }  // namespace flowplan::experiment

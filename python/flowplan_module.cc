@@ -321,6 +321,21 @@ PYBIND11_MODULE(_flowplan, m) {
         py::arg("overshoot"), py::arg("max_spheres"), py::arg("pair_samples"), py::arg("velocity_limit"),
         py::arg("collision_group"), py::arg("force"), "flowplan robot import: writes the robot folder `out`");
   m.def(
+      "make_problems",
+      [](const std::string& out, const std::string& config, const std::vector<std::string>& overrides,
+         const std::string& family, const std::string& robot) {
+        flowplan::experiment::ProblemsArgs args;
+        args.out = out;
+        args.config.path = config;
+        args.config.overrides = overrides;
+        args.family = family;
+        args.robot = robot;
+        py::gil_scoped_release unlocked;
+        flowplan::experiment::MakeProblems(args);
+      },
+      py::arg("out"), py::arg("config"), py::arg("overrides"), py::arg("family"), py::arg("robot"),
+      "flowplan problems: writes the problem file `out`");
+  m.def(
       "render",
       [](const std::string& plans, const std::string& out, const std::string& problem, int64_t index,
          const std::string& robot, const std::string& config, const std::vector<std::string>& overrides) {

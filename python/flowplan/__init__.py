@@ -44,7 +44,7 @@ else:
     _why_portable = ""
 
 __all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Problem", "RobotFolder", "Verdict", "generate",
-           "import_robot", "import_scenes", "load_planner", "render", "load_problems", "load_scene", "make_planner", "native_kernels", "set_log_level", "train"]
+           "import_robot", "import_scenes", "load_planner", "make_problems", "render", "load_problems", "load_scene", "make_planner", "native_kernels", "set_log_level", "train"]
 
 #: What flowplan raises for bad input (a file that is not a planner, a planner that cannot take the kernels);
 #: a RuntimeError. The message names the file.
@@ -392,3 +392,19 @@ def render(plans, out=None, *, problem=None, index=0, robot=None, config=None, o
     """
     return _cpp("render").render(str(plans), str(out or ""), str(problem or ""), int(index), str(robot or ""),
                                  str(config or ""), [str(o) for o in overrides])
+
+
+def make_problems(out, config=None, overrides=(), *, family=None, robot=None):
+    """`flowplan problems`: random planning problems written to the problem file `out`, whose problems it returns
+    (load_problems). Without family, spheres that block the straight TCP path (problems.* of the config: count,
+    spheres, radii, clearance) for the built-in Franka or the robot folder `robot` (or the config's robot:); with
+    family="shelf" (or another of the scene families, docs/planning.md) that family's problems for the Franka.
+    The config's seed makes them; the same seed gives the same file.
+
+        problems = flowplan.make_problems("shelf.yaml", family="shelf", overrides=["problems.count=20"])
+
+    Raises flowplan.Error naming the setting or folder at fault; nothing is written then.
+    """
+    _cpp("make_problems").make_problems(str(out), str(config or ""), [str(o) for o in overrides], str(family or ""),
+                                        str(robot or ""))
+    return load_problems(out)

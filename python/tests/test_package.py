@@ -356,6 +356,16 @@ def test_problem_files_and_scenes_plan_from_python(tmp_path):
     assert torch.allclose(scene["boxes"][:, :6].float(), SHELF["boxes"][:, :6])
     with pytest.raises(flowplan.Error, match="nothing.yaml"):
         flowplan.load_problems(tmp_path / "nothing.yaml")
+    # flowplan.make_problems is `flowplan problems`: the same settings write the same file.
+    again = flowplan.make_problems(tmp_path / "again.yaml", overrides=["problems.count=2", "seed=3"], family="shelf")
+    assert (tmp_path / "again.yaml").read_bytes() == problems_file.read_bytes()
+    assert [p.name for p in again] == [p.name for p in problems]
+    blocked = flowplan.make_problems(tmp_path / "ur5.yaml", overrides=["problems.count=3"],
+                                     robot=os.path.join(SOURCE, "robots", "ur5"))
+    assert len(blocked) == 3 and all(p.start.shape == (6,) and p.scene["spheres"].shape[0] >= 1 for p in blocked)
+    with pytest.raises(flowplan.Error, match="--family"):
+        flowplan.make_problems(tmp_path / "bad.yaml", family="shelf", robot=os.path.join(SOURCE, "robots", "ur5"))
+    assert not (tmp_path / "bad.yaml").exists()
 
 
 def test_rrt_connect_for_a_robot_folder():
