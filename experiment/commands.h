@@ -30,7 +30,7 @@ Command AddFkCommand(CLI::App& app);        // fk.cc: the Franka's TCP through M
 /// Every subcommand, in the order `flowplan --help` lists them.
 std::vector<Command> AddCommands(CLI::App& app);
 
-// The work of six commands as functions (the Python package calls them).
+// The work of seven commands as functions (the Python package calls them).
 
 /// `flowplan generate --config CONFIG OVERRIDES...`: the data set of the config
 /// (every episode, one file). Returns the file written (generate.out).
@@ -99,6 +99,19 @@ struct ProblemsArgs {
 /// spheres blocking the straight TCP path (problems.*) or a scene family's.
 /// @throws flowplan::Error naming the setting or folder at fault.
 void MakeProblems(const ProblemsArgs& args);
+
+/// `flowplan eval stitching`'s arguments.
+struct EvalArgs {
+  std::string ckpt;    // --ckpt: a checkpoint file, or a run folder (its newest checkpoint)
+  ConfigArgs overlay;  // --config and key=value: applied over the checkpoint's config
+  std::string out;     // --out: the JSON report (empty: RUN_DIR/eval_stitching.json)
+};
+
+/// `flowplan eval stitching`: the unguided planner's stitching error on the
+/// data set's test and training pairs, written as the JSON report (returned)
+/// and its plans beside it (REPORT.plans.h5). @throws flowplan::Error naming
+/// the checkpoint, data set or setting at fault.
+std::string EvaluateStitching(const EvalArgs& args);
 
 /// `flowplan train --config CONFIG OVERRIDES... [--until STEP]`, or with
 /// `resume_dir` set `flowplan train --resume RESUME_DIR OVERRIDES...`. Returns

@@ -19,12 +19,6 @@
 namespace flowplan::experiment {
 namespace {
 
-struct EvalArgs {
-  std::string ckpt;
-  ConfigArgs overlay;  // --config: YAML applied over the checkpoint's config
-  std::string out;     // JSON report; default RUN_DIR/eval_stitching.json
-};
-
 void WritePlans(const std::string& path, const eval::StitchingResult& test, const eval::StitchingResult& train) {
   AtomicFile target(path);
   {
@@ -42,7 +36,9 @@ void WritePlans(const std::string& path, const eval::StitchingResult& test, cons
   target.Commit();
 }
 
-void RunEvalStitching(const EvalArgs& args) {
+}  // namespace
+
+std::string EvaluateStitching(const EvalArgs& args) {
   // Stitching is measured on the network alone: unguided.
   std::vector<std::string> overrides = args.overlay.overrides;
   overrides.push_back("guidance.scale=0");
@@ -73,9 +69,8 @@ void RunEvalStitching(const EvalArgs& args) {
   spdlog::info("stitching error (step {}, {} plans): test pairs {:.4f} ± {:.4f}, training pairs {:.4f} ± {:.4f}; "
                "wrote {} and {}",
                loaded.step, loaded.config.eval.num_plans, test.mean, test.stddev, train.mean, train.stddev, out, plans);
+  return out;
 }
-
-}  // namespace
 
 Command AddEvalCommand(CLI::App& app) {
   auto args = std::make_shared<EvalArgs>();
@@ -85,7 +80,7 @@ Command AddEvalCommand(CLI::App& app) {
   stitching->add_option("--ckpt", args->ckpt, "checkpoint file, or a run folder (its newest checkpoint)")->required();
   stitching->add_option("--out", args->out, "JSON report (default: RUN_DIR/eval_stitching.json)");
   args->overlay.Add(stitching, false, "YAML applied over the checkpoint's config");
-  return {stitching, [args] { RunEvalStitching(*args); }};
+  return {stitching, [args] { EvaluateStitching(*args); }};
 }
 
 }  // namespace flowplan::experiment

@@ -5,6 +5,7 @@
 
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <xmmintrin.h>
 #include <torch/python.h>  // torch.Tensor <-> torch::Tensor, without copies
 
 #include <cmath>
@@ -34,6 +35,20 @@
 namespace py = pybind11;
 
 namespace {
+
+/// flowplan's planning and training flush denormals to zero on the calling thread, as its training does; the
+/// caller's floating-point mode (MXCSR) is restored when a call returns, so Python code after it computes as before.
+class KeepFloatingPointMode {
+ public:
+  KeepFloatingPointMode() : csr_(_mm_getcsr()) {}
+  ~KeepFloatingPointMode() { _mm_setcsr(csr_); }
+  KeepFloatingPointMode(const KeepFloatingPointMode&) = delete;
+  KeepFloatingPointMode& operator=(const KeepFloatingPointMode&) = delete;
+
+ private:
+  unsigned int csr_;
+};
+using KeepMode = py::call_guard<KeepFloatingPointMode>;
 
 /// An exported planner file with flowplan's native kernels, as the bytes of a
 /// TorchScript module (torch.jit.load reads them).
@@ -290,13 +305,13 @@ PYBIND11_MODULE(_flowplan, m) {
       error(e.what());
     }
   });
-  m.def("native_planner", &NativePlanner, py::arg("path"),
+  m.def("native_planner", &NativePlanner, py::arg("path"), KeepMode(),
         "The exported planner file at `path` assembled again with flowplan's native kernels: the bytes of its "
         "TorchScript module. Raises flowplan.Error naming the file if it is not a flowplan planner or cannot be "
         "assembled again.");
-  m.def("load_scene", &LoadScene, py::arg("path"), py::arg("workspace_dim"),
+  m.def("load_scene", &LoadScene, py::arg("path"), py::arg("workspace_dim"), KeepMode(),
         "A scene file's obstacles: kind -> (K, columns) float64 rows.");
-  m.def("load_problems", &LoadProblems, py::arg("path"), "A problem file's problems, as dicts.");
+  m.def("load_problems", &LoadProblems, py::arg("path"), KeepMode(), "A problem file's problems, as dicts.");
   m.def(
       "import_scenes",
       [](const std::vector<std::string>& files, const std::string& folder, const std::string& out,
@@ -315,11 +330,24 @@ PYBIND11_MODULE(_flowplan, m) {
         flowplan::experiment::ImportScenes(args);
       },
       py::arg("files"), py::arg("folder"), py::arg("out"), py::arg("robot"), py::arg("frames"), py::arg("grasp"),
-      py::arg("grasp_margin"), py::arg("limit_tolerance"), "flowplan scenes import: writes the problem file `out`");
+      py::arg("grasp_margin"), py::arg("limit_tolerance"), KeepMode(), "flowplan scenes import: writes the problem file `out`");
   m.def("import_robot", &ImportRobot, py::arg("model"), py::arg("out"), py::arg("srdf"), py::arg("package_dir"),
         py::arg("base"), py::arg("tip"), py::arg("tcp_offset"), py::arg("joints"), py::arg("hold"),
         py::arg("overshoot"), py::arg("max_spheres"), py::arg("pair_samples"), py::arg("velocity_limit"),
-        py::arg("collision_group"), py::arg("force"), "flowplan robot import: writes the robot folder `out`");
+        py::arg("collision_group"), py::arg("force"), KeepMode(), "flowplan robot import: writes the robot folder `out`");
+  m.def(
+      "evaluate_stitching",
+      [](const std::string& ckpt, const std::string& out, const std::string& config,
+         const std::vector<std::string>& overrides) {
+        flowplan::experiment::EvalArgs args;
+        args.ckpt = ckpt;
+        args.out = out;
+        args.overlay.path = config;
+        args.overlay.overrides = overrides;
+        return Interruptible([&] { return flowplan::experiment::EvaluateStitching(args); });
+      },
+      py::arg("ckpt"), py::arg("out"), py::arg("config"), py::arg("overrides"), KeepMode(),
+      "flowplan eval stitching: the JSON report written");
   m.def(
       "make_problems",
       [](const std::string& out, const std::string& config, const std::vector<std::string>& overrides,
@@ -333,7 +361,7 @@ PYBIND11_MODULE(_flowplan, m) {
         py::gil_scoped_release unlocked;
         flowplan::experiment::MakeProblems(args);
       },
-      py::arg("out"), py::arg("config"), py::arg("overrides"), py::arg("family"), py::arg("robot"),
+      py::arg("out"), py::arg("config"), py::arg("overrides"), py::arg("family"), py::arg("robot"), KeepMode(),
       "flowplan problems: writes the problem file `out`");
   m.def(
       "render",
@@ -360,7 +388,7 @@ PYBIND11_MODULE(_flowplan, m) {
         return entry;
       },
       py::arg("plans"), py::arg("out"), py::arg("problem"), py::arg("index"), py::arg("robot"), py::arg("config"),
-      py::arg("overrides"), "flowplan render: writes PREFIX.gif and PREFIX.png");
+      py::arg("overrides"), KeepMode(), "flowplan render: writes PREFIX.gif and PREFIX.png");
   m.def("set_log_level", &flowplan::SetUpLogging, py::arg("level"),
         "What flowplan logs: debug, info (the default), warn or error.");
   m.def(
@@ -368,24 +396,24 @@ PYBIND11_MODULE(_flowplan, m) {
       [](const std::string& config, const std::vector<std::string>& overrides) {
         return Interruptible([&] { return flowplan::experiment::Generate(config, overrides); });
       },
-      py::arg("config"), py::arg("overrides"), "flowplan generate --config CONFIG OVERRIDES...: the file written");
+      py::arg("config"), py::arg("overrides"), KeepMode(), "flowplan generate --config CONFIG OVERRIDES...: the file written");
   m.def(
       "train",
       [](const std::string& config, const std::vector<std::string>& overrides, const std::string& resume,
          int64_t until_step) {
         return Interruptible([&] { return flowplan::experiment::Train(config, overrides, resume, until_step); });
       },
-      py::arg("config"), py::arg("overrides"), py::arg("resume"), py::arg("until_step"),
+      py::arg("config"), py::arg("overrides"), py::arg("resume"), py::arg("until_step"), KeepMode(),
       "flowplan train (--config CONFIG | --resume RUN_DIR) OVERRIDES... [--until STEP]: the run folder");
   py::class_<InProcessPlanner>(m, "InProcessPlanner")
       .def(py::init<const std::string&, const std::string&, const std::string&, const std::string&,
                     const std::string&, const std::vector<std::string>&>(),
            py::arg("kind"), py::arg("planner"), py::arg("ckpt"), py::arg("config"), py::arg("robot"),
-           py::arg("overrides"))
+           py::arg("overrides"), KeepMode())
       .def("plan", &InProcessPlanner::Plan, py::arg("start"), py::arg("goal"), py::arg("scene"), py::arg("seed"),
-           py::arg("floor_height"), py::arg("held"))
+           py::arg("floor_height"), py::arg("held"), KeepMode())
       .def("check", &InProcessPlanner::Check, py::arg("plans"), py::arg("start"), py::arg("goal"), py::arg("scene"),
-           py::arg("found"), py::arg("floor_height"), py::arg("held"))
+           py::arg("found"), py::arg("floor_height"), py::arg("held"), KeepMode())
       .def_property_readonly("kind", &InProcessPlanner::kind)
       .def_property_readonly("native", &InProcessPlanner::native)
       .def_property_readonly("horizon", &InProcessPlanner::horizon)

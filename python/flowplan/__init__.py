@@ -43,8 +43,9 @@ except ImportError as missing:  # PyTorch alone: the portable code of the files
 else:
     _why_portable = ""
 
-__all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Problem", "RobotFolder", "Verdict", "generate",
-           "import_robot", "import_scenes", "load_planner", "make_problems", "render", "load_problems", "load_scene", "make_planner", "native_kernels", "set_log_level", "train"]
+__all__ = ["Error", "InProcessPlanner", "Planner", "PlanResult", "Problem", "RobotFolder", "Verdict",
+           "evaluate_stitching", "generate", "import_robot", "import_scenes", "load_planner", "load_problems",
+           "load_scene", "make_planner", "make_problems", "native_kernels", "render", "set_log_level", "train"]
 
 #: What flowplan raises for bad input (a file that is not a planner, a planner that cannot take the kernels);
 #: a RuntimeError. The message names the file.
@@ -408,3 +409,24 @@ def make_problems(out, config=None, overrides=(), *, family=None, robot=None):
     _cpp("make_problems").make_problems(str(out), str(config or ""), [str(o) for o in overrides], str(family or ""),
                                         str(robot or ""))
     return load_problems(out)
+
+
+def evaluate_stitching(ckpt, out=None, config=None, overrides=()):
+    """`flowplan eval stitching`: the trained planner's stitching error, unguided, on its data set's test pairs (that
+    no training episode connects) and training pairs: per plan 0.5 (|x_1 - start| + |x_{T-2} - goal|) over the
+    positions, eval.num_plans plans per set (docs/getting_started.md). ckpt is a checkpoint or a run folder (its
+    newest checkpoint); config and overrides apply over the checkpoint's config.
+
+    Returns the report (written to out, default RUN/eval_stitching.json) as a dict: "test" and "train" each hold
+    "mean", "stddev", "num_plans" and "per_pair"; "plans_file" is the HDF5 file of the plans beside it
+    (/test/plans (N, T, D), /test/pair_index (N,), and /train/...).
+    """
+    import json
+    import os
+    path = _cpp("evaluate_stitching").evaluate_stitching(str(ckpt), str(out or ""), str(config or ""),
+                                                         [str(o) for o in overrides])
+    with open(path) as report:
+        result = json.load(report)
+    result["report_file"] = path
+    result["plans_file"] = os.path.splitext(path)[0] + ".plans.h5"
+    return result

@@ -267,9 +267,26 @@ def test_generate_train_resume_and_plan_from_python(tmp_path):
     assert flowplan.generate(tiny, paths) == f"{tmp_path}/data.h5"
     run = flowplan.train(tiny, paths, until_step=3)
     assert run == f"{tmp_path}/run"
+    # Training flushes denormals to zero on its thread; the caller's floating-point mode comes back with the call.
+    assert (torch.tensor([1e-40]) * 1.0).item() != 0
     assert sorted(os.listdir(os.path.join(run, "checkpoints"))) == ["step_00000003.pt"]
     assert flowplan.train(resume=run) == run
     assert "step_00000006.pt" in os.listdir(os.path.join(run, "checkpoints"))
+    # The stitching error of the run, recomputed from the plans and the data set's pairs read by h5py.
+    import h5py
+    report = flowplan.evaluate_stitching(run, tmp_path / "stitching.json")
+    assert report["report_file"] == str(tmp_path / "stitching.json") and report["step"] == 6
+    with h5py.File(report["plans_file"], "r") as plans, h5py.File(tmp_path / "data.h5", "r") as data:
+        for pairs in ("test", "train"):
+            x = torch.from_numpy(plans[pairs]["plans"][()]).double()               # (N, T, D)
+            which = torch.from_numpy(plans[pairs]["pair_index"][()]).long()        # (N,)
+            start = torch.from_numpy(data["eval"][f"{pairs}_pairs"]["start"][()]).double()[which]
+            goal = torch.from_numpy(data["eval"][f"{pairs}_pairs"]["goal"][()]).double()[which]
+            positions = slice(0, 2)  # the particle's x, y (then vx, vy)
+            errors = 0.5 * ((x[:, 1, positions] - start[:, positions]).norm(dim=1) +
+                            (x[:, -2, positions] - goal[:, positions]).norm(dim=1))
+            assert report[pairs]["num_plans"] == x.shape[0]
+            assert report[pairs]["mean"] == pytest.approx(errors.mean().item(), rel=1e-5)
     learned = flowplan.make_planner("learned", ckpt=run)
     result = learned.plan(torch.tensor([0.0, 0.0, 0.0, 0.0]), torch.tensor([1.0, 0.0, 0.0, 0.0]), 3,
                           spheres=[[0.5, 0.3, 0.1]])  # rows as a list: the same as a tensor
