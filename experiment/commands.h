@@ -108,10 +108,13 @@ struct EvalArgs {
 };
 
 /// `flowplan eval stitching`: the unguided planner's stitching error on the
-/// data set's test and training pairs, written as the JSON report (returned)
-/// and its plans beside it (REPORT.plans.h5). @throws flowplan::Error naming
-/// the checkpoint, data set or setting at fault.
+/// data set's test and training pairs, written as the JSON report, whose path
+/// it returns, and its plans beside it (StitchingPlansFile of that path).
+/// @throws flowplan::Error naming the checkpoint, data set or setting at fault.
 std::string EvaluateStitching(const EvalArgs& args);
+
+/// The HDF5 file of the plans beside the stitching report `report` (REPORT without its extension, .plans.h5).
+std::string StitchingPlansFile(const std::string& report);
 
 /// `flowplan train --config CONFIG OVERRIDES... [--until STEP]`, or with
 /// `resume_dir` set `flowplan train --resume RESUME_DIR OVERRIDES...`. Returns

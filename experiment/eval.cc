@@ -38,6 +38,10 @@ void WritePlans(const std::string& path, const eval::StitchingResult& test, cons
 
 }  // namespace
 
+std::string StitchingPlansFile(const std::string& report) {
+  return std::filesystem::path(report).replace_extension(".plans.h5").string();
+}
+
 std::string EvaluateStitching(const EvalArgs& args) {
   // Stitching is measured on the network alone: unguided.
   std::vector<std::string> overrides = args.overlay.overrides;
@@ -64,7 +68,7 @@ std::string EvaluateStitching(const EvalArgs& args) {
                                ", \"sampler_splitting\": " +
                                JsonString(config::EnumName(loaded.config.sampler.splitting)) +
                                ", \"test\": " + eval::ToJson(test) + ", \"train\": " + eval::ToJson(train) + "}\n");
-  const std::string plans = std::filesystem::path(out).replace_extension(".plans.h5").string();
+  const std::string plans = StitchingPlansFile(out);
   WritePlans(plans, test, train);
   spdlog::info("stitching error (step {}, {} plans): test pairs {:.4f} ± {:.4f}, training pairs {:.4f} ± {:.4f}; "
                "wrote {} and {}",

@@ -5,9 +5,13 @@
 
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#if defined(__x86_64__) || defined(__i386__)
 #include <xmmintrin.h>
+#endif
+#include <ATen/Parallel.h>
 #include <torch/python.h>  // torch.Tensor <-> torch::Tensor, without copies
 
+#include <cfenv>
 #include <cmath>
 #include <csignal>
 #include <map>
@@ -36,19 +40,33 @@ namespace py = pybind11;
 
 namespace {
 
-/// flowplan's planning and training flush denormals to zero on the calling thread, as its training does; the
-/// caller's floating-point mode (MXCSR) is restored when a call returns, so Python code after it computes as before.
-class KeepFloatingPointMode {
+/// What a call into flowplan changes in the caller's process and gives back when it returns: the floating-point
+/// mode of the calling thread (flowplan's planning and training flush denormals to zero on it, as its training does)
+/// and LibTorch's intra-op thread count (the commands set it from the config's `threads`). Python code after a call
+/// computes as it did before.
+class KeepCallerState {
  public:
-  KeepFloatingPointMode() : csr_(_mm_getcsr()) {}
-  ~KeepFloatingPointMode() { _mm_setcsr(csr_); }
-  KeepFloatingPointMode(const KeepFloatingPointMode&) = delete;
-  KeepFloatingPointMode& operator=(const KeepFloatingPointMode&) = delete;
+  KeepCallerState() : threads_(at::get_num_threads()) { SaveMode(); }
+  ~KeepCallerState() {
+    RestoreMode();
+    if (at::get_num_threads() != threads_) at::set_num_threads(threads_);
+  }
+  KeepCallerState(const KeepCallerState&) = delete;
+  KeepCallerState& operator=(const KeepCallerState&) = delete;
 
  private:
-  unsigned int csr_;
+#if defined(__x86_64__) || defined(__i386__)
+  void SaveMode() { csr_ = _mm_getcsr(); }  // MXCSR, its flush-to-zero and denormals-are-zero bits with it
+  void RestoreMode() { _mm_setcsr(csr_); }
+  unsigned int csr_ = 0;
+#else
+  void SaveMode() { std::fegetenv(&env_); }
+  void RestoreMode() { std::fesetenv(&env_); }
+  std::fenv_t env_;
+#endif
+  int threads_;
 };
-using KeepMode = py::call_guard<KeepFloatingPointMode>;
+using KeepMode = py::call_guard<KeepCallerState>;
 
 /// An exported planner file with flowplan's native kernels, as the bytes of a
 /// TorchScript module (torch.jit.load reads them).
@@ -295,7 +313,8 @@ py::dict ImportRobot(const std::string& model, const std::string& out, const std
 PYBIND11_MODULE(_flowplan, m) {
   m.doc() = "flowplan's C++ library for the Python package `flowplan` (use the package, not this module).";
   flowplan::SetUpLogging("info");  // the command line's format: "[12:00:01.234] [info] message"
-  // MuJoCo's errors as flowplan::Error (flowplan.Error here), not MuJoCo's default: print, wait for Enter, exit.
+  // MuJoCo's fatal errors (which cannot be thrown through its C frames) end the process with one line naming them,
+  // as they do the command line's, instead of MuJoCo's default: print, then wait for Enter before exiting.
   flowplan::sim::InstallMujocoHandlers();
   static py::exception<flowplan::Error> error(m, "Error", PyExc_RuntimeError);
   py::register_exception_translator([](std::exception_ptr thrown) {
@@ -344,10 +363,11 @@ PYBIND11_MODULE(_flowplan, m) {
         args.out = out;
         args.overlay.path = config;
         args.overlay.overrides = overrides;
-        return Interruptible([&] { return flowplan::experiment::EvaluateStitching(args); });
+        const std::string report = Interruptible([&] { return flowplan::experiment::EvaluateStitching(args); });
+        return std::make_pair(report, flowplan::experiment::StitchingPlansFile(report));
       },
       py::arg("ckpt"), py::arg("out"), py::arg("config"), py::arg("overrides"), KeepMode(),
-      "flowplan eval stitching: the JSON report written");
+      "flowplan eval stitching: the JSON report and the plans file written");
   m.def(
       "make_problems",
       [](const std::string& out, const std::string& config, const std::vector<std::string>& overrides,

@@ -18,7 +18,8 @@ constexpr int kMaxGeoms = 20000;
 
 /// MuJoCo looks OpenGL's functions up among the process's global symbols. A program linked with flowplan has
 /// OSMesa's there; a process that loaded flowplan as a library (the Python package's module, opened with
-/// RTLD_LOCAL) has them only in that library's scope: OSMesa is made global, once.
+/// RTLD_LOCAL) has them only in that library's scope: OSMesa is made global, once. Libraries the process loads
+/// afterwards then see OSMesa's gl* functions too (as they would in a program linked with it).
 void ExposeOpenGl() {
   static const bool exposed = [] {
     Dl_info info;

@@ -373,6 +373,8 @@ def import_robot(model, out, *, srdf=None, package_dir=None, base=None, tip=None
     Raises flowplan.Error naming the file and element at fault (a malformed URDF, a joint without limits, a tip that
     does not exist, a missing collision mesh) or an existing robot.yaml without force.
     """
+    if isinstance(joints, str):  # "a,b,c", as the command takes them
+        joints = [j for j in joints.split(",") if j]
     entry = _cpp("import_robot").import_robot(
         str(model), str(out), str(srdf or ""), str(package_dir or ""), str(base or ""), str(tip or ""),
         [float(v) for v in tcp_offset] if tcp_offset is not None else [], [str(j) for j in joints],
@@ -422,11 +424,10 @@ def evaluate_stitching(ckpt, out=None, config=None, overrides=()):
     (/test/plans (N, T, D), /test/pair_index (N,), and /train/...).
     """
     import json
-    import os
-    path = _cpp("evaluate_stitching").evaluate_stitching(str(ckpt), str(out or ""), str(config or ""),
-                                                         [str(o) for o in overrides])
+    path, plans = _cpp("evaluate_stitching").evaluate_stitching(str(ckpt), str(out or ""), str(config or ""),
+                                                                [str(o) for o in overrides])
     with open(path) as report:
         result = json.load(report)
     result["report_file"] = path
-    result["plans_file"] = os.path.splitext(path)[0] + ".plans.h5"
+    result["plans_file"] = plans
     return result

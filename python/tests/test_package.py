@@ -267,8 +267,9 @@ def test_generate_train_resume_and_plan_from_python(tmp_path):
     assert flowplan.generate(tiny, paths) == f"{tmp_path}/data.h5"
     run = flowplan.train(tiny, paths, until_step=3)
     assert run == f"{tmp_path}/run"
-    # Training flushes denormals to zero on its thread; the caller's floating-point mode comes back with the call.
-    assert (torch.tensor([1e-40]) * 1.0).item() != 0
+    # Training flushes denormals to zero on its thread and sets LibTorch's thread count from its config; the caller's
+    # floating-point mode and thread count come back with the call.
+    assert (torch.tensor([1e-40]) * 1.0).item() != 0 and torch.get_num_threads() == 2
     assert sorted(os.listdir(os.path.join(run, "checkpoints"))) == ["step_00000003.pt"]
     assert flowplan.train(resume=run) == run
     assert "step_00000006.pt" in os.listdir(os.path.join(run, "checkpoints"))
@@ -376,6 +377,7 @@ def test_problem_files_and_scenes_plan_from_python(tmp_path):
     # flowplan.make_problems is `flowplan problems`: the same settings write the same file.
     again = flowplan.make_problems(tmp_path / "again.yaml", overrides=["problems.count=2", "seed=3"], family="shelf")
     assert (tmp_path / "again.yaml").read_bytes() == problems_file.read_bytes()
+    assert torch.get_num_threads() == 2  # as this file set it: the call's own thread count is not left behind
     assert [p.name for p in again] == [p.name for p in problems]
     blocked = flowplan.make_problems(tmp_path / "ur5.yaml", overrides=["problems.count=3"],
                                      robot=os.path.join(SOURCE, "robots", "ur5"))

@@ -12,7 +12,6 @@
 #include <cmath>
 #include <map>
 #include <memory>
-#include <set>
 
 #include "collision/body_model.h"
 #include "collision/checker.h"
@@ -48,22 +47,21 @@ std::vector<double> SmoothMove(const std::vector<double>& q0, const std::vector<
   return plan;
 }
 
-/// How the checker's self-collision and MuJoCo's contacts between a robot folder's collision geometry compare on
-/// random configurations within the limits (`plan --execute`'s model, the arm's geoms made to collide with one
-/// another and with their parents, contacts reported up to `reach` apart).
+/// How the collision spheres' self-collision and MuJoCo's contacts between a robot folder's collision geometry
+/// compare, link pair by link pair, on random configurations within the limits (`plan --execute`'s model, the arm's
+/// geoms made to collide with one another and with their parents, contacts reported up to `reach` apart).
 struct SelfCollisionComparison {
-  int configurations = 0;
-  int geometry_overlaps = 0;  // configurations where the geometry of a checked pair overlaps by more than 0.1 mm
-  int sphere_overlaps = 0;    // configurations the checker calls self-colliding
-  int missed = 0;             // geometry overlaps the checker does not call self-colliding
+  int geometry_overlaps = 0;    // (configuration, checked pair)s whose geometry overlaps by more than 0.1 mm
+  int sphere_overlaps = 0;      // (configuration, checked pair)s whose spheres overlap
+  int missed = 0;               // geometry overlaps whose pair's spheres do not overlap
   double deepest_missed = 0.0;  // m: the deepest geometry overlap among them
-  int unexplained = 0;        // sphere overlaps whose pair's geometry MuJoCo finds farther than 2 * outside apart
-  double outside = 0.0;       // m: how far the folder's spheres reach outside its geometry at most
+  int unexplained = 0;          // sphere overlaps whose pair MuJoCo reports no nearer than 2 * outside
+  int checker_disagrees = 0;    // configurations the checker judges otherwise than the pairs' spheres say
+  double outside = 0.0;         // m: how far the folder's spheres reach outside its geometry at most
 };
 
 SelfCollisionComparison CompareSelfCollision(const RobotFile& file, const std::string& dir, int configurations) {
   SelfCollisionComparison out;
-  out.configurations = configurations;
   const kinematics::RobotDescription d = file.Description("robot.yaml");
   const auto body = std::make_shared<const collision::BodyModel>(d);
   const collision::Checker checker(body, std::make_shared<const collision::World>(geometry::Scene{}, 3), {});
@@ -72,6 +70,8 @@ SelfCollisionComparison CompareSelfCollision(const RobotFile& file, const std::s
   const ExecutionModel model = LoadExecutionModel(file, dir, geometry::Scene{}, DriveSettings{}, config, "robot.yaml");
   mjModel& m = *model.model;
   m.opt.disableflags |= mjDSBL_FILTERPARENT;
+  // MuJoCo measures overlaps exactly; a pair that does not overlap it reports when its estimate of their distance
+  // (exact for primitives, approximate between meshes) is within the margin.
   const double reach = 2.0 * out.outside + 1e-3;
   for (int g = 0; g < m.ngeom; ++g) {
     m.geom_conaffinity[g] = 1;
@@ -80,8 +80,23 @@ SelfCollisionComparison CompareSelfCollision(const RobotFile& file, const std::s
   }
   std::unique_ptr<mjData, decltype(&mj_deleteData)> data(mj_makeData(&m), mj_deleteData);
   auto link_of_geom = [&](int g) { return d.FindLink(mj_id2name(&m, mjOBJ_BODY, m.geom_bodyid[g])); };  // bodies are named after the links
-  std::set<std::pair<int, int>> checked;
-  for (const auto& [a, b] : body->self_pairs()) checked.insert({std::min(a, b), std::max(a, b)});
+  std::vector<std::pair<int, int>> checked;
+  for (const auto& [a, b] : body->self_pairs()) checked.push_back({std::min(a, b), std::max(a, b)});
+  std::vector<collision::Frame> frames(static_cast<size_t>(body->num_links()));
+  std::vector<double> centres(static_cast<size_t>(3 * body->num_spheres()));
+  // The smallest gap between a sphere of link a and one of link b, computed here from the placed spheres.
+  auto sphere_gap = [&](int a, int b) {
+    double gap = INFINITY;
+    for (int s = body->first_sphere(a); s < body->first_sphere(a + 1); ++s) {
+      for (int t = body->first_sphere(b); t < body->first_sphere(b + 1); ++t) {
+        const double* cs = &centres[static_cast<size_t>(3 * s)];
+        const double* ct = &centres[static_cast<size_t>(3 * t)];
+        gap = std::min(gap, std::hypot(cs[0] - ct[0], cs[1] - ct[1], cs[2] - ct[2]) - body->sphere_radius(s) -
+                                body->sphere_radius(t));
+      }
+    }
+    return gap;
+  };
   Rng rng(7);
   for (int n = 0; n < configurations; ++n) {
     std::vector<double> q(static_cast<size_t>(d.num_joints));
@@ -89,31 +104,35 @@ SelfCollisionComparison CompareSelfCollision(const RobotFile& file, const std::s
     for (int j = 0; j < d.num_joints; ++j) data->qpos[model.drives.qpos[j]] = q[j];
     mj_kinematics(&m, data.get());
     mj_collision(&m, data.get());
-    std::map<std::pair<int, int>, double> nearest;  // checked link pair -> MuJoCo's smallest distance
+    std::map<std::pair<int, int>, double> nearest;  // link pair -> MuJoCo's smallest distance
     for (int c = 0; c < data->ncon; ++c) {
       const int a = link_of_geom(data->contact[c].geom1), b = link_of_geom(data->contact[c].geom2);
+      if (a < 0 || b < 0 || a == b) continue;
       const std::pair<int, int> pair{std::min(a, b), std::max(a, b)};
-      if (a < 0 || b < 0 || a == b || !checked.count(pair)) continue;
       const auto at = nearest.find(pair);
       nearest[pair] = at == nearest.end() ? data->contact[c].dist : std::min(at->second, data->contact[c].dist);
     }
-    double deepest = 0.0;
-    for (const auto& [pair, distance] : nearest) deepest = std::min(deepest, distance);
-    const collision::Contact contact = checker.FirstContact(q.data());
-    const bool self = contact.kind == collision::Contact::Kind::kSelf;
-    if (deepest < -1e-4) {
-      ++out.geometry_overlaps;
-      if (!self) {
-        ++out.missed;
-        out.deepest_missed = std::max(out.deepest_missed, -deepest);
+    body->Place(q.data(), frames.data(), centres.data());
+    bool any_sphere_overlap = false;
+    for (const auto& pair : checked) {
+      const auto at = nearest.find(pair);
+      const double geometry = at == nearest.end() ? INFINITY : at->second;
+      const bool spheres_overlap = sphere_gap(pair.first, pair.second) < 0.0;
+      any_sphere_overlap = any_sphere_overlap || spheres_overlap;
+      if (geometry < -1e-4) {
+        ++out.geometry_overlaps;
+        if (!spheres_overlap) {
+          ++out.missed;
+          out.deepest_missed = std::max(out.deepest_missed, -geometry);
+        }
+      }
+      if (spheres_overlap) {
+        ++out.sphere_overlaps;
+        out.unexplained += geometry > 2.0 * out.outside;
       }
     }
-    if (self) {
-      ++out.sphere_overlaps;
-      const int a = body->sphere_link(contact.sphere), b = body->sphere_link(contact.other);
-      const auto at = nearest.find({std::min(a, b), std::max(a, b)});
-      out.unexplained += at == nearest.end() || at->second > 2.0 * out.outside;
-    }
+    out.checker_disagrees +=
+        (checker.FirstContact(q.data()).kind == collision::Contact::Kind::kSelf) != any_sphere_overlap;
   }
   return out;
 }
@@ -199,16 +218,18 @@ TEST_F(RobotExecutionTest, MujocoMeasuresTheSpheresAsTheCollisionCheckerDoes) {
 
 TEST_F(RobotExecutionTest, SelfCollisionAgreesWithMujocosContactsOnRandomConfigurations) {
   // The UR5's spheres cover its collision meshes and reach at most `outside` beyond them, so on every random
-  // configuration within the limits, wherever MuJoCo finds the meshes' hulls of a pair the checker checks
-  // overlapping, the checker finds the configuration self-colliding (the hulls hold the meshes, so this also says
-  // the meshes are near enough to convex where the links meet), and wherever the checker finds two links'
-  // spheres overlapping, MuJoCo finds those links' hulls within 2 * outside of each other.
+  // configuration within the limits and for every link pair the checker checks: where MuJoCo finds the pair's mesh
+  // hulls overlapping, the pair's spheres overlap (the hulls hold the meshes, so this also says the meshes are near
+  // enough to convex where the links meet); where the pair's spheres overlap, MuJoCo finds its hulls within
+  // 2 * outside of each other. And the checker calls a configuration self-colliding exactly when some checked pair's
+  // spheres overlap.
   const SelfCollisionComparison r = CompareSelfCollision(file_, Ur5Folder(), 3000);
   EXPECT_EQ(r.missed, 0) << "the deepest overlap missed: " << r.deepest_missed << " m";
   EXPECT_EQ(r.unexplained, 0);
-  // Enough of both for the checks to mean something (617 and 1131 when written).
-  EXPECT_GE(r.geometry_overlaps, 300);
-  EXPECT_GE(r.sphere_overlaps, r.geometry_overlaps);
+  EXPECT_EQ(r.checker_disagrees, 0);
+  // Enough of both for the checks to mean something.
+  EXPECT_GE(r.geometry_overlaps, 300) << r.geometry_overlaps;
+  EXPECT_GE(r.sphere_overlaps, 300) << r.sphere_overlaps;
   EXPECT_GT(r.outside, 0.005);
   EXPECT_LT(r.outside, 0.02);
 }
