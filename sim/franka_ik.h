@@ -1,26 +1,20 @@
 #pragma once
 
-// Inverse kinematics of the Franka TCP: damped least squares on MuJoCo's site
-// Jacobians, for a TCP position with a fixed orientation (by default the
-// gripper pointing down), with joint limits and a null-space posture.
+// Inverse kinematics of the Franka TCP (sim/arm_ik.h on the built-in model),
+// for a TCP position with a fixed orientation (by default the gripper pointing
+// down), with joint limits and a null-space posture.
 
 #include <mujoco/mujoco.h>
 
 #include <Eigen/Core>
 #include <string>
 
+#include "sim/arm_ik.h"
 #include "sim/franka_model.h"
 
 namespace flowplan::sim {
 
-struct IkOptions {
-  int max_iterations = 300;
-  double position_tolerance = 1e-5;     // m
-  double orientation_tolerance = 1e-4;  // rad
-  double damping = 0.05;                // damped-least-squares λ (m, rad)
-  double max_step = 0.2;                // rad, largest joint change per iteration
-  double limit_margin = 0.01;           // rad kept from every joint limit
-  double posture_gain = 0.1;            // pull towards `posture` in the task's null space
+struct IkOptions : IkSettings {
   JointVector posture = FrankaReadyPose();  // rad
   Eigen::Matrix3d tcp_rotation = DownwardTcpRotation();  // target TCP orientation in the world
 };
@@ -44,6 +38,9 @@ IkResult SolveTcpIk(const FrankaModel& model, mjData& d, const Eigen::Vector3d& 
 /// @throws flowplan::Error "franka IK: target (2.0, 0.0, 0.5) is unreachable (closest 0.61 m away)".
 JointVector SolveTcpIkOrThrow(const FrankaModel& model, mjData& d, const Eigen::Vector3d& target,
                               const JointVector& seed, const IkOptions& options = {});
+
+/// The Franka's joints and TCP site in `model`, for SolveArmIk.
+ArmIkModel FrankaIkModel(const FrankaModel& model);
 
 /// "(0.5, -0.3, 0.2)": a point as written in messages and dataset names.
 std::string FormatPoint(const Eigen::Vector3d& p);
