@@ -91,8 +91,8 @@ Rendered Render(const RenderArgs& args);
 struct ProblemsArgs {
   ConfigArgs config;   // --config and key=value: problems.*, seed, threads, robot
   std::string out;     // --out: the problem file
-  std::string family;  // --family: a procedural scene family of the built-in Franka (empty: blocked problems)
-  std::string robot;   // --robot: a robot folder to draw the blocked problems for (empty: config.robot, or the Franka)
+  std::string family;  // --family: a procedural scene family (empty: blocked problems)
+  std::string robot;   // --robot: a robot folder to draw the problems for (empty: config.robot, or the Franka)
 };
 
 /// `flowplan problems`: random planning problems written to args.out, either

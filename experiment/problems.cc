@@ -1,6 +1,7 @@
-// `flowplan problems`: random Franka planning problems, either with spheres
-// blocking the straight path (problems.*) or from a procedural scene family
-// (--family; problems/scene_families.h). docs/planning.md.
+// `flowplan problems`: random planning problems for the Franka or a robot
+// folder, either with spheres blocking the straight path (problems.*) or from
+// a procedural scene family (--family; problems/scene_families.h).
+// docs/planning.md.
 
 #include <spdlog/spdlog.h>
 
@@ -21,15 +22,18 @@ void MakeProblems(const ProblemsArgs& args) {
   const ExperimentConfig config = args.config.Load();
   const int threads = ConfigureThreads(config);
   const std::string folder = !args.robot.empty() ? args.robot : config.robot;
-  const kinematics::Robot arm = folder.empty() ? kinematics::Robot(sim::LoadFrankaModel().description(), "the Franka")
-                                               : kinematics::Robot(robotfiles::LoadRobot(folder), folder);
   if (!args.family.empty()) {
-    if (!folder.empty()) {
-      throw Error("--family: the scene families are laid out for the built-in Franka; a robot folder's problems are "
-                  "the blocked ones (problems.*) or MoveIt files (`flowplan scenes import`)");
+    const problems::FamilyArm arm = folder.empty() ? problems::FrankaFamilyArm() : problems::FolderFamilyArm(folder);
+    if (arm.scale != 1.0 || arm.shift != 0.0) {
+      const std::string shift = arm.shift == 0.0 ? "" : fmt::format(", and the scenes {:.3f} m farther out for its "
+                                                                    "wider base", arm.shift);
+      spdlog::info("{}: the families' lengths scaled by {:.3f}, the arm's reach over the Franka's{}", folder,
+                   arm.scale, shift);
     }
-    const problems::ProblemSet set = problems::MakeFamilyProblems(
-        arm, args.family, static_cast<uint64_t>(config.seed), config.problems.count, config.problems.clearance, threads);
+    const problems::ProblemSet set = problems::MakeFamilyProblems(arm, args.family,
+                                                                  static_cast<uint64_t>(config.seed),
+                                                                  config.problems.count, config.problems.clearance,
+                                                                  threads);
     EnsureParentFolder(args.out);
     WriteFileAtomically(args.out, problems::ProblemSetYaml(set));
     size_t obstacles = 0;
@@ -37,6 +41,8 @@ void MakeProblems(const ProblemsArgs& args) {
     spdlog::info("wrote {}: {} {} problems, {} obstacles", args.out, set.problems.size(), args.family, obstacles);
     return;
   }
+  const kinematics::Robot arm = folder.empty() ? kinematics::Robot(sim::LoadFrankaModel().description(), "the Franka")
+                                               : kinematics::Robot(robotfiles::LoadRobot(folder), folder);
   problems::ProblemSet set;
   try {
     set = problems::MakeBlockedProblems(arm, config.problems, static_cast<uint64_t>(config.seed));
@@ -57,12 +63,12 @@ void MakeProblems(const ProblemsArgs& args) {
 Command AddProblemsCommand(CLI::App& app) {
   auto args = std::make_shared<ProblemsArgs>();
   CLI::App* command =
-      app.add_subcommand("problems", "draw random problems: spheres blocking the straight path (problems.*), for the "
-                                     "Franka or a robot folder (--robot), or a scene family of the Franka (--family)");
+      app.add_subcommand("problems", "draw random problems for the Franka or a robot folder (--robot): spheres "
+                                     "blocking the straight path (problems.*), or a scene family (--family)");
   args->config.Add(command, false);
   command->add_option("--out", args->out, "YAML file of problems")->required();
   command->add_option("--robot", args->robot,
-                      "a robot folder (`flowplan robot import`; or robot: in the config) to draw the blocked problems for");
+                      "a robot folder (`flowplan robot import`; or robot: in the config) to draw the problems for");
   std::string families;
   for (const auto& name : problems::SceneFamilies()) families += (families.empty() ? "" : ", ") + name;
   command->add_option("--family", args->family,

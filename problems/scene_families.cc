@@ -1,6 +1,7 @@
 #include "problems/scene_families.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <functional>
 
@@ -8,8 +9,10 @@
 #include "core/parallel.h"
 #include "core/random.h"
 #include "geometry/scene_rows.h"
-#include "sim/franka_ik.h"
+#include "robotfiles/robot_folder.h"
+#include "robotfiles/robot_model.h"
 #include "collision/checker.h"
+#include "sim/franka_ik.h"
 #include "sim/mujoco_util.h"
 
 namespace flowplan::problems {
@@ -45,6 +48,7 @@ std::vector<double> Values(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z
 
 /// What a family draws: the scene, and how to draw a start and a goal TCP pose.
 struct Layout {
+  double yaw = 0.0;  // rad: the direction from the arm to the scene
   geometry::Scene scene;
   std::vector<std::string> box_names, cylinder_names;  // in the scene's numbering of each kind
   std::function<void(Rng&, Eigen::Vector3d&, Eigen::Matrix3d&)> start, goal;
@@ -110,6 +114,7 @@ void AddClutter(Layout& l, Rng& rng, const Frame& f, double top, double hx, doub
 Layout Table(Rng& rng) {
   Layout l;
   const Frame f = InFront(rng, rng.Uniform(0.55, 0.65));
+  l.yaw = f.yaw;
   const double top = rng.Uniform(0.0, 0.12), depth = 0.6, width = 1.2;
   AddBox(l, "table", f, 0.0, 0.0, top - 0.02, depth, width, 0.04);
   AddClutter(l, rng, f, top, 0.25, 0.5, 3 + static_cast<int>(rng.Below(5)));
@@ -127,6 +132,7 @@ Layout Shelf(Rng& rng) {
   Layout l;
   const double front = rng.Uniform(0.5, 0.65), depth = rng.Uniform(0.3, 0.4), width = rng.Uniform(0.8, 1.0);
   Frame f = InFront(rng, front + 0.5 * depth);  // origin: the bookcase's centre on the floor
+  l.yaw = f.yaw;
   const int shelves = 2 + static_cast<int>(rng.Below(3));
   const double bottom = rng.Uniform(0.0, 0.15), gap = rng.Uniform(0.27, 0.35), board = 0.02;
   std::vector<double> levels;
@@ -159,6 +165,7 @@ Layout Shelf(Rng& rng) {
 Layout Box(Rng& rng) {
   Layout l;
   const Frame f = InFront(rng, rng.Uniform(0.45, 0.6));
+  l.yaw = f.yaw;
   const double top = rng.Uniform(0.0, 0.1);
   const double lx = rng.Uniform(0.3, 0.42), ly = rng.Uniform(0.3, 0.42), h = rng.Uniform(0.12, 0.22), wall = 0.02;
   AddBox(l, "table", f, 0.0, 0.0, top - 0.02, 0.7, 1.2, 0.04);
@@ -188,6 +195,7 @@ Layout Cage(Rng& rng) {
   Layout l;
   const double size = rng.Uniform(0.35, 0.45), height = rng.Uniform(0.35, 0.5), r = 0.012;
   const Frame f = InFront(rng, rng.Uniform(0.45, 0.55) + 0.5 * size);  // origin: the cage's centre on the floor
+  l.yaw = f.yaw;
   const double base = rng.Uniform(0.0, 0.1), s = 0.5 * size;
   AddBox(l, "table", f, 0.0, 0.0, base - 0.02, size + 0.3, size + 0.6, 0.04);
   const double corners[4][2] = {{-s, -s}, {-s, s}, {s, s}, {s, -s}};
@@ -226,6 +234,7 @@ Layout UnderTable(Rng& rng) {
   Layout l;
   const double depth = rng.Uniform(0.45, 0.6), width = rng.Uniform(0.9, 1.2), top = rng.Uniform(0.35, 0.5);
   const Frame f = InFront(rng, rng.Uniform(0.38, 0.48) + 0.5 * depth);  // origin: under the table's centre
+  l.yaw = f.yaw;
   AddBox(l, "table_top", f, 0.0, 0.0, top - 0.02, depth, width, 0.04);
   for (int k = 0; k < 4; ++k) {
     const double x = (k < 2 ? -1 : 1) * (0.5 * depth - 0.03), y = (k % 2 ? -1 : 1) * (0.5 * width - 0.03);
@@ -262,34 +271,108 @@ uint64_t NameHash(const std::string& name) {
   return h;
 }
 
-/// A collision-free configuration whose TCP is at a pose drawn by `draw`, or false.
-bool FreePose(const kinematics::Robot& arm, const sim::FrankaModel& model, mjData& d, Rng& rng,
+/// Every length of `layout` times `scale`, then the whole layout `shift` m farther from the arm along its direction:
+/// the scene's shapes and the TCP positions it draws.
+void Place(Layout& layout, double scale, double shift) {
+  if (scale == 1.0 && shift == 0.0) return;
+  const Eigen::Vector3d away = shift * Eigen::Vector3d(std::cos(layout.yaw), std::sin(layout.yaw), 0.0);
+  auto place = [&](std::vector<double>& centre) {
+    for (int k = 0; k < 3; ++k) centre[k] = scale * centre[k] + away[k];
+  };
+  for (auto& box : layout.scene.boxes) {
+    place(box.centre);
+    for (double& v : box.size) v *= scale;
+  }
+  for (auto& cylinder : layout.scene.cylinders) {
+    place(cylinder.centre);
+    cylinder.radius *= scale;
+    cylinder.height *= scale;
+  }
+  for (auto* draw : {&layout.start, &layout.goal}) {
+    *draw = [inner = *draw, scale, away](Rng& r, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
+      inner(r, p, rot);
+      p = scale * p + away;
+    };
+  }
+}
+
+/// Each revolute joint of q (J,) turned by whole turns, within the limits, to the value nearest the home posture:
+/// the same posture, on home's side of the joint space. (A joint with limits of ±2π reaches one posture at
+/// two values; between them the link sweeps a whole turn, through the floor for a shoulder.)
+void NearestTurnToHome(const FamilyArm& arm, const std::vector<bool>& revolute, Eigen::VectorXd& q) {
+  const Eigen::VectorXd& reference = arm.home;
+  constexpr double kTurn = 2.0 * M_PI;
+  for (int j = 0; j < q.size(); ++j) {
+    if (!revolute[j]) continue;
+    while (q[j] - kTurn >= arm.ik.lower[j] && std::abs(q[j] - kTurn - reference[j]) < std::abs(q[j] - reference[j])) {
+      q[j] -= kTurn;
+    }
+    while (q[j] + kTurn <= arm.ik.upper[j] && std::abs(q[j] + kTurn - reference[j]) < std::abs(q[j] - reference[j])) {
+      q[j] += kTurn;
+    }
+  }
+}
+
+/// A configuration (J,) whose TCP is at a pose drawn by `draw`, valid by `checker`, on home's side of every whole
+/// turn (NearestTurnToHome), or false.
+bool FreePose(const FamilyArm& arm, const std::vector<bool>& revolute, mjData& d, Rng& rng,
               const std::function<void(Rng&, Eigen::Vector3d&, Eigen::Matrix3d&)>& draw,
-              const geometry::SceneRows& rows, double clearance, sim::JointVector& q) {
-  const sim::FrankaLimits& limits = model.limits();
+              const collision::Checker& checker, Eigen::VectorXd& q) {
+  const int J = static_cast<int>(arm.home.size());
   for (int t = 0; t < kPoseTries; ++t) {
     Eigen::Vector3d p;
-    sim::IkOptions options;
-    draw(rng, p, options.tcp_rotation);
-    // From the ready pose, then from a random posture.
-    sim::JointVector seed = sim::FrankaReadyPose();
+    Eigen::Matrix3d rotation;
+    draw(rng, p, rotation);
+    // From the home posture, then from a random posture.
+    Eigen::VectorXd seed = arm.home;
     if (t % 2 == 1) {
-      for (int j = 0; j < sim::kFrankaJoints; ++j) seed[j] = rng.Uniform(limits.q_lower[j], limits.q_upper[j]);
+      for (int j = 0; j < J; ++j) seed[j] = rng.Uniform(arm.ik.lower[j], arm.ik.upper[j]);
     }
-    const sim::IkResult ik = sim::SolveTcpIk(model, d, p, seed, options);
+    sim::ArmIkResult ik = sim::SolveArmIk(arm.ik, d, p, rotation, seed, arm.home);
     if (!ik.converged) continue;
+    NearestTurnToHome(arm, revolute, ik.q);
     // Clear of the obstacles by `clearance`, and of itself and the floor, as the plan checker demands of every
     // state of a plan.
-    const collision::BodyModel body(arm.description(), "family: robot");
-    collision::Floor floor;
-    floor.present = true;
-    const collision::Checker checker(std::shared_ptr<const collision::BodyModel>(std::shared_ptr<const collision::BodyModel>(), &body),
-                                     std::make_shared<const collision::World>(rows, 3, floor), {clearance, 0.001});
     if (!checker.Valid(ik.q.data())) continue;
     q = ik.q;
     return true;
   }
   return false;
+}
+
+/// How far the links that never turn (the base, a lift's column: no revolute joint between them and the world) reach
+/// horizontally from the world's z axis: their spheres' farthest extent at home.
+double Footprint(const kinematics::RobotDescription& robot) {
+  std::vector<bool> fixed(robot.links.size(), false);
+  for (size_t i = 0; i < robot.links.size(); ++i) {
+    const auto& link = robot.links[i];
+    const bool turns = (link.joint >= 0 || link.offset != 0.0) && link.type == kinematics::JointType::kRevolute;
+    fixed[i] = !turns && (link.parent < 0 || fixed[static_cast<size_t>(link.parent)]);
+  }
+  const collision::BodyModel body(robot, "family: robot");
+  std::vector<collision::Frame> frames(static_cast<size_t>(body.num_links()));
+  std::vector<double> centres(static_cast<size_t>(body.num_spheres()) * 3);
+  body.Place(robot.home.data(), frames.data(), centres.data());
+  double footprint = 0.0;
+  for (int s = 0; s < body.num_spheres(); ++s) {
+    if (!fixed[static_cast<size_t>(body.sphere_link(s))]) continue;
+    footprint = std::max(footprint, std::hypot(centres[3 * s], centres[3 * s + 1]) + body.sphere_radius(s));
+  }
+  return footprint;
+}
+
+/// The largest horizontal distance of the TCP from the world's z axis over a fixed draw of configurations.
+double HorizontalReach(const kinematics::RobotDescription& robot) {
+  const collision::BodyModel body(robot, "family: robot");
+  Rng rng(0x5eac4u);
+  std::vector<double> q(static_cast<size_t>(robot.num_joints)), tcp(static_cast<size_t>(body.workspace_dim()));
+  double reach = 0.0;
+  for (int i = 0; i < 4096; ++i) {
+    for (int j = 0; j < robot.num_joints; ++j) q[j] = rng.Uniform(robot.joint_lower[j], robot.joint_upper[j]);
+    body.Tcp(q.data(), tcp.data());
+    reach = std::max(reach, std::hypot(tcp[0], tcp[1]));
+  }
+  return reach;
 }
 
 }  // namespace
@@ -303,8 +386,62 @@ const std::vector<std::string>& SceneFamilies() {
   return names;
 }
 
-Problem MakeFamilyProblem(const kinematics::Robot& arm, const sim::FrankaModel& model, const std::string& family,
-                          uint64_t seed, int index, double clearance) {
+FamilyArm FrankaFamilyArm() {
+  auto model = std::make_shared<const sim::FrankaModel>(sim::LoadFrankaModel());
+  FamilyArm arm;
+  arm.robot = model->description();
+  arm.ik = sim::FrankaIkModel(*model);
+  arm.model = model;
+  arm.home = sim::FrankaReadyPose();
+  arm.scale = 1.0;
+  return arm;
+}
+
+FamilyArm FolderFamilyArm(const std::string& dir) {
+  const robotfiles::RobotFile file = robotfiles::LoadRobotFile(dir);
+  const std::string where = dir + "/robot.yaml";
+  FamilyArm arm;
+  arm.robot = file.Description(where);
+  const int J = arm.robot.num_joints;
+  if (arm.robot.home.size() != static_cast<size_t>(J)) {
+    throw Error(where + ": the scene families need a home posture (home:) of " + std::to_string(J) +
+                " values to start inverse kinematics from");
+  }
+  arm.scale = FamilyScale(arm.robot);
+  arm.shift = FamilyShift(arm.robot, arm.scale);
+  auto simulation = std::make_shared<const robotfiles::SimulationModel>(
+      robotfiles::LoadSimulationModel(file, robotfiles::DriveSettings{}, where));
+  arm.ik.model = simulation->model.get();
+  arm.ik.qpos = simulation->qpos;
+  arm.ik.dof = simulation->dof;
+  arm.ik.tcp_site = simulation->tcp_site;
+  arm.ik.lower = Eigen::Map<const Eigen::VectorXd>(arm.robot.joint_lower.data(), J);
+  arm.ik.upper = Eigen::Map<const Eigen::VectorXd>(arm.robot.joint_upper.data(), J);
+  arm.model = simulation;
+  arm.home = Eigen::Map<const Eigen::VectorXd>(arm.robot.home.data(), J);
+  return arm;
+}
+
+double FamilyShift(const kinematics::RobotDescription& robot, double scale) {
+  static const double franka = [] {
+    kinematics::RobotDescription d = sim::LoadFrankaModel().description();
+    const sim::JointVector ready = sim::FrankaReadyPose();
+    d.home.assign(ready.data(), ready.data() + sim::kFrankaJoints);
+    return Footprint(d);
+  }();
+  return std::max(0.0, Footprint(robot) - scale * franka);
+}
+
+double FamilyScale(const kinematics::RobotDescription& robot) {
+  if (robot.kind != kinematics::RobotKind::kArm || robot.workspace_dim != 3) {
+    throw Error("scene families: the robot \"" + robot.name + "\" is not an arm in 3-D");
+  }
+  static const double franka = HorizontalReach(sim::LoadFrankaModel().description());
+  return HorizontalReach(robot) / franka;
+}
+
+Problem MakeFamilyProblem(const FamilyArm& arm, const std::string& family, uint64_t seed, int index,
+                          double clearance) {
   FamilyFn make = nullptr;
   std::string known;
   for (const auto& [name, fn] : Registry()) {
@@ -313,40 +450,56 @@ Problem MakeFamilyProblem(const kinematics::Robot& arm, const sim::FrankaModel& 
   }
   if (make == nullptr) throw Error("scene family \"" + family + "\" is not one of " + known);
   Rng rng(StreamSeed(StreamSeed(seed, NameHash(family)), static_cast<uint64_t>(index)));
-  auto d = sim::MakeData(model.mj());
+  const int J = static_cast<int>(arm.home.size());
+  if (arm.robot.num_joints != J || static_cast<int>(arm.ik.qpos.size()) != J) {
+    throw Error("family " + family + ": the arm's description, MuJoCo joints and home posture disagree in length");
+  }
+  std::vector<bool> revolute(static_cast<size_t>(J), true);
+  for (const auto& link : arm.robot.links) {
+    if (link.joint >= 0 && link.type == kinematics::JointType::kPrismatic) revolute[link.joint] = false;
+  }
+  auto d = sim::MakeData(*arm.ik.model);
+  auto body = std::make_shared<const collision::BodyModel>(arm.robot, "family: robot");
+  collision::Floor floor;
+  floor.present = true;
   for (int draw = 0; draw < kDraws; ++draw) {
     Layout layout = make(rng);
+    Place(layout, arm.scale, arm.shift);
     const geometry::SceneRows rows = geometry::Rows(layout.scene, 3, "family " + family);
-    sim::JointVector start, goal;
-    if (!FreePose(arm, model, *d, rng, layout.goal, rows, clearance, goal)) continue;
-    if (!FreePose(arm, model, *d, rng, layout.start, rows, clearance, start)) continue;
+    const collision::Checker checker(body, std::make_shared<const collision::World>(rows, 3, floor),
+                                     {clearance, 0.001});
+    Eigen::VectorXd start, goal;
+    // Both on home's side of every whole turn. (Putting the start on the goal's side instead, so that a start and
+    // goal of nearby postures are near in joint space, made as many UR5 problems harder for RRT-Connect as it made
+    // easier: a joint's short way round can be blocked where its long way is free.)
+    if (!FreePose(arm, revolute, *d, rng, layout.goal, checker, goal)) continue;
+    if (!FreePose(arm, revolute, *d, rng, layout.start, checker, start)) continue;
     Problem p;
     p.name = family + "/" + std::to_string(index);
-    p.start_q.assign(start.data(), start.data() + sim::kFrankaJoints);
-    p.goal_q.assign(goal.data(), goal.data() + sim::kFrankaJoints);
+    p.start_q.assign(start.data(), start.data() + J);
+    p.goal_q.assign(goal.data(), goal.data() + J);
     p.obstacle_names = layout.box_names;  // the scene's numbering: (spheres,) boxes, cylinders
     p.obstacle_names.insert(p.obstacle_names.end(), layout.cylinder_names.begin(), layout.cylinder_names.end());
     p.scene = std::move(layout.scene);
     p.floor_height = 0.0;  // the arm and the scene stand on the floor
-    DescribeEnds(collision::BodyModel(arm.description(), "family: robot"), p);
+    DescribeEnds(*body, p);
     double travel = 0.0;
     for (size_t k = 0; k < p.start_tcp.size(); ++k) travel += std::pow(p.goal_tcp[k] - p.start_tcp[k], 2);
-    if (std::sqrt(travel) < kMinTravel) continue;
+    if (std::sqrt(travel) < kMinTravel * arm.scale) continue;
     return p;
   }
   throw Error("family " + family + ": no valid problem " + std::to_string(index) + " in " + std::to_string(kDraws) +
               " draws (clearance " + config::internal::FormatDouble(clearance) + " m too large?)");
 }
 
-ProblemSet MakeFamilyProblems(const kinematics::Robot& arm, const std::string& family, uint64_t seed, int count,
+ProblemSet MakeFamilyProblems(const FamilyArm& arm, const std::string& family, uint64_t seed, int count,
                               double clearance, int threads) {
-  const sim::FrankaModel model = sim::LoadFrankaModel();
   ProblemSet set;
   set.source = "family " + family;
   set.seed = static_cast<int64_t>(seed);
   set.problems.resize(static_cast<size_t>(count));
   ParallelFor(count, threads, [&](int, int i) {
-    set.problems[static_cast<size_t>(i)] = MakeFamilyProblem(arm, model, family, seed, i, clearance);
+    set.problems[static_cast<size_t>(i)] = MakeFamilyProblem(arm, family, seed, i, clearance);
   });
   return set;
 }

@@ -401,7 +401,7 @@ def make_problems(out, config=None, overrides=(), *, family=None, robot=None):
     """`flowplan problems`: random planning problems written to the problem file `out`, whose problems it returns
     (load_problems). Without family, spheres that block the straight TCP path (problems.* of the config: count,
     spheres, radii, clearance) for the built-in Franka or the robot folder `robot` (or the config's robot:); with
-    family="shelf" (or another of the scene families, docs/planning.md) that family's problems for the Franka.
+    family="shelf" (or another of the scene families, docs/planning.md) that family's problems for the same robot.
     The config's seed makes them; the same seed gives the same file.
 
         problems = flowplan.make_problems("shelf.yaml", family="shelf", overrides=["problems.count=20"])

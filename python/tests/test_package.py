@@ -382,8 +382,18 @@ def test_problem_files_and_scenes_plan_from_python(tmp_path):
     blocked = flowplan.make_problems(tmp_path / "ur5.yaml", overrides=["problems.count=3"],
                                      robot=os.path.join(SOURCE, "robots", "ur5"))
     assert len(blocked) == 3 and all(p.start.shape == (6,) and p.scene["spheres"].shape[0] >= 1 for p in blocked)
-    with pytest.raises(flowplan.Error, match="--family"):
-        flowplan.make_problems(tmp_path / "bad.yaml", family="shelf", robot=os.path.join(SOURCE, "robots", "ur5"))
+    # A family for the robot folder, planned by its RRT-Connect.
+    shelf = flowplan.make_problems(tmp_path / "ur5_shelf.yaml", overrides=["problems.count=2"], family="shelf",
+                                   robot=os.path.join(SOURCE, "robots", "ur5"))
+    ur5 = flowplan.make_planner("rrt_connect", config=os.path.join(SOURCE, "configs", "robot_joint.yaml"),
+                                robot=os.path.join(SOURCE, "robots", "ur5"))
+    for problem in shelf:
+        assert problem.start.shape == (6,) and problem.scene["boxes"].shape[0] >= 5
+        result = ur5.plan(problem.start, problem.goal, 1, **problem.world())
+        assert result.found.all(), result.failure
+        assert ur5.check(result.plans, problem.start, problem.goal, **problem.world())[0].valid
+    with pytest.raises(flowplan.Error, match="kitchen"):
+        flowplan.make_problems(tmp_path / "bad.yaml", family="kitchen", robot=os.path.join(SOURCE, "robots", "ur5"))
     assert not (tmp_path / "bad.yaml").exists()
 
 

@@ -246,5 +246,44 @@ train: {steps: 3, batch_size: 4, eval_every: 0, checkpoint_every: 3}
   EXPECT_FALSE(fs::exists(dir / "massless.h5"));
 }
 
+// `problems --family` for a robot folder: the UR5's cage problems (the hardest family), planned by RRT-Connect and
+// recounted by the script with kinematics of its own composed from the robot the plan file carries.
+TEST(RobotCliTest, ASceneFamilyIsDrawnForARobotFolderAndPlanned) {
+  const fs::path dir = testing::ScratchDir();
+  const std::string robot = std::string(FLOWPLAN_SOURCE_DIR) + "/robots/ur5";
+  const std::string problems = (dir / "cage.yaml").string();
+  const testing::Outcome drawn =
+      Flowplan("problems --robot " + robot + " --family cage problems.count=3 --out " + problems);
+  ASSERT_EQ(drawn.exit_code, 0) << drawn.output;
+  EXPECT_THAT(drawn.output, HasSubstr("the families' lengths scaled by 0.996, the arm's reach over the Franka's"));
+  EXPECT_THAT(drawn.output, HasSubstr("3 cage problems"));
+  const std::string prefix = (dir / "plans").string();
+  const testing::Outcome planned =
+      Flowplan("plan --rrt-connect --robot " + robot + " --config " + FLOWPLAN_SOURCE_DIR +
+               "/configs/robot_joint.yaml --problems " + problems +
+               " -n 1 --no-plot threads=1 rrt_connect.max_iterations=1000000 --out " + prefix);
+  ASSERT_EQ(planned.exit_code, 0) << planned.output;
+  EXPECT_THAT(planned.output, HasSubstr("3/3 problems solved"));
+  const testing::Outcome recount = RunCommand(std::string(FLOWPLAN_PYTHON) + " " + FLOWPLAN_SOURCE_DIR +
+                                              "/scripts/recount_plans.py " + prefix);
+  EXPECT_EQ(recount.exit_code, 0) << recount.output;
+  EXPECT_THAT(recount.output, HasSubstr("TCP 3/3 (flowplan 3), arm 3/3 (flowplan 3)"));
+  // A folder without a home posture cannot seed inverse kinematics: one line naming the file.
+  fs::create_directories(dir / "no_home");
+  std::ifstream in(robot + "/robot.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t home = text.find("\n  home: ");
+  ASSERT_NE(home, std::string::npos);
+  text.erase(home + 1, text.find('\n', home + 1) - home);
+  testing::WriteText(dir / "no_home" / "robot.yaml", text);
+  fs::copy(robot + "/meshes", dir / "no_home" / "meshes");
+  const testing::Outcome refused = Flowplan("problems --robot " + (dir / "no_home").string() +
+                                            " --family table --out " + (dir / "x.yaml").string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_THAT(refused.output, HasSubstr("no_home/robot.yaml: the scene families need a home posture (home:) of 6 "
+                                        "values"));
+  EXPECT_FALSE(fs::exists(dir / "x.yaml"));
+}
+
 }  // namespace
 }  // namespace flowplan

@@ -1,5 +1,7 @@
 // Procedural scene families, checked with MuJoCo (the arm's collision geoms
-// against the scene's shapes, its kinematics for the TCP) and plain geometry.
+// against the scene's shapes, its kinematics for the TCP) and plain geometry:
+// for the built-in Franka, and for the UR5 robot folder (robots/ur5) whose
+// joints turn ±2π.
 
 #include "problems/scene_families.h"
 
@@ -8,9 +10,12 @@
 
 #include <Eigen/Geometry>
 #include <fstream>
+#include <tuple>
 
 #include "core/config.h"
 #include "core/error.h"
+#include "robotfiles/robot_folder.h"
+#include "robotfiles/robot_model.h"
 #include "sim/franka_execution.h"
 #include "sim/franka_model.h"
 #include "sim/franka_self_collision.h"
@@ -20,8 +25,8 @@
 namespace flowplan::problems {
 namespace {
 
-const kinematics::Robot& Franka() {
-  static const kinematics::Robot arm(sim::LoadFrankaModel().description());
+const FamilyArm& Franka() {
+  static const FamilyArm arm = FrankaFamilyArm();
   return arm;
 }
 
@@ -174,6 +179,110 @@ TEST(SceneFamiliesTest, FamiliesDifferAndAnUnknownOneIsNamed) {
   } catch (const Error& e) {
     EXPECT_THAT(e.what(), ::testing::HasSubstr("\"kitchen\" is not one of table, shelf, box, cage, under_table"));
   }
+}
+
+const FamilyArm& Ur5() {
+  static const FamilyArm arm = FolderFamilyArm(std::string(FLOWPLAN_SOURCE_DIR) + "/robots/ur5");
+  return arm;
+}
+
+class FolderFamilyTest : public ::testing::TestWithParam<std::string> {};
+
+// The UR5's problems, checked against the folder's own MuJoCo model (`plan --execute`'s, built from robot.yaml's
+// tree and collision meshes): its TCP site where the problem says, pointing as the family says, its collision
+// geometry clear of every obstacle, every joint on home's side of a whole turn.
+TEST_P(FolderFamilyTest, AFolderRobotsProblemsAreFreeReachedAndOnHomesSide) {
+  const std::string family = GetParam();
+  const FamilyArm& arm = Ur5();
+  const ProblemSet set = MakeFamilyProblems(arm, family, 3, 4, kClearance, 2);
+  const std::string dir = std::string(FLOWPLAN_SOURCE_DIR) + "/robots/ur5";
+  const robotfiles::RobotFile file = robotfiles::LoadRobotFile(dir);
+  const int J = arm.robot.num_joints;
+  ASSERT_EQ(J, 6);
+  for (const Problem& p : set.problems) {
+    SCOPED_TRACE(p.name);
+    ASSERT_EQ(p.obstacle_names.size(), static_cast<size_t>(p.scene.size()));
+    const robotfiles::ExecutionModel model =
+        robotfiles::LoadExecutionModel(file, dir, p.scene, robotfiles::DriveSettings{}, sim::ExecutionConfig{}, "ur5");
+    mjModel& m = *model.model;
+    for (int g = 0; g < m.ngeom; ++g) m.geom_margin[g] = m.geom_gap[g] = 0.0;  // overlaps only
+    auto d = sim::MakeData(m);
+    const int site = model.drives.tcp_site;
+    ASSERT_GE(site, 0);
+    // The start and goal on home's side of every whole turn.
+    for (const auto& [q, tcp, reference] : {std::tuple{&p.start_q, &p.start_tcp, &arm.robot.home},
+                                            std::tuple{&p.goal_q, &p.goal_tcp, &arm.robot.home}}) {
+      ASSERT_EQ(q->size(), static_cast<size_t>(J));
+      for (int j = 0; j < J; ++j) {
+        EXPECT_GE((*q)[j], arm.robot.joint_lower[j]);
+        EXPECT_LE((*q)[j], arm.robot.joint_upper[j]);
+        // No whole turn that stays within the limits brings the joint nearer its reference.
+        for (const double turn : {-2.0 * M_PI, 2.0 * M_PI}) {
+          const double other = (*q)[j] + turn;
+          if (other < arm.robot.joint_lower[j] || other > arm.robot.joint_upper[j]) continue;
+          EXPECT_LE(std::abs((*q)[j] - (*reference)[j]), std::abs(other - (*reference)[j])) << "joint " << j;
+        }
+        d->qpos[model.drives.qpos[j]] = (*q)[j];
+      }
+      mj_forward(&m, d.get());
+      for (int k = 0; k < 3; ++k) EXPECT_NEAR((*tcp)[k], d->site_xpos[3 * site + k], 1e-6);
+      int touching = 0;
+      for (int c = 0; c < d->ncon; ++c) touching += d->contact[c].dist < 0.0 ? 1 : 0;
+      EXPECT_EQ(touching, 0);  // the collision meshes' hulls against the real shapes
+    }
+    // The gripper's approach (the TCP's z axis) at the goal, from MuJoCo's site frame.
+    for (int j = 0; j < J; ++j) d->qpos[model.drives.qpos[j]] = p.goal_q[j];
+    mj_forward(&m, d.get());
+    const Eigen::Vector3d approach(d->site_xmat[9 * site + 2], d->site_xmat[9 * site + 5], d->site_xmat[9 * site + 8]);
+    if (family == "table" || family == "box") {
+      EXPECT_GT(-approach.z(), 0.999);
+    } else {
+      EXPECT_LT(std::abs(approach.z()), 1e-3);
+    }
+    EXPECT_GE(p.start_clearance, kClearance);
+    EXPECT_GE(p.goal_clearance, kClearance);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Families, FolderFamilyTest, ::testing::ValuesIn(SceneFamilies()),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+
+TEST(SceneFamiliesTest, TheScaleAndShiftAreTheArmsReachAndBaseAgainstTheFrankas) {
+  EXPECT_EQ(FamilyScale(Franka().robot), 1.0);
+  // The Franka with every length halved (exact in binary floating point) reaches half as far.
+  kinematics::RobotDescription half = Franka().robot;
+  for (auto& link : half.links) {
+    for (double& v : link.pos) v *= 0.5;
+  }
+  for (double& v : half.tcp_pos) v *= 0.5;
+  for (auto& sphere : half.spheres) {
+    for (double& v : sphere.centre) v *= 0.5;
+    sphere.radius *= 0.5;
+  }
+  EXPECT_EQ(FamilyScale(half), 0.5);
+  EXPECT_GT(Ur5().scale, 0.9);
+  EXPECT_LT(Ur5().scale, 1.1);
+  // The shift: how much wider the links that never turn are than the Franka's base (link0, fixed at the origin),
+  // scaled. A base sphere of 0.5 m at the origin makes the Franka's base that wide.
+  EXPECT_EQ(FamilyShift(Franka().robot, 1.0), 0.0);
+  const kinematics::RobotDescription& franka = Franka().robot;
+  double link0 = 0.0;
+  for (const auto& sphere : franka.spheres) {
+    if (sphere.link != 0) continue;
+    link0 = std::max(link0, std::hypot(sphere.centre[0], sphere.centre[1]) + sphere.radius);
+  }
+  ASSERT_EQ(franka.links[0].parent, -1);
+  ASSERT_EQ(franka.links[0].pos, (std::array<double, 3>{0.0, 0.0, 0.0}));
+  ASSERT_GT(link0, 0.05);
+  kinematics::RobotDescription wide = franka;
+  wide.spheres.push_back({0, {0.0, 0.0, 0.1}, 0.5, "pedestal"});
+  EXPECT_NEAR(FamilyShift(wide, 1.0), 0.5 - link0, 1e-12);
+  EXPECT_NEAR(FamilyShift(wide, 2.0), 0.5 - 2.0 * link0, 1e-12);
+  EXPECT_EQ(FamilyShift(wide, 10.0), 0.0);
+  kinematics::RobotDescription point;
+  point.kind = kinematics::RobotKind::kPoint;
+  point.name = "ball";
+  EXPECT_THROW(FamilyScale(point), Error);
 }
 
 }  // namespace
