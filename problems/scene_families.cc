@@ -271,27 +271,35 @@ uint64_t NameHash(const std::string& name) {
   return h;
 }
 
-/// Every length of `layout` times `scale`, then the whole layout `shift` m farther from the arm along its direction:
-/// the scene's shapes and the TCP positions it draws.
-void Place(Layout& layout, double scale, double shift) {
-  if (scale == 1.0 && shift == 0.0) return;
+/// Every length of `layout` times `scale`, then the whole layout `shift` m farther from the arm along its direction,
+/// then turned by `facing` rad about the world's z axis: the scene's shapes and the TCP poses it draws.
+void Place(Layout& layout, double scale, double shift, double facing) {
+  if (scale == 1.0 && shift == 0.0 && facing == 0.0) return;
   const Eigen::Vector3d away = shift * Eigen::Vector3d(std::cos(layout.yaw), std::sin(layout.yaw), 0.0);
-  auto place = [&](std::vector<double>& centre) {
-    for (int k = 0; k < 3; ++k) centre[k] = scale * centre[k] + away[k];
+  const Eigen::Quaterniond turn(Eigen::AngleAxisd(facing, Eigen::Vector3d::UnitZ()));
+  auto place = [&](std::vector<double>& centre, std::vector<double>& quaternion) {
+    const Eigen::Vector3d c = turn * (scale * Eigen::Vector3d(centre[0], centre[1], centre[2]) + away);
+    centre = {c.x(), c.y(), c.z()};
+    const Eigen::Quaterniond q = quaternion.empty()
+                                     ? turn
+                                     : turn * Eigen::Quaterniond(quaternion[0], quaternion[1], quaternion[2],
+                                                                 quaternion[3]);
+    quaternion = {q.w(), q.x(), q.y(), q.z()};
   };
   for (auto& box : layout.scene.boxes) {
-    place(box.centre);
+    place(box.centre, box.quaternion);
     for (double& v : box.size) v *= scale;
   }
   for (auto& cylinder : layout.scene.cylinders) {
-    place(cylinder.centre);
+    place(cylinder.centre, cylinder.quaternion);
     cylinder.radius *= scale;
     cylinder.height *= scale;
   }
   for (auto* draw : {&layout.start, &layout.goal}) {
-    *draw = [inner = *draw, scale, away](Rng& r, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
+    *draw = [inner = *draw, scale, away, turn](Rng& r, Eigen::Vector3d& p, Eigen::Matrix3d& rot) {
       inner(r, p, rot);
-      p = scale * p + away;
+      p = turn * (scale * p + away);
+      rot = turn.toRotationMatrix() * rot;
     };
   }
 }
@@ -409,6 +417,7 @@ FamilyArm FolderFamilyArm(const std::string& dir) {
   }
   arm.scale = FamilyScale(arm.robot);
   arm.shift = FamilyShift(arm.robot, arm.scale);
+  arm.facing = FamilyFacing(arm.robot);
   auto simulation = std::make_shared<const robotfiles::SimulationModel>(
       robotfiles::LoadSimulationModel(file, robotfiles::DriveSettings{}, where));
   arm.ik.model = simulation->model.get();
@@ -420,6 +429,13 @@ FamilyArm FolderFamilyArm(const std::string& dir) {
   arm.model = simulation;
   arm.home = Eigen::Map<const Eigen::VectorXd>(arm.robot.home.data(), J);
   return arm;
+}
+
+double FamilyFacing(const kinematics::RobotDescription& robot) {
+  const collision::BodyModel body(robot, "family: robot");
+  double tcp[3];
+  body.Tcp(robot.home.data(), tcp);
+  return std::hypot(tcp[0], tcp[1]) < 0.01 ? 0.0 : std::atan2(tcp[1], tcp[0]);
 }
 
 double FamilyShift(const kinematics::RobotDescription& robot, double scale) {
@@ -464,7 +480,7 @@ Problem MakeFamilyProblem(const FamilyArm& arm, const std::string& family, uint6
   floor.present = true;
   for (int draw = 0; draw < kDraws; ++draw) {
     Layout layout = make(rng);
-    Place(layout, arm.scale, arm.shift);
+    Place(layout, arm.scale, arm.shift, arm.facing);
     const geometry::SceneRows rows = geometry::Rows(layout.scene, 3, "family " + family);
     const collision::Checker checker(body, std::make_shared<const collision::World>(rows, 3, floor),
                                      {clearance, 0.001});

@@ -17,8 +17,9 @@
 //   under_table  a table top at 0.35-0.5 m on four legs; the goal under it,
 //                gripper horizontal; the start above it, gripper down
 //
-// Every scene stands on the floor (z = 0) in front of the arm, turned by up to
-// ±0.6 rad about the world's z axis through the origin. The dimensions above
+// Every scene stands on the floor (z = 0) in front of the arm (the direction
+// its TCP lies in at home), turned by up to ±0.6 rad about the world's z axis
+// through the origin. The dimensions above
 // are the Franka's; for another arm every length of the scene and of the TCP
 // poses drawn in it is multiplied by FamilyScale (the arm's reach over the
 // Franka's), and the scene stands farther out by as much as the arm's base
@@ -55,6 +56,7 @@ struct FamilyArm {
   Eigen::VectorXd home;                // (J,) the first IK seed, and the posture IK keeps to
   double scale = 1.0;                  // FamilyScale(robot)
   double shift = 0.0;                  // m, FamilyShift(robot, scale)
+  double facing = 0.0;                 // rad, FamilyFacing(robot)
 };
 
 /// The built-in Franka (its MJCF for IK); scale 1.
@@ -75,6 +77,11 @@ double FamilyScale(const kinematics::RobotDescription& robot);
 /// links that never turn (the base; a lift's column) reach farther from the world's z axis than the Franka's base
 /// scaled by `scale` does (their spheres at home), or 0. 0 for the Franka.
 double FamilyShift(const kinematics::RobotDescription& robot, double scale);
+
+/// The direction (rad about the world's z axis) the arm faces: its TCP's azimuth at home (0 if the TCP is within
+/// 1 cm of the z axis there). Scenes stand in that direction. The Franka's family arm faces 0 by definition (its
+/// ready pose's TCP is on the x axis).
+double FamilyFacing(const kinematics::RobotDescription& robot);
 
 /// Problem `index` of `family`: its scene, start and goal.
 /// @throws flowplan::Error for an unknown family, or if no valid problem is

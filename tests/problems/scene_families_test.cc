@@ -1,7 +1,7 @@
 // Procedural scene families, checked with MuJoCo (the arm's collision geoms
 // against the scene's shapes, its kinematics for the TCP) and plain geometry:
 // for the built-in Franka, and for the UR5 robot folder (robots/ur5) whose
-// joints turn ±2π.
+// joints turn ±2π, and the arm on a lift (robots/fetch_arm).
 
 #include "problems/scene_families.h"
 
@@ -181,24 +181,33 @@ TEST(SceneFamiliesTest, FamiliesDifferAndAnUnknownOneIsNamed) {
   }
 }
 
+std::string Folder(const std::string& robot) { return std::string(FLOWPLAN_SOURCE_DIR) + "/robots/" + robot; }
+
 const FamilyArm& Ur5() {
-  static const FamilyArm arm = FolderFamilyArm(std::string(FLOWPLAN_SOURCE_DIR) + "/robots/ur5");
+  static const FamilyArm arm = FolderFamilyArm(Folder("ur5"));
   return arm;
 }
 
-class FolderFamilyTest : public ::testing::TestWithParam<std::string> {};
+const FamilyArm& FetchArm() {
+  static const FamilyArm arm = FolderFamilyArm(Folder("fetch_arm"));
+  return arm;
+}
 
-// The UR5's problems, checked against the folder's own MuJoCo model (`plan --execute`'s, built from robot.yaml's
+// (robot folder, family)
+class FolderFamilyTest : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
+
+// The shipped folders' problems (the UR5: six joints turning ±2π; the arm on a lift: eight joints, one of them
+// prismatic), checked against the folder's own MuJoCo model (`plan --execute`'s, built from robot.yaml's
 // tree and collision meshes): its TCP site where the problem says, pointing as the family says, its collision
 // geometry clear of every obstacle, every joint on home's side of a whole turn.
 TEST_P(FolderFamilyTest, AFolderRobotsProblemsAreFreeReachedAndOnHomesSide) {
-  const std::string family = GetParam();
-  const FamilyArm& arm = Ur5();
+  const auto& [robot, family] = GetParam();
+  const FamilyArm& arm = robot == "ur5" ? Ur5() : FetchArm();
   const ProblemSet set = MakeFamilyProblems(arm, family, 3, 4, kClearance, 2);
-  const std::string dir = std::string(FLOWPLAN_SOURCE_DIR) + "/robots/ur5";
+  const std::string dir = Folder(robot);
   const robotfiles::RobotFile file = robotfiles::LoadRobotFile(dir);
   const int J = arm.robot.num_joints;
-  ASSERT_EQ(J, 6);
+  ASSERT_EQ(J, robot == "ur5" ? 6 : 8);
   for (const Problem& p : set.problems) {
     SCOPED_TRACE(p.name);
     ASSERT_EQ(p.obstacle_names.size(), static_cast<size_t>(p.scene.size()));
@@ -244,10 +253,11 @@ TEST_P(FolderFamilyTest, AFolderRobotsProblemsAreFreeReachedAndOnHomesSide) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Families, FolderFamilyTest, ::testing::ValuesIn(SceneFamilies()),
-                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+INSTANTIATE_TEST_SUITE_P(Families, FolderFamilyTest,
+                         ::testing::Combine(::testing::Values("ur5", "fetch_arm"), ::testing::ValuesIn(SceneFamilies())),
+                         [](const auto& info) { return std::get<0>(info.param) + "_" + std::get<1>(info.param); });
 
-TEST(SceneFamiliesTest, TheScaleAndShiftAreTheArmsReachAndBaseAgainstTheFrankas) {
+TEST(SceneFamiliesTest, TheScaleShiftAndFacingAreTheArmsReachBaseAndHomeAgainstTheFrankas) {
   EXPECT_EQ(FamilyScale(Franka().robot), 1.0);
   // The Franka with every length halved (exact in binary floating point) reaches half as far.
   kinematics::RobotDescription half = Franka().robot;
@@ -279,6 +289,15 @@ TEST(SceneFamiliesTest, TheScaleAndShiftAreTheArmsReachAndBaseAgainstTheFrankas)
   EXPECT_NEAR(FamilyShift(wide, 1.0), 0.5 - link0, 1e-12);
   EXPECT_NEAR(FamilyShift(wide, 2.0), 0.5 - 2.0 * link0, 1e-12);
   EXPECT_EQ(FamilyShift(wide, 10.0), 0.0);
+  // The arm on a lift stands on a base cylinder of 0.28 m radius, which its spheres cover; the UR5's base is narrow.
+  EXPECT_GE(FetchArm().shift + FetchArm().scale * link0, 0.28);
+  EXPECT_LT(FetchArm().shift + FetchArm().scale * link0, 0.28 + 0.05);
+  EXPECT_EQ(Ur5().shift, 0.0);
+  // The facing: the TCP's azimuth at home. The UR5's TCP at zero is at (-0.81725, -0.19145) (its DH parameters,
+  // robots/ur5/README.md); the Franka's ready pose has its TCP on the x axis.
+  EXPECT_NEAR(Ur5().facing, std::atan2(-0.19145, -0.81725), 1e-9);
+  EXPECT_NEAR(FamilyFacing(Franka().robot), 0.0, 1e-9);
+  EXPECT_EQ(Franka().facing, 0.0);
   kinematics::RobotDescription point;
   point.kind = kinematics::RobotKind::kPoint;
   point.name = "ball";
