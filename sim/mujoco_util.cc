@@ -118,7 +118,9 @@ void InstallExactConvexOverlaps() {
     for (int a = 0; a < mjNGEOMTYPES; ++a) {
       for (int b = 0; b < mjNGEOMTYPES; ++b) {
         original_colliders[a][b] = mjCOLLISIONFUNC[a][b];
-        if (mjCOLLISIONFUNC[a][b] != nullptr && Solid(a) && Solid(b) && (GeneralConvex(a) || GeneralConvex(b))) {
+        const bool box_box = a == mjGEOM_BOX && b == mjGEOM_BOX;
+        if (mjCOLLISIONFUNC[a][b] != nullptr && Solid(a) && Solid(b) &&
+            (GeneralConvex(a) || GeneralConvex(b) || box_box)) {
           mjCOLLISIONFUNC[a][b] = &ExactOverlapCollider;
         }
       }
