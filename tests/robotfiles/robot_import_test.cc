@@ -9,6 +9,8 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
 #include <mujoco/mujoco.h>
 
 #include <cmath>
@@ -453,6 +455,47 @@ TEST(ShippedRobotTest, Ur5FollowsThePublishedDenavitHartenbergParameters) {
   EXPECT_THAT(d.velocity_limit, ::testing::Each(::testing::DoubleEq(M_PI)));
   EXPECT_EQ(LoadRobotFile(std::string(FLOWPLAN_SOURCE_DIR) + "/robots/ur5").effort_limit,
             (std::vector<double>{150, 150, 150, 28, 28, 28}));
+}
+
+TEST(ShippedRobotTest, FetchArmFollowsThePublishedJointOffsets) {
+  // robots/fetch_arm against the product written here of the published joint origins (all with identity
+  // rotations) and axes: T = prod Trans(origin_i) Motion(axis_i, q_i), the lift a slide along z.
+  const std::string dir = std::string(FLOWPLAN_SOURCE_DIR) + "/robots/fetch_arm";
+  const kinematics::RobotDescription d = LoadRobot(dir);
+  ASSERT_EQ(d.num_joints, 8);
+  const double origin[9][3] = {{-0.086875, 0, 0.37743}, {0.119525, 0, 0.34858}, {0.117, 0, 0.06}, {0.219, 0, 0},
+                               {0.133, 0, 0},          {0.197, 0, 0},          {0.1245, 0, 0},   {0.1385, 0, 0},
+                               {0.16645, 0, 0}};  // the last: the gripper (the TCP) past the wrist roll
+  const char axis[8] = {'s', 'z', 'y', 'x', 'y', 'x', 'y', 'x'};  // s: the slide along z
+  const kinematics::Robot robot(d);
+  torch::manual_seed(12);
+  const torch::Tensor lower = torch::tensor(d.joint_lower, torch::kFloat64);
+  const torch::Tensor upper = torch::tensor(d.joint_upper, torch::kFloat64);
+  const torch::Tensor q = lower + torch::rand({20, 8}, torch::kFloat64) * (upper - lower);
+  const torch::Tensor tcp = robot.Tcp(q);
+  for (int64_t b = 0; b < 20; ++b) {
+    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 8; ++i) {
+      p += R * Eigen::Vector3d(origin[i][0], origin[i][1], origin[i][2]);
+      const double v = q[b][i].item<double>();
+      if (axis[i] == 's') {
+        p += R * Eigen::Vector3d(0, 0, v);
+      } else {
+        const Eigen::Vector3d a = axis[i] == 'x' ? Eigen::Vector3d::UnitX()
+                                  : axis[i] == 'y' ? Eigen::Vector3d::UnitY()
+                                                   : Eigen::Vector3d::UnitZ();
+        R = R * Eigen::AngleAxisd(v, a).toRotationMatrix();
+      }
+    }
+    p += R * Eigen::Vector3d(origin[8][0], origin[8][1], origin[8][2]);
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(tcp[b][i].item<double>(), p[i], 1e-12) << "b " << b;
+  }
+  // The published limits (the continuous joints planned within ±π), speeds and efforts.
+  EXPECT_EQ(d.joint_lower, (std::vector<double>{0, -1.6056, -1.221, -M_PI, -2.251, -M_PI, -2.16, -M_PI}));
+  EXPECT_EQ(d.joint_upper, (std::vector<double>{0.38615, 1.6056, 1.518, M_PI, 2.251, M_PI, 2.16, M_PI}));
+  EXPECT_EQ(d.velocity_limit, (std::vector<double>{0.1, 1.256, 1.454, 1.571, 1.521, 1.571, 2.268, 2.268}));
+  EXPECT_EQ(LoadRobotFile(dir).effort_limit, (std::vector<double>{450, 33.82, 131.76, 76.94, 66.18, 29.35, 25.7, 7.36}));
 }
 
 /// The lift arm as an MJCF: a slide, hinges through their bodies' origins, a capsule, a box, a mesh, a motor per
