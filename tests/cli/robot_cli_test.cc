@@ -285,5 +285,67 @@ TEST(RobotCliTest, ASceneFamilyIsDrawnForARobotFolderAndPlanned) {
   EXPECT_FALSE(fs::exists(dir / "x.yaml"));
 }
 
+// Every consumer of a robot, on tiny budgets, for each shipped folder: data generation, training, export, a scene
+// family's problem planned by the exported planner, RRT-Connect and the hybrid, executed in MuJoCo and drawn.
+class ShippedRobotCliTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ShippedRobotCliTest, EveryConsumerRunsOnATinyBudget) {
+  const fs::path dir = testing::ScratchDir();
+  const std::string robot = std::string(FLOWPLAN_SOURCE_DIR) + "/robots/" + GetParam();
+  const std::string config = (dir / "tiny.yaml").string();
+  testing::WriteText(config, "robot: " + robot + R"(
+seed: 3
+threads: 1
+run_dir: )" + (dir / "run").string() + R"(
+generate:
+  dataset: robot_joint
+  episodes: 12
+  out: )" + (dir / "data.h5").string() + R"(
+  robot_joint:
+    horizon: 32
+    record_every: 4
+    joint_motion: {min_duration: 1.0, min_hold: 0.2}
+data:
+  path: )" + (dir / "data.h5").string() + R"(
+  val_fraction: 0.2
+model:
+  name: unet1d
+  unet: {down_dims: [8, 16]}
+train: {steps: 3, batch_size: 4, eval_every: 0, checkpoint_every: 3}
+)");
+  const testing::Outcome generated = Flowplan("generate --config " + config + " --log-level warn");
+  ASSERT_EQ(generated.exit_code, 0) << generated.output;
+  const testing::Outcome trained = Flowplan("train --config " + config + " --log-level warn");
+  ASSERT_EQ(trained.exit_code, 0) << trained.output;
+  const std::string planner = (dir / "planner.pt").string();
+  const testing::Outcome exported =
+      Flowplan("export --ckpt " + (dir / "run").string() + " --out " + planner + " --log-level warn");
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  const std::string problems = (dir / "table.yaml").string();
+  const testing::Outcome drawn = Flowplan("problems --robot " + robot + " --family table problems.count=1 --out " + problems);
+  ASSERT_EQ(drawn.exit_code, 0) << drawn.output;
+  // The exported planner (3 training steps: its plans may fail, but it plans), RRT-Connect and the hybrid, with the
+  // plans executed in MuJoCo.
+  const testing::Outcome learned = Flowplan("plan --planner " + planner + " --problems " + problems +
+                                            " -n 1 --no-plot --out " + (dir / "learned").string());
+  ASSERT_EQ(learned.exit_code, 0) << learned.output;
+  EXPECT_THAT(learned.output, HasSubstr("1 problems (0 refused), 1 plans each"));
+  for (const std::string kind : {"rrt_connect", "hybrid"}) {
+    const std::string ckpt = kind == "hybrid" ? " --ckpt " + (dir / "run").string() : " --config " + config;
+    const testing::Outcome planned = Flowplan("plan --planner-kind " + kind + ckpt + " --problems " + problems +
+                                              " -n 1 --no-plot --execute --out " + (dir / kind).string());
+    ASSERT_EQ(planned.exit_code, 0) << planned.output;
+    EXPECT_THAT(planned.output, HasSubstr("success 1/1 plans, executed 1/1")) << kind;
+  }
+  const testing::Outcome rendered = Flowplan("render " + (dir / "hybrid.h5").string() + " --problem table_0 --robot " + robot +
+                                             " --out " + (dir / "video").string() + " render.width=160 render.height=120");
+  ASSERT_EQ(rendered.exit_code, 0) << rendered.output;
+  EXPECT_THAT(rendered.output, HasSubstr("the plan executed in MuJoCo: "));
+  EXPECT_GT(fs::file_size(dir / "video.gif"), 1000u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Robots, ShippedRobotCliTest, ::testing::Values("ur5", "fetch_arm"),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+
 }  // namespace
 }  // namespace flowplan
