@@ -310,12 +310,14 @@ void Place(Layout& layout, double scale, double shift, double facing) {
 void NearestTurnToHome(const FamilyArm& arm, const std::vector<bool>& revolute, Eigen::VectorXd& q) {
   const Eigen::VectorXd& reference = arm.home;
   constexpr double kTurn = 2.0 * M_PI;
+  const double margin = sim::IkSettings{}.limit_margin;  // as far from the limits as IK keeps
   for (int j = 0; j < q.size(); ++j) {
     if (!revolute[j]) continue;
-    while (q[j] - kTurn >= arm.ik.lower[j] && std::abs(q[j] - kTurn - reference[j]) < std::abs(q[j] - reference[j])) {
+    const double lower = arm.ik.lower[j] + margin, upper = arm.ik.upper[j] - margin;
+    while (q[j] - kTurn >= lower && std::abs(q[j] - kTurn - reference[j]) < std::abs(q[j] - reference[j])) {
       q[j] -= kTurn;
     }
-    while (q[j] + kTurn <= arm.ik.upper[j] && std::abs(q[j] + kTurn - reference[j]) < std::abs(q[j] - reference[j])) {
+    while (q[j] + kTurn <= upper && std::abs(q[j] + kTurn - reference[j]) < std::abs(q[j] - reference[j])) {
       q[j] += kTurn;
     }
   }
@@ -348,13 +350,17 @@ bool FreePose(const FamilyArm& arm, const std::vector<bool>& revolute, mjData& d
   return false;
 }
 
-/// How far the links that never turn (the base, a lift's column: no revolute joint between them and the world) reach
-/// horizontally from the world's z axis: their spheres' farthest extent at home.
+/// How far the links that never turn (the base, a lift's column: no planned revolute joint between them and the
+/// world) reach horizontally from the world's z axis: their spheres' farthest extent at home (a planned slide that
+/// moves them sideways is measured where home puts it).
 double Footprint(const kinematics::RobotDescription& robot) {
+  if (robot.home.size() != static_cast<size_t>(robot.num_joints)) {
+    throw Error("scene families: the robot \"" + robot.name + "\" has no home posture");
+  }
   std::vector<bool> fixed(robot.links.size(), false);
   for (size_t i = 0; i < robot.links.size(); ++i) {
     const auto& link = robot.links[i];
-    const bool turns = (link.joint >= 0 || link.offset != 0.0) && link.type == kinematics::JointType::kRevolute;
+    const bool turns = link.joint >= 0 && link.type == kinematics::JointType::kRevolute;  // held joints do not
     fixed[i] = !turns && (link.parent < 0 || fixed[static_cast<size_t>(link.parent)]);
   }
   const collision::BodyModel body(robot, "family: robot");
@@ -411,6 +417,9 @@ FamilyArm FolderFamilyArm(const std::string& dir) {
   FamilyArm arm;
   arm.robot = file.Description(where);
   const int J = arm.robot.num_joints;
+  if (arm.robot.kind != kinematics::RobotKind::kArm || arm.robot.workspace_dim != 3) {
+    throw Error(where + ": the scene families need an arm in 3-D");
+  }
   if (arm.robot.home.size() != static_cast<size_t>(J)) {
     throw Error(where + ": the scene families need a home posture (home:) of " + std::to_string(J) +
                 " values to start inverse kinematics from");
@@ -432,6 +441,9 @@ FamilyArm FolderFamilyArm(const std::string& dir) {
 }
 
 double FamilyFacing(const kinematics::RobotDescription& robot) {
+  if (robot.home.size() != static_cast<size_t>(robot.num_joints)) {
+    throw Error("scene families: the robot \"" + robot.name + "\" has no home posture");
+  }
   const collision::BodyModel body(robot, "family: robot");
   double tcp[3];
   body.Tcp(robot.home.data(), tcp);
@@ -467,7 +479,7 @@ Problem MakeFamilyProblem(const FamilyArm& arm, const std::string& family, uint6
   if (make == nullptr) throw Error("scene family \"" + family + "\" is not one of " + known);
   Rng rng(StreamSeed(StreamSeed(seed, NameHash(family)), static_cast<uint64_t>(index)));
   const int J = static_cast<int>(arm.home.size());
-  if (arm.robot.num_joints != J || static_cast<int>(arm.ik.qpos.size()) != J) {
+  if (arm.ik.model == nullptr || arm.robot.num_joints != J || static_cast<int>(arm.ik.qpos.size()) != J) {
     throw Error("family " + family + ": the arm's description, MuJoCo joints and home posture disagree in length");
   }
   std::vector<bool> revolute(static_cast<size_t>(J), true);

@@ -30,8 +30,8 @@ struct IkSettings {
   double position_tolerance = 1e-5;     // m
   double orientation_tolerance = 1e-4;  // rad
   double damping = 0.05;                // damped-least-squares λ (m, rad)
-  double max_step = 0.2;                // rad, largest joint change per iteration
-  double limit_margin = 0.01;           // rad kept from every joint limit
+  double max_step = 0.2;                // rad (m for a slide), largest joint change per iteration
+  double limit_margin = 0.01;           // rad (m for a slide) kept from every joint limit
   double posture_gain = 0.1;            // pull towards the posture in the task's null space
 };
 

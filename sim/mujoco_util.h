@@ -55,8 +55,8 @@ void InstallMujocoHandlers();
 /// does likewise (13 cm deep for a gripper box 13 cm above a shelf board, margin
 /// 0.5 m). Once installed, such a pair's overlap is confirmed with the margin set
 /// to 0; an overlap that is not confirmed is reported at distance 0 (near, not
-/// touching). Other pairs (spheres and capsules with anything, boxes with
-/// spheres and capsules) keep MuJoCo's own colliders.
+/// touching). Other pairs (spheres, capsules and boxes with one another, but
+/// not box with box) keep MuJoCo's own colliders.
 /// Applies to every model of the process; calling it again is harmless.
 void InstallExactConvexOverlaps();
 
