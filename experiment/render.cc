@@ -69,6 +69,19 @@ Rendered Render(const RenderArgs& args) {
   std::vector<Eigen::Vector3d> path;
   for (int64_t t = 0; t < T; ++t) path.emplace_back(tcp[t][0].item<double>(), tcp[t][1].item<double>(), tcp[t][2].item<double>());
   auto joints = [J](const double* state) { return std::vector<double>(state, state + J); };
+  // The camera: framing the scene, the arm at the plan's first and last states and its TCP path, unless render.frame
+  // is off.
+  render::RenderConfig camera = config.render;
+  if (camera.frame) {
+    std::vector<Eigen::Vector3d> shown = path;
+    for (const int64_t t : {int64_t{0}, T - 1}) {
+      const torch::Tensor centres = kinematics.SphereCentres(q[t]);
+      for (int64_t s = 0; s < centres.size(0); ++s) {
+        shown.emplace_back(centres[s][0].item<double>(), centres[s][1].item<double>(), centres[s][2].item<double>());
+      }
+    }
+    camera = render::Framed(camera, scene, shown);
+  }
 
   // The built-in Franka's plans, and with its folder a robot's, are executed in MuJoCo and the execution drawn; the
   // Franka among its MJCF's shapes, a folder's robot by its collision spheres. Without its folder, a robot other than
@@ -85,14 +98,14 @@ Rendered Render(const RenderArgs& args) {
     const sim::FrankaModel world = sim::MakeFrankaScene(scene, 1.0 / config.execute.control_hz);
     sim::FrankaExecutor executor(world, static_cast<int>(scene.size()), config.execute);
     executed = executor.Execute(plan, T, dt, target);
-    renderer = std::make_unique<render::ArmRenderer>(scene, config.render);
+    renderer = std::make_unique<render::ArmRenderer>(scene, camera);
   } else {
     if (execute) {
       const robotfiles::ExecutionModel world = FolderExecution(args.robot, robot, scene, {}, config);
       sim::ArmExecutor executor(*world.model, world.drives, static_cast<int>(scene.size()), config.execute);
       executed = executor.Execute(plan, T, dt, target);
     }
-    renderer = std::make_unique<render::ArmRenderer>(robot, scene, config.render);
+    renderer = std::make_unique<render::ArmRenderer>(robot, scene, camera);
   }
   // One frame a state: the executed states (T_exec, 2J) and their TCPs, or the plan's (T, D) and the planned path.
   std::vector<render::Image> frames;

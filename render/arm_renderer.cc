@@ -5,6 +5,7 @@
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
+#include <Eigen/Geometry>
 #include <cmath>
 
 #include "core/error.h"
@@ -217,6 +218,45 @@ Image ArmRenderer::Render(const std::vector<double>& q, const std::vector<Eigen:
   camera_.frustum_top = c.frustum_top;
   camera_.frustum_near = c.frustum_near;
   return image;
+}
+
+RenderConfig Framed(RenderConfig config, const geometry::Scene& scene, const std::vector<Eigen::Vector3d>& points) {
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(INFINITY), high = Eigen::Vector3d::Constant(-INFINITY);
+  auto add = [&](const Eigen::Vector3d& centre, double reach) {
+    low = low.cwiseMin((centre.array() - reach).matrix());
+    high = high.cwiseMax((centre.array() + reach).matrix());
+  };
+  auto at = [](const std::vector<double>& v) { return Eigen::Vector3d(v[0], v[1], v[2]); };
+  auto turn = [](const std::vector<double>& q) {
+    return q.empty() ? Eigen::Quaterniond::Identity() : Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized();
+  };
+  for (const auto& s : scene.spheres) add(at(s.centre), s.radius);
+  for (const auto& b : scene.boxes) {  // its eight corners
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3d corner(((k & 1) ? 0.5 : -0.5) * b.size[0], ((k & 2) ? 0.5 : -0.5) * b.size[1],
+                                   ((k & 4) ? 0.5 : -0.5) * b.size[2]);
+      add(at(b.centre) + turn(b.quaternion) * corner, 0.0);
+    }
+  }
+  for (const auto& c : scene.cylinders) {  // the ends of its axis, and its radius around them
+    const Eigen::Vector3d axis = turn(c.quaternion) * Eigen::Vector3d(0.0, 0.0, 0.5 * c.height);
+    add(at(c.centre) + axis, c.radius);
+    add(at(c.centre) - axis, c.radius);
+  }
+  for (const auto& c : scene.capsules) {
+    add(at(c.a), c.radius);
+    add(at(c.b), c.radius);
+  }
+  for (const Eigen::Vector3d& p : points) add(p, 0.0);
+  if (!(low.array() <= high.array()).all()) return config;  // nothing to frame
+  const Eigen::Vector3d middle = 0.5 * (low + high);
+  const double radius = std::max(0.5 * (high - low).norm(), 0.1);
+  constexpr double kHalfFieldOfView = 22.5 * M_PI / 180.0;  // MuJoCo's default vertical field of view, halved
+  config.lookat = {middle.x(), middle.y(), middle.z()};
+  config.distance = radius / std::sin(kHalfFieldOfView);  // the sphere around the box just fits
+  const double towards = std::hypot(middle.x(), middle.y()) < 1e-6 ? 0.0 : std::atan2(middle.y(), middle.x());
+  config.azimuth = towards * 180.0 / M_PI + 60.0;
+  return config;
 }
 
 }  // namespace flowplan::render

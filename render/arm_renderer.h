@@ -31,6 +31,7 @@ struct RenderConfig {
   double distance = 2.0;                              // m from it
   double azimuth = 145.0;                             // deg, about the world z axis
   double elevation = -25.0;                           // deg, negative: from above
+  bool frame = true;  // `flowplan render`: lookat, distance and azimuth chosen by Framed (false: as given)
 
   template <class V>
   void Visit(V& v) {
@@ -40,8 +41,16 @@ struct RenderConfig {
     v.Field("distance", distance, "camera distance from lookat (m)", config::Positive());
     v.Field("azimuth", azimuth, "camera azimuth about the world z axis (deg)");
     v.Field("elevation", elevation, "camera elevation (deg; negative looks down)", config::InRange(-90.0, 90.0));
+    v.Field("frame", frame,
+            "`flowplan render`: frame the scene and the plan (lookat, distance and azimuth chosen; false: as given)");
   }
 };
+
+/// `config` with a camera that frames `points` (world, m: the arm's states) and every obstacle of `scene`: looking
+/// at the middle of their bounding box, from config.elevation, 60° to the left of the direction from the world's
+/// origin (the arm's base) to that middle (from beside and in front of the arm, into shelves and boxes that open
+/// towards it), far enough that the sphere around the box fits MuJoCo's 45° field of view.
+RenderConfig Framed(RenderConfig config, const geometry::Scene& scene, const std::vector<Eigen::Vector3d>& points);
 
 /// Colours of the pictures (RGB in [0, 1]); tests look for them.
 inline constexpr std::array<float, 3> kArmColour = {0.62f, 0.68f, 0.80f};

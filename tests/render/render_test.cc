@@ -115,6 +115,50 @@ TEST(ArmRendererTest, TheObstacleAndTheArmAreWhereAProjectionPutsThem) {
   EXPECT_FALSE(before[1] > before[0] + 30 && before[1] > before[2] + 30);  // not green without the trail
 }
 
+TEST(ArmRendererTest, AFramedCameraShowsEveryObstacleCornerAndPointAndFillsThePicture) {
+  // A turned bookcase-sized box and a cylinder off to the side of the arm, and points of a TCP path.
+  geometry::Scene scene;
+  const double s = std::sqrt(0.5);
+  scene.boxes.push_back({{-0.6, 0.9, 0.6}, {0.35, 0.9, 1.2}, {std::cos(0.3), 0.0, 0.0, std::sin(0.3)}, NAN});
+  scene.cylinders.push_back({{-0.2, 0.5, 0.2}, 0.05, 0.4, {s, s, 0.0, 0.0}, NAN});
+  const std::vector<Eigen::Vector3d> points = {{0.0, 0.0, 0.0}, {-0.3, 0.4, 0.5}, {0.1, 0.2, 0.9}};
+  RenderConfig config;
+  config.width = 320;
+  config.height = 240;
+  const RenderConfig framed = Framed(config, scene, points);
+  // It looks from 60° to the left of the direction towards the middle of what it shows.
+  const Eigen::Vector3d middle(framed.lookat[0], framed.lookat[1], framed.lookat[2]);
+  EXPECT_NEAR(framed.azimuth, std::atan2(middle.y(), middle.x()) * 180.0 / M_PI + 60.0, 1e-9);
+  EXPECT_EQ(framed.elevation, config.elevation);
+  ArmRenderer renderer(scene, framed);
+  const sim::JointVector ready = sim::FrankaReadyPose();
+  renderer.Render(std::vector<double>(ready.data(), ready.data() + 7));  // places the camera
+  std::vector<Eigen::Vector3d> shown = points;
+  const geometry::BoxObstacle& box = scene.boxes[0];
+  const Eigen::Quaterniond turn(box.quaternion[0], box.quaternion[1], box.quaternion[2], box.quaternion[3]);
+  for (int k = 0; k < 8; ++k) {
+    shown.push_back(Eigen::Vector3d(box.centre.data()) +
+                    turn * Eigen::Vector3d(((k & 1) ? 0.5 : -0.5) * box.size[0], ((k & 2) ? 0.5 : -0.5) * box.size[1],
+                                           ((k & 4) ? 0.5 : -0.5) * box.size[2]));
+  }
+  double left = INFINITY, right = -INFINITY, top = INFINITY, bottom = -INFINITY;
+  for (const Eigen::Vector3d& p : shown) {
+    const Eigen::Vector2d at = Project(renderer.camera(), p, framed.width, framed.height);
+    EXPECT_TRUE(at.x() >= 0 && at.x() < framed.width && at.y() >= 0 && at.y() < framed.height) << p.transpose();
+    left = std::min(left, at.x());
+    right = std::max(right, at.x());
+    top = std::min(top, at.y());
+    bottom = std::max(bottom, at.y());
+  }
+  // Not lost in the middle of the picture: what it frames spans at least half its width or height.
+  EXPECT_TRUE(right - left > 0.5 * framed.width || bottom - top > 0.5 * framed.height)
+      << left << " " << right << " " << top << " " << bottom;
+  // Nothing to frame: the camera as given.
+  const RenderConfig unchanged = Framed(config, geometry::Scene{}, {});
+  EXPECT_EQ(unchanged.lookat, config.lookat);
+  EXPECT_EQ(unchanged.distance, config.distance);
+}
+
 TEST(ArmRendererTest, AnyArmIsDrawnByItsCollisionSpheresWhereItsKinematicsPutThem) {
   // The shipped UR5 folder; its spheres placed by the collision check's kinematics (plain C++), drawn by MuJoCo
   // from the model ArmXml writes.
