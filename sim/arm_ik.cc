@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/random.h"
 
 namespace flowplan::sim {
 namespace {
@@ -112,9 +113,17 @@ ArmIkResult SolveArmIk(const ArmIkModel& arm, mjData& d, const Eigen::Vector3d& 
                : J == 6 ? &Solve<6>
                         : &Solve<Eigen::Dynamic>;
   ArmIkResult result = solve(arm, d, target, rotation, seed, posture, settings);
-  if (result.converged || seed == posture) return result;
-  ArmIkResult retry = solve(arm, d, target, rotation, posture, posture, settings);
-  return retry.converged || retry.position_error < result.position_error ? retry : result;
+  auto keep_better = [&](ArmIkResult retry) {
+    if (retry.converged || retry.position_error < result.position_error) result = std::move(retry);
+  };
+  if (!result.converged && seed != posture) keep_better(solve(arm, d, target, rotation, posture, posture, settings));
+  Rng rng(settings.restart_seed);
+  Eigen::VectorXd start(static_cast<Eigen::Index>(J));
+  for (int restart = 0; restart < settings.restarts && !result.converged; ++restart) {
+    for (Eigen::Index j = 0; j < start.size(); ++j) start[j] = rng.Uniform(arm.lower[j], arm.upper[j]);
+    keep_better(solve(arm, d, target, rotation, start, posture, settings));
+  }
+  return result;
 }
 
 }  // namespace flowplan::sim

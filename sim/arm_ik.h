@@ -11,6 +11,7 @@
 #include <mujoco/mujoco.h>
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 namespace flowplan::sim {
@@ -33,6 +34,8 @@ struct IkSettings {
   double max_step = 0.2;                // rad (m for a slide), largest joint change per iteration
   double limit_margin = 0.01;           // rad (m for a slide) kept from every joint limit
   double posture_gain = 0.1;            // pull towards the posture in the task's null space
+  int restarts = 0;                     // further solves from seeds drawn uniformly within the limits
+  uint64_t restart_seed = 0;            // seeds the draw of those restarts (the same draw for every target)
 };
 
 struct ArmIkResult {
@@ -46,8 +49,10 @@ struct ArmIkResult {
 /// Solves for a configuration (J,) whose TCP is at `target` (m, world frame)
 /// with the orientation `rotation` (world frame), from `seed` (J,), pulled
 /// towards `posture` (J,) in the null space of the task; if that does not
-/// converge, once more from `posture`. Joints stay settings.limit_margin
-/// inside their limits. Deterministic. Uses `d` (data of arm.model) as scratch:
+/// converge, once more from `posture`, then from each of settings.restarts
+/// configurations drawn within the limits (Rng(settings.restart_seed)), the
+/// first that converges returned, else the closest. Joints stay
+/// settings.limit_margin inside their limits. Deterministic. Uses `d` (data of arm.model) as scratch:
 /// only the planned joints' qpos are written.
 ArmIkResult SolveArmIk(const ArmIkModel& arm, mjData& d, const Eigen::Vector3d& target,
                        const Eigen::Matrix3d& rotation, const Eigen::VectorXd& seed, const Eigen::VectorXd& posture,
