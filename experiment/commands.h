@@ -48,6 +48,7 @@ struct SceneImport {
   double grasp_margin = 0.01;      // m
   double limit_tolerance = 0.002;  // rad
   std::string robot;               // --robot: a robot folder (empty: the built-in Franka)
+  bool force = false;              // --force: replace --out (and the --scenes-dir files) if they exist
 };
 
 /// `flowplan scenes import`: MoveIt scenes and requests into the problem file
@@ -93,6 +94,7 @@ struct ProblemsArgs {
   std::string out;     // --out: the problem file
   std::string family;  // --family: a procedural scene family (empty: blocked problems)
   std::string robot;   // --robot: a robot folder to draw the problems for (empty: config.robot, or the Franka)
+  bool force = false;  // --force: replace --out if it exists
 };
 
 /// `flowplan problems`: random planning problems written to args.out, either

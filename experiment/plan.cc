@@ -25,6 +25,12 @@ void CheckOutputsFree(const std::string& prefix, bool force) {
   }
 }
 
+void CheckOutputFree(const std::string& path, bool force) {
+  if (!force && std::filesystem::exists(path)) {
+    throw Error(path + ": exists; give --force to replace it, or --out another file");
+  }
+}
+
 namespace {
 
 void RunPlan(const PlanArgs& args) {

@@ -201,6 +201,10 @@ std::string RefusalOf(const std::string& name, const torch::Tensor& state, const
 /// @throws flowplan::Error naming the file that exists.
 void CheckOutputsFree(const std::string& prefix, bool force);
 
+/// Unless `force`: @throws flowplan::Error naming `path` if it exists (a command's one output file, e.g.
+///   `problems --out`, `scenes import --out`).
+void CheckOutputFree(const std::string& path, bool force);
+
 /// plan_report.cc: draws PREFIX.png from PREFIX.h5 with scripts/plot.py; returns
 /// the figure's path, or why it was not drawn.
 std::string DrawPlanFigure(const std::string& prefix);

@@ -10,6 +10,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "experiment/commands.h"
+#include "experiment/plan.h"
 #include "kinematics/robot.h"
 #include "problems/blocked_problems.h"
 #include "problems/scene_families.h"
@@ -19,6 +20,7 @@
 namespace flowplan::experiment {
 
 void MakeProblems(const ProblemsArgs& args) {
+  CheckOutputFree(args.out, args.force);
   const ExperimentConfig config = args.config.Load();
   const int threads = ConfigureThreads(config);
   const std::string folder = !args.robot.empty() ? args.robot : config.robot;
@@ -67,6 +69,7 @@ Command AddProblemsCommand(CLI::App& app) {
                                      "blocking the straight path (problems.*), or a scene family (--family)");
   args->config.Add(command, false);
   command->add_option("--out", args->out, "YAML file of problems")->required();
+  command->add_flag("--force", args->force, "replace the --out file if it exists");
   command->add_option("--robot", args->robot,
                       "a robot folder (`flowplan robot import`; or robot: in the config) to draw the problems for");
   std::string families;

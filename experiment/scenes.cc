@@ -10,6 +10,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "experiment/commands.h"
+#include "experiment/plan.h"
 #include "collision/body_model.h"
 #include "problems/moveit_import.h"
 #include "robotfiles/robot_folder.h"
@@ -23,6 +24,7 @@ std::string Stem(const std::string& path) { return std::filesystem::path(path).s
 }  // namespace
 
 void ImportScenes(const SceneImport& args) {
+  CheckOutputFree(args.out, args.force);
   std::vector<std::pair<std::string, std::string>> pairs;
   if (!args.folder.empty()) {
     if (!args.files.empty()) throw Error("scenes import: give --dir or SCENE REQUEST pairs, not both");
@@ -88,6 +90,9 @@ void ImportScenes(const SceneImport& args) {
     }
   }
   if (!args.scenes_dir.empty()) {
+    for (const problems::Problem& p : set.problems) {
+      CheckOutputFree((std::filesystem::path(args.scenes_dir) / (p.name + ".yaml")).string(), args.force);
+    }
     MakeDirectories(args.scenes_dir);
     for (const problems::Problem& p : set.problems) {
       WriteFileAtomically((std::filesystem::path(args.scenes_dir) / (p.name + ".yaml")).string(),
@@ -112,6 +117,7 @@ Command AddScenesCommand(CLI::App& app) {
   import->add_option("files", args->files, "SCENE.yaml REQUEST.yaml pairs");
   import->add_option("--dir", args->folder, "a folder of sceneNNNN.yaml / requestNNNN.yaml pairs (MotionBenchMaker)");
   import->add_option("--out", args->out, "problem file to write (YAML)")->required();
+  import->add_flag("--force", args->force, "replace the --out file and the --scenes-dir files if they exist");
   import->add_option("--scenes-dir", args->scenes_dir, "also write each problem's scene as DIR/NAME.yaml");
   import->add_option("--robot", args->robot,
                      "robot folder (`flowplan robot import`) whose joints, by name, the requests set (default: the "

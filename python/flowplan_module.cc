@@ -335,7 +335,7 @@ PYBIND11_MODULE(_flowplan, m) {
       "import_scenes",
       [](const std::vector<std::string>& files, const std::string& folder, const std::string& out,
          const std::string& robot, const std::vector<std::string>& frames, const std::string& grasp,
-         double grasp_margin, double limit_tolerance) {
+         double grasp_margin, double limit_tolerance, bool force) {
         flowplan::experiment::SceneImport args;
         args.files = files;
         args.folder = folder;
@@ -345,11 +345,12 @@ PYBIND11_MODULE(_flowplan, m) {
         args.grasp = grasp;
         args.grasp_margin = grasp_margin;
         args.limit_tolerance = limit_tolerance;
+        args.force = force;
         py::gil_scoped_release unlocked;
         flowplan::experiment::ImportScenes(args);
       },
       py::arg("files"), py::arg("folder"), py::arg("out"), py::arg("robot"), py::arg("frames"), py::arg("grasp"),
-      py::arg("grasp_margin"), py::arg("limit_tolerance"), KeepMode(), "flowplan scenes import: writes the problem file `out`");
+      py::arg("grasp_margin"), py::arg("limit_tolerance"), py::arg("force"), KeepMode(), "flowplan scenes import: writes the problem file `out`");
   m.def("import_robot", &ImportRobot, py::arg("model"), py::arg("out"), py::arg("srdf"), py::arg("package_dir"),
         py::arg("base"), py::arg("tip"), py::arg("tcp_offset"), py::arg("joints"), py::arg("hold"),
         py::arg("overshoot"), py::arg("max_spheres"), py::arg("pair_samples"), py::arg("velocity_limit"),
@@ -371,17 +372,19 @@ PYBIND11_MODULE(_flowplan, m) {
   m.def(
       "make_problems",
       [](const std::string& out, const std::string& config, const std::vector<std::string>& overrides,
-         const std::string& family, const std::string& robot) {
+         const std::string& family, const std::string& robot, bool force) {
         flowplan::experiment::ProblemsArgs args;
         args.out = out;
         args.config.path = config;
         args.config.overrides = overrides;
         args.family = family;
         args.robot = robot;
+        args.force = force;
         py::gil_scoped_release unlocked;
         flowplan::experiment::MakeProblems(args);
       },
-      py::arg("out"), py::arg("config"), py::arg("overrides"), py::arg("family"), py::arg("robot"), KeepMode(),
+      py::arg("out"), py::arg("config"), py::arg("overrides"), py::arg("family"), py::arg("robot"), py::arg("force"),
+      KeepMode(),
       "flowplan problems: writes the problem file `out`");
   m.def(
       "render",

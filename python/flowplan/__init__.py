@@ -312,7 +312,7 @@ def load_problems(path):
 
 
 def import_scenes(out, pairs=(), *, folder=None, robot=None, frames=(), grasped="touching-tcp", grasp_margin=0.01,
-                  limit_tolerance=0.002):
+                  limit_tolerance=0.002, force=False):
     """`flowplan scenes import`: MoveIt planning scenes and motion-plan requests (MotionBenchMaker's format) into
     the problem file `out`, whose problems it returns (load_problems).
 
@@ -322,6 +322,7 @@ def import_scenes(out, pairs=(), *, folder=None, robot=None, frames=(), grasped=
         robot: a robot folder whose joints the requests set by name (default: the built-in Franka).
         frames, grasped, grasp_margin, limit_tolerance: as the command's --frame, --grasped, --grasp-margin and
             --limit-tolerance (docs/planning.md).
+        force: replace `out` if it exists (otherwise flowplan.Error names it and nothing is written).
 
     A pair that cannot be planned is a problem with status "refused" and its reason; a file that is not a MoveIt
     file raises flowplan.Error naming it, and nothing is written.
@@ -329,7 +330,7 @@ def import_scenes(out, pairs=(), *, folder=None, robot=None, frames=(), grasped=
     files = [str(f) for pair in pairs for f in pair]
     _cpp("import_scenes").import_scenes(files, str(folder or ""), str(out), str(robot or ""),
                                         [str(f) for f in frames], str(grasped), float(grasp_margin),
-                                        float(limit_tolerance))
+                                        float(limit_tolerance), bool(force))
     return load_problems(out)
 
 
@@ -397,7 +398,7 @@ def render(plans, out=None, *, problem=None, index=0, robot=None, config=None, o
                                  str(config or ""), [str(o) for o in overrides])
 
 
-def make_problems(out, config=None, overrides=(), *, family=None, robot=None):
+def make_problems(out, config=None, overrides=(), *, family=None, robot=None, force=False):
     """`flowplan problems`: random planning problems written to the problem file `out`, whose problems it returns
     (load_problems). Without family, spheres that block the straight TCP path (problems.* of the config: count,
     spheres, radii, clearance) for the built-in Franka or the robot folder `robot` (or the config's robot:); with
@@ -406,10 +407,11 @@ def make_problems(out, config=None, overrides=(), *, family=None, robot=None):
 
         problems = flowplan.make_problems("shelf.yaml", family="shelf", overrides=["problems.count=20"])
 
-    Raises flowplan.Error naming the setting or folder at fault; nothing is written then.
+    Raises flowplan.Error naming the setting or folder at fault, or `out` if it exists and force is not set;
+    nothing is written then.
     """
     _cpp("make_problems").make_problems(str(out), str(config or ""), [str(o) for o in overrides], str(family or ""),
-                                        str(robot or ""))
+                                        str(robot or ""), bool(force))
     return load_problems(out)
 
 

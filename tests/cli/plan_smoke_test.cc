@@ -498,6 +498,16 @@ TEST(SceneImportTest, AMoveItFolderImportsAndRrtConnectPlansItsSceneInMujoco) {
   EXPECT_THAT(problems, HasSubstr("name: scene0001"));
   EXPECT_THAT(problems, HasSubstr("obstacle_names: [table, board, bottle]"));
   ASSERT_TRUE(fs::exists(path("scenes/scene0001.yaml")));
+  // Run again, it replaces nothing without --force: not the problem file, and not a scene file either.
+  ExpectCleanFailure(Flowplan("scenes import --dir " + path("set") + " --out " + path("problems.yaml")),
+                     path("problems.yaml") + ": exists; give --force to replace it");
+  ExpectCleanFailure(Flowplan("scenes import --dir " + path("set") + " --out " + path("other.yaml") +
+                              " --scenes-dir " + path("scenes")),
+                     path("scenes/scene0001.yaml") + ": exists; give --force to replace it");
+  EXPECT_FALSE(fs::exists(path("other.yaml")));
+  ExpectOk(Flowplan("scenes import --dir " + path("set") + " --out " + path("problems.yaml") + " --scenes-dir " +
+                    path("scenes") + " --force"));
+  EXPECT_EQ(ReadText(path("problems.yaml")), problems);
 
   const std::string config = " --config " + Source("configs/franka_reach.yaml") + " data.path=" + path("none.h5") +
                              " --log-level warn";
@@ -534,6 +544,12 @@ TEST(SceneImportTest, AMoveItFolderImportsAndRrtConnectPlansItsSceneInMujoco) {
   const std::string box = ReadText(path("box.yaml"));
   EXPECT_THAT(box, HasSubstr("source: family box"));
   EXPECT_THAT(box, HasSubstr("name: box/1"));
+  // An existing problem file is replaced only when asked to.
+  ExpectCleanFailure(Flowplan("problems --family table problems.count=2 --out " + path("box.yaml")),
+                     path("box.yaml") + ": exists; give --force to replace it");
+  EXPECT_EQ(ReadText(path("box.yaml")), box);
+  ExpectOk(Flowplan("problems --family table problems.count=2 --force --out " + path("box.yaml")));
+  EXPECT_THAT(ReadText(path("box.yaml")), HasSubstr("source: family table"));
   ExpectCleanFailure(Flowplan("problems --family kitchen --out " + path("k.yaml")),
                      "scene family \"kitchen\" is not one of table, shelf, box, cage, under_table");
 }
