@@ -356,20 +356,19 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
     }
     if (guides.defined()) result.route[static_cast<size_t>(b)] = seeded ? "seeded" : "unseeded";
     torch::Tensor states;
-    if (path) {
-      // Simplified, then timed; the plan is found when the plan checker passes it as returned (float32). A
-      // rounded path that fails (a state that grazes an obstacle within the motion check's resolution) falls
-      // back to the path before rounding.
+    // Simplified, then timed; the plan is found when the plan checker passes it as returned (float32). A rounded
+    // path that fails (a state that grazes an obstacle within the motion check's resolution) falls back to the path
+    // before rounding. Whether one of the path's candidates passed; `why` says why not.
+    auto time_and_check = [&](const Path& found_path, std::string& why) {
       std::vector<Path> candidates;
       if (config_.simplify) {
-        const Path tight = search.Tighten(search.Shortcut(*path), 2);
+        const Path tight = search.Tighten(search.Shortcut(found_path), 2);
         candidates.push_back(search.RoundCorners(tight, max_points));
         candidates.push_back(tight);
       }
-      candidates.push_back(*path);
+      candidates.push_back(found_path);
       // Each path timed smoothly first; then, if a motion between states cut a corner of it, with its corners on
       // states.
-      std::string why;
       for (const Path& candidate : candidates) {
         std::vector<double> flat;
         for (const Config& q : candidate) flat.insert(flat.end(), q.begin(), q.end());
@@ -380,18 +379,33 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
           const validity::PlanVerdict verdict =
               checker_.Check(states.unsqueeze(0), request.start[b], request.goal[b], request.scene, {},
                              request.world, /*measure_clearance=*/false)[0];
-          if (verdict.valid()) {
-            result.found[b] = true;
-            break;
-          }
+          if (verdict.valid()) return true;
           if (why.empty()) why = "the timed path fails the plan check: " + verdict.reason;
         }
-        if (result.found[b].item<bool>()) {
-          why.clear();
-          break;
-        }
       }
-      result.failure[static_cast<size_t>(b)] = why;
+      return false;
+    };
+    if (path) {
+      std::string why;
+      result.found[b] = time_and_check(*path, why);
+      result.failure[static_cast<size_t>(b)] = result.found[b].item<bool>() ? "" : why;
+    }
+    // Further searches, unseeded, each with its own seed and the whole iteration budget, while the time lasts.
+    for (int64_t attempt = 1; refusal.empty() && attempt < config_.attempts && !result.found[b].item<bool>() &&
+                              Clock::now() < budget.deadline;
+         ++attempt) {
+      const auto again = search.Connect(start, goal, StreamSeed(seed, 2 + static_cast<uint64_t>(attempt)), budget);
+      if (!again) continue;
+      std::string why;
+      if (time_and_check(*again, why)) {
+        path = again;
+        result.found[b] = true;
+        result.failure[static_cast<size_t>(b)] = "";
+        if (guides.defined()) result.route[static_cast<size_t>(b)] = "unseeded";
+      } else {
+        path = again;  // the plan returned is this path's, and so is the reason given
+        result.failure[static_cast<size_t>(b)] = why;
+      }
     }
     if (!result.found[b].item<bool>()) {
       std::vector<double> flat;

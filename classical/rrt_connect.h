@@ -33,6 +33,7 @@ struct RrtConnectConfig {
   double time_limit = 10.0;        // s per plan, a safety stop on top of max_iterations
   double range = 0.0;              // longest tree edge, joint-space units; 0: 20 % of the joint space's diagonal
   bool simplify = true;            // shortcut and tighten the found path, and round its corners
+  int64_t attempts = 1;            // searches per plan until one passes the plan check, each with max_iterations
 
   template <class V>
   void Visit(V& v) {
@@ -43,6 +44,10 @@ struct RrtConnectConfig {
             config::NonNegative());
     v.Field("simplify", simplify,
             "shortcut and tighten the found path and round its corners (Chaikin's corner cutting, kept only if valid)");
+    v.Field("attempts", attempts,
+            "searches per plan: when a search finds no path, or its path cannot be timed to pass the plan check, a "
+            "fresh search with its own seed and max_iterations (time_limit covers them all)",
+            config::Positive());
   }
 };
 
@@ -53,7 +58,11 @@ struct RrtConnectConfig {
 /// when D = 2J, the velocities of that timing. A start or goal past a joint
 /// limit by more than check.limit_tolerance, or not valid, is refused
 /// (PlanResult::refused, with the reason in failure); a plan not found is the
-/// straight joint-space line, with found = false and the reason.
+/// straight joint-space line, with found = false and the reason. With
+/// config.attempts > 1, a search whose path is not found, or cannot be timed
+/// to pass the plan check, is followed by a fresh unseeded one
+/// (StreamSeed(seed, 2 + attempt)), up to `attempts` searches; attempts = 1
+/// plans exactly as a single search.
 class RrtConnectPlanner : public planning::Planner {
  public:
   /// Plans trajectories like `trajectory`'s (T states dt apart, D = J or 2J)

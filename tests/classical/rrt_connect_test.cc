@@ -85,6 +85,43 @@ TEST(RrtConnectTest, SameSeedSamePlansAndEachPlanIsItsOwnSearch) {
   EXPECT_TRUE(torch::equal(a.slice(0, 0, 1), planner.Plan(first).plans));
 }
 
+// With a budget too small for one search to go around the disc every time, further attempts find plans the first
+// search did not, keep the plans it did find bit for bit, and every plan found clears the disc (plain geometry).
+TEST(RrtConnectTest, FurtherAttemptsFindWhatOneSearchMissesAndKeepWhatItFound) {
+  constexpr int64_t B = 24;
+  RrtConnectConfig once;
+  once.max_iterations = 6;
+  RrtConnectConfig thrice = once;
+  thrice.attempts = 3;
+  planning::PlanRequest request;
+  request.start = torch::tensor({0.1f, 0.5f, 0.0f, 0.0f}).repeat({B, 1});
+  request.goal = torch::tensor({0.9f, 0.5f, 0.0f, 0.0f}).repeat({B, 1});
+  request.scene = Disc05();
+  request.seed = 5;
+  const planning::PlanResult one = RrtConnectPlanner(Disc(32), once).Plan(request);
+  const planning::PlanResult three = RrtConnectPlanner(Disc(32), thrice).Plan(request);
+  const int64_t found_once = one.found.sum().item<int64_t>(), found_thrice = three.found.sum().item<int64_t>();
+  ASSERT_GT(found_once, 0);
+  ASSERT_LT(found_once, B) << "the budget is large enough for every search: the test shows nothing";
+  EXPECT_GT(found_thrice, found_once);
+  const torch::Tensor s = torch::linspace(0, 1, 21, torch::kFloat64).view({1, -1, 1});
+  for (int64_t b = 0; b < B; ++b) {
+    if (one.found[b].item<bool>()) {
+      EXPECT_TRUE(three.found[b].item<bool>());
+      EXPECT_TRUE(torch::equal(one.plans[b], three.plans[b])) << "plan " << b;
+    }
+    if (!three.found[b].item<bool>()) {
+      EXPECT_THAT(three.failure[static_cast<size_t>(b)], ::testing::HasSubstr("found no path within 6 iterations"));
+      continue;
+    }
+    EXPECT_EQ(three.failure[static_cast<size_t>(b)], "");
+    const torch::Tensor p = three.plans[b].to(torch::kFloat64).slice(1, 0, 2);
+    const torch::Tensor dense = p.slice(0, 0, 31).unsqueeze(1) + s * (p.slice(0, 1) - p.slice(0, 0, 31)).unsqueeze(1);
+    EXPECT_GT((dense - torch::tensor({0.5, 0.5}, torch::kFloat64)).norm(2, -1).min().item<double>(),
+              0.2 + 0.05 - 0.0005);
+  }
+}
+
 TEST(RrtConnectTest, AStartInsideAnObstacleOrPastALimitIsRefusedWithItsReason) {
   const RrtConnectPlanner planner(Disc(16), RrtConnectConfig{});
   planning::PlanRequest request;
