@@ -352,6 +352,10 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
         result.failure[static_cast<size_t>(b)] =
             "RRT-Connect found no path within " + std::to_string(iterations) + " iterations or " +
             fmt::format("{:g} s", config_.time_limit);
+        if (config_.attempts > 1) {
+          result.failure[static_cast<size_t>(b)] += " (" + std::to_string(iterations) + " iterations in each of up to " +
+                                                    std::to_string(config_.attempts) + " searches)";
+        }
       }
     }
     if (guides.defined()) result.route[static_cast<size_t>(b)] = seeded ? "seeded" : "unseeded";
@@ -397,15 +401,10 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
       const auto again = search.Connect(start, goal, StreamSeed(seed, 2 + static_cast<uint64_t>(attempt)), budget);
       if (!again) continue;
       std::string why;
-      if (time_and_check(*again, why)) {
-        path = again;
-        result.found[b] = true;
-        result.failure[static_cast<size_t>(b)] = "";
-        if (guides.defined()) result.route[static_cast<size_t>(b)] = "unseeded";
-      } else {
-        path = again;  // the plan returned is this path's, and so is the reason given
-        result.failure[static_cast<size_t>(b)] = why;
-      }
+      result.found[b] = time_and_check(*again, why);
+      path = again;  // the plan returned is this path's, and so is the reason given
+      result.failure[static_cast<size_t>(b)] = result.found[b].item<bool>() ? "" : why;
+      if (guides.defined()) result.route[static_cast<size_t>(b)] = "unseeded";
     }
     if (!result.found[b].item<bool>()) {
       std::vector<double> flat;

@@ -46,7 +46,8 @@ struct RrtConnectConfig {
             "shortcut and tighten the found path and round its corners (Chaikin's corner cutting, kept only if valid)");
     v.Field("attempts", attempts,
             "searches per plan: when a search finds no path, or its path cannot be timed to pass the plan check, a "
-            "fresh search with its own seed and max_iterations (time_limit covers them all)",
+            "fresh search with its own seed and max_iterations; time_limit is checked before each search (the "
+            "hybrid's classical-first stage too runs up to this many searches of hybrid.classical_iterations)",
             config::Positive());
   }
 };

@@ -51,7 +51,7 @@ struct ArmIkResult {
 /// towards `posture` (J,) in the null space of the task; if that does not
 /// converge, once more from `posture`, then from each of settings.restarts
 /// configurations drawn within the limits (Rng(settings.restart_seed)), the
-/// first that converges returned, else the closest. Joints stay
+/// first that converges returned, else the one of smallest position error. Joints stay
 /// settings.limit_margin inside their limits. Deterministic. Uses `d` (data of arm.model) as scratch:
 /// only the planned joints' qpos are written.
 ArmIkResult SolveArmIk(const ArmIkModel& arm, mjData& d, const Eigen::Vector3d& target,

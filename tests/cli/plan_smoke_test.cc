@@ -505,6 +505,7 @@ TEST(SceneImportTest, AMoveItFolderImportsAndRrtConnectPlansItsSceneInMujoco) {
                               " --scenes-dir " + path("scenes")),
                      path("scenes/scene0001.yaml") + ": exists; give --force to replace it");
   EXPECT_FALSE(fs::exists(path("other.yaml")));
+  std::ofstream(path("problems.yaml")) << "stale\n";
   ExpectOk(Flowplan("scenes import --dir " + path("set") + " --out " + path("problems.yaml") + " --scenes-dir " +
                     path("scenes") + " --force"));
   EXPECT_EQ(ReadText(path("problems.yaml")), problems);

@@ -51,9 +51,10 @@ class ArmIkTest : public ::testing::TestWithParam<std::string> {};
 // home with seeded restarts (from home alone a random wrist orientation is often out of reach of the descent:
 // the test prints how many converge without them). Every solution the solver calls converged must be one: its
 // TCP where asked by both kinematics, pointing as asked, its joints inside the limits by IK's margin. A solve
-// that does not converge must report the error of what it returns. At least four in five must converge (each
-// target has a solution, the configuration it was made from): the arm on a lift stalls on about one in six,
-// some within 0.05 mm of the target, with its step size and stall rule the same as every arm's.
+// that does not converge must report the error of what it returns. At least two in three must converge (each
+// target has a solution, the configuration it was made from; 56, 59 and 50 of 60 do): the arm on a lift stalls
+// on about one in six, some within 0.05 mm of the target, with its step size and stall rule the same as every
+// arm's.
 TEST_P(ArmIkTest, ReachesTheTcpPosesOfRandomConfigurations) {
   const FamilyArm& arm = Arm(GetParam());
   const sim::ArmIkModel& ik = arm.ik;
@@ -105,10 +106,10 @@ TEST_P(ArmIkTest, ReachesTheTcpPosesOfRandomConfigurations) {
   }
   std::printf("%s: %d of %d reachable targets solved from home, %d with %d restarts\n", GetParam().c_str(),
               from_home, kTargets, converged, settings.restarts);
-  EXPECT_GE(converged, kTargets * 4 / 5) << converged << " of " << kTargets << " reachable targets solved";
+  EXPECT_GE(converged, kTargets * 2 / 3) << converged << " of " << kTargets << " reachable targets solved";
 }
 
-// Same target, same seed: the same bits (the families' problems rest on it).
+// Same target, same seed, same restarts: the same bits (the families' problems rest on it).
 TEST_P(ArmIkTest, SolutionsAreDeterministic) {
   const FamilyArm& arm = Arm(GetParam());
   const int J = arm.robot.num_joints;
@@ -117,11 +118,18 @@ TEST_P(ArmIkTest, SolutionsAreDeterministic) {
   const Pose target = SitePose(arm.ik, drawn);
   auto d1 = sim::MakeData(*arm.ik.model);
   auto d2 = sim::MakeData(*arm.ik.model);
-  const auto a = sim::SolveArmIk(arm.ik, *d1, target.position, target.rotation, arm.home, arm.home);
-  sim::SolveArmIk(arm.ik, *d2, target.position + Eigen::Vector3d(0.05, 0, 0), target.rotation, arm.home, arm.home);
-  const auto b = sim::SolveArmIk(arm.ik, *d2, target.position, target.rotation, arm.home, arm.home);
-  EXPECT_TRUE(a.q == b.q);
-  EXPECT_EQ(a.converged, b.converged);
+  for (const int restarts : {0, 10}) {
+    sim::IkSettings settings;
+    settings.restarts = restarts;
+    settings.restart_seed = 4;
+    // A home far from the target, so that the restarts are used when there are any.
+    const Eigen::VectorXd far = arm.ik.lower.array() + 0.02;
+    const auto a = sim::SolveArmIk(arm.ik, *d1, target.position, target.rotation, far, far, settings);
+    sim::SolveArmIk(arm.ik, *d2, target.position + Eigen::Vector3d(0.05, 0, 0), target.rotation, far, far, settings);
+    const auto b = sim::SolveArmIk(arm.ik, *d2, target.position, target.rotation, far, far, settings);
+    EXPECT_TRUE(a.q == b.q) << restarts << " restarts";
+    EXPECT_EQ(a.converged, b.converged);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(ShippedArms, ArmIkTest, ::testing::Values("franka", "ur5", "fetch_arm"),
