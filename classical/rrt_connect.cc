@@ -404,7 +404,10 @@ planning::PlanResult RrtConnectPlanner::PlanAlong(const planning::PlanRequest& r
       result.found[b] = time_and_check(*again, why);
       path = again;  // the plan returned is this path's, and so is the reason given
       result.failure[static_cast<size_t>(b)] = result.found[b].item<bool>() ? "" : why;
-      if (guides.defined()) result.route[static_cast<size_t>(b)] = "unseeded";
+      // A plan found by a further search is unseeded. When none is found, the route stays: a seeded call that
+      // fails tells the hybrid to search from the start to the goal without the guide (seed 2, which the further
+      // searches here do not use).
+      if (guides.defined() && result.found[b].item<bool>()) result.route[static_cast<size_t>(b)] = "unseeded";
     }
     if (!result.found[b].item<bool>()) {
       std::vector<double> flat;
