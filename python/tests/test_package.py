@@ -379,6 +379,12 @@ def test_problem_files_and_scenes_plan_from_python(tmp_path):
     assert (tmp_path / "again.yaml").read_bytes() == problems_file.read_bytes()
     assert torch.get_num_threads() == 2  # as this file set it: the call's own thread count is not left behind
     assert [p.name for p in again] == [p.name for p in problems]
+    # An existing file is replaced only with force=True; without it, one error naming the file and the bytes kept.
+    with pytest.raises(flowplan.Error, match="again.yaml: exists; give --force"):
+        flowplan.make_problems(tmp_path / "again.yaml", overrides=["problems.count=1", "seed=4"], family="table")
+    assert (tmp_path / "again.yaml").read_bytes() == problems_file.read_bytes()
+    assert len(flowplan.make_problems(tmp_path / "again.yaml", overrides=["problems.count=1", "seed=4"],
+                                      family="table", force=True)) == 1
     blocked = flowplan.make_problems(tmp_path / "ur5.yaml", overrides=["problems.count=3"],
                                      robot=os.path.join(SOURCE, "robots", "ur5"))
     assert len(blocked) == 3 and all(p.start.shape == (6,) and p.scene["spheres"].shape[0] >= 1 for p in blocked)
