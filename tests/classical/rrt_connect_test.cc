@@ -122,6 +122,48 @@ TEST(RrtConnectTest, FurtherAttemptsFindWhatOneSearchMissesAndKeepWhatItFound) {
   }
 }
 
+// A path found but too long to time within the speed limits fails the plan check; a further search finds another,
+// and plans found at the first search are kept bit for bit. Unsimplified paths, so that some are long.
+TEST(RrtConnectTest, APathTooLongToTimeWithinTheSpeedLimitsIsFollowedByAFurtherSearch) {
+  constexpr int64_t B = 24;
+  constexpr double kSpeed = 1.0;  // m/s in x and in y: 16 states (1 s) cover at most this far in each
+  kinematics::TrajectoryInfo info = Disc(16);
+  info.robot.velocity_limit = {kSpeed, kSpeed};
+  RrtConnectConfig once;
+  once.simplify = false;
+  RrtConnectConfig thrice = once;
+  thrice.attempts = 3;
+  planning::PlanRequest request;
+  request.start = torch::tensor({0.1f, 0.5f, 0.0f, 0.0f}).repeat({B, 1});
+  request.goal = torch::tensor({0.9f, 0.5f, 0.0f, 0.0f}).repeat({B, 1});
+  request.scene = Disc05();
+  request.seed = 8;
+  const planning::PlanResult one = RrtConnectPlanner(info, once).Plan(request);
+  const planning::PlanResult three = RrtConnectPlanner(info, thrice).Plan(request);
+  int too_long = 0, recovered = 0;
+  for (int64_t b = 0; b < B; ++b) {
+    const std::string& why = one.failure[static_cast<size_t>(b)];
+    if (one.found[b].item<bool>()) {
+      EXPECT_TRUE(torch::equal(one.plans[b], three.plans[b])) << "plan " << b;
+    } else if (why.find("the timed path fails the plan check") != std::string::npos) {
+      EXPECT_THAT(why, ::testing::HasSubstr("x its speed limit"));
+      ++too_long;
+      recovered += three.found[b].item<bool>();
+    }
+    if (!three.found[b].item<bool>()) continue;
+    // Found plans keep to the speed limit and clear the disc, by plain arithmetic on the states.
+    const torch::Tensor p = three.plans[b].to(torch::kFloat64).slice(1, 0, 2);
+    const double fastest = (p.slice(0, 1) - p.slice(0, 0, -1)).abs().max().item<double>() / kDt;
+    EXPECT_LE(fastest, kSpeed * (1.0 + 1e-4)) << "plan " << b;
+    const torch::Tensor s = torch::linspace(0, 1, 21, torch::kFloat64).view({1, -1, 1});
+    const torch::Tensor dense = p.slice(0, 0, 15).unsqueeze(1) + s * (p.slice(0, 1) - p.slice(0, 0, 15)).unsqueeze(1);
+    EXPECT_GT((dense - torch::tensor({0.5, 0.5}, torch::kFloat64)).norm(2, -1).min().item<double>(),
+              0.2 + 0.05 - 0.0005);
+  }
+  ASSERT_GT(too_long, 0) << "every first path could be timed: the test shows nothing";
+  EXPECT_GT(recovered, 0);
+}
+
 TEST(RrtConnectTest, AStartInsideAnObstacleOrPastALimitIsRefusedWithItsReason) {
   const RrtConnectPlanner planner(Disc(16), RrtConnectConfig{});
   planning::PlanRequest request;
