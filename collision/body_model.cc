@@ -328,12 +328,18 @@ void BodyModel::JointAxes(const Frame* frames, double* axes, double* points) con
 
 double BodyModel::Travel(int l, uint64_t joints, const double* dq, const double* axes, const double* points,
                          const double* centre) const {
+  return Travel(l, joints, dq, axes, points, centre, bound_radius_[static_cast<size_t>(l)]);
+}
+
+double BodyModel::Travel(int l, uint64_t joints, const double* dq, const double* axes, const double* points,
+                         const double* centre, double sphere_radius) const {
   if (point_) {
     double total = 0.0;
     for (int j = 0; j < J_; ++j) total += dq[j];
     return total;
   }
-  const double radius = std::max(bound_radius_[static_cast<size_t>(l)], 0.0);
+  // The static bound (reach_j, for any point within the link's bounding sphere) holds for any part of the link.
+  const double radius = std::max(sphere_radius, 0.0);
   double local = 0.0, deeper = 0.0, bound = 0.0;
   for (const auto& [j, reach] : chain_[static_cast<size_t>(l)]) {
     if (!(joints & (uint64_t{1} << j))) continue;

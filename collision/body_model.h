@@ -105,6 +105,10 @@ class BodyModel {
   /// most the static bound Σ_j travel_j |Δq_j| of bound_travel.
   double Travel(int l, uint64_t joints, const double* dq, const double* axes, const double* points,
                 const double* centre) const;
+  /// Travel of any point within a sphere of `radius` about `centre` that moves with link l (a cluster's
+  /// bounding sphere): tighter than the link's for a part of the link near the joints' axes.
+  double Travel(int l, uint64_t joints, const double* dq, const double* axes, const double* points,
+                const double* centre, double radius) const;
 
   /// The static part of Travel alone, Σ_j reach_j |Δq_j| over the joints of `joints` that move link l: never
   /// below Travel, and cheaper (no axes), so a screen before it.

@@ -38,22 +38,10 @@ struct Checker::Probe {
                                       // `sphere`, -1 until measured
   std::vector<double> sphere;         // the measured spheres' clearances, cluster by cluster
   std::vector<double> pair_gap;       // (P) the gap between each self pair's bounding spheres (NaN: not yet)
+  std::vector<double> cluster_gap;    // the smallest gap between the spheres of each cluster pair of each self
+                                      // pair (Checker::pair_clusters_ numbering; NaN: not yet)
 };
 
-namespace {
-
-/// The probes of the calls on one thread, reused so that a call allocates nothing once they have grown.
-template <class P>
-struct ProbePool {
-  std::vector<std::unique_ptr<P>> probes;
-  size_t used = 0;
-  P& Next() {
-    if (used == probes.size()) probes.push_back(std::make_unique<P>());
-    return *probes[used++];
-  }
-};
-
-}  // namespace
 
 Checker::Checker(std::shared_ptr<const BodyModel> body, std::shared_ptr<const World> world, CheckSettings settings)
     : body_(std::move(body)), world_(std::move(world)), settings_(settings) {
@@ -63,6 +51,13 @@ Checker::Checker(std::shared_ptr<const BodyModel> body, std::shared_ptr<const Wo
   }
   if (!(settings_.margin >= 0.0)) throw Error("collision check: margin: expected a non-negative margin");
   if (!(settings_.resolution > 0.0)) throw Error("collision check: resolution: expected a positive resolution");
+  const BodyModel& b = *body_;
+  pair_clusters_.assign(1, 0);
+  for (const auto& [la, lb] : b.self_pairs()) {
+    const int clusters_a = b.first_cluster(la + 1) - b.first_cluster(la);
+    const int clusters_b = b.first_cluster(lb + 1) - b.first_cluster(lb);
+    pair_clusters_.push_back(pair_clusters_.back() + clusters_a * clusters_b);
+  }
 }
 
 void Checker::Fill(Probe& p, const double* q) const {
@@ -94,6 +89,7 @@ void Checker::Fill(Probe& p, const double* q) const {
   p.slot.assign(static_cast<size_t>(b.num_clusters() * K), -1);
   p.sphere.clear();
   p.pair_gap.assign(b.self_pairs().size(), std::numeric_limits<double>::quiet_NaN());
+  p.cluster_gap.assign(static_cast<size_t>(pair_clusters_.back()), std::numeric_limits<double>::quiet_NaN());
 }
 
 /// Link l's clearance from obstacle k by its bounding sphere: the box bound, made exact when it is below `need`.
@@ -142,6 +138,30 @@ double Checker::PairGap(Probe& p, int pair) const {
     const int W = body_->workspace_dim();
     g = Gap(&p.bounds[static_cast<size_t>(la * W)], &p.bounds[static_cast<size_t>(lb * W)], W) -
         body_->bound_radius(la) - body_->bound_radius(lb);
+  }
+  return g;
+}
+
+/// The smallest gap between a sphere of cluster ca (of self pair `pair`'s first link) and one of cluster cb (of
+/// its second), exact.
+double Checker::ClusterPairGap(Probe& p, int pair, int ca, int cb) const {
+  const BodyModel& b = *body_;
+  const auto [la, lb] = b.self_pairs()[static_cast<size_t>(pair)];
+  const int clusters_b = b.first_cluster(lb + 1) - b.first_cluster(lb);
+  double& g = p.cluster_gap[static_cast<size_t>(pair_clusters_[static_cast<size_t>(pair)] +
+                                                (ca - b.first_cluster(la)) * clusters_b + cb - b.first_cluster(lb))];
+  if (std::isnan(g)) {
+    const int W = b.workspace_dim();
+    Spheres(p, ca);
+    Spheres(p, cb);
+    double smallest = std::numeric_limits<double>::infinity();
+    for (int sa = b.first_in_cluster(ca); sa < b.first_in_cluster(ca + 1); ++sa) {
+      for (int sb = b.first_in_cluster(cb); sb < b.first_in_cluster(cb + 1); ++sb) {
+        smallest = std::min(smallest, Gap(&p.centres[static_cast<size_t>(sa * W)], &p.centres[static_cast<size_t>(sb * W)], W) -
+                                          b.sphere_radius(sa) - b.sphere_radius(sb));
+      }
+    }
+    g = smallest;
   }
   return g;
 }
@@ -198,6 +218,7 @@ Contact Checker::Scan(Probe& p, bool first_only, double* clearance) const {
                 b.cluster_radius(ca) - b.cluster_radius(cb) >= 0.0) {
           continue;
         }
+        if (ClusterPairGap(p, static_cast<int>(pair), ca, cb) >= 0.0) continue;
         Spheres(p, ca);
         Spheres(p, cb);
         for (int sa = b.first_in_cluster(ca); sa < b.first_in_cluster(ca + 1); ++sa) {
@@ -252,13 +273,9 @@ double Checker::Clearance(const double* q) const {
 }
 
 MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
-  const BodyModel& b = *body_;
-  const World& w = *world_;
-  const int J = b.num_joints(), L = b.num_links(), K = w.size(), W = b.workspace_dim();
-  const int P = static_cast<int>(b.self_pairs().size());
-  const double margin = settings_.margin, resolution = settings_.resolution;
-  MotionVerdict verdict;
+  const int J = body_->num_joints();
   if (!Finite(qa, J) || !Finite(qb, J)) {
+    MotionVerdict verdict;
     verdict.valid = false;
     verdict.contact = {Contact::Kind::kObstacle, 0, -1, std::numeric_limits<double>::quiet_NaN()};
     return verdict;
@@ -269,6 +286,53 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
   Probe& last = pool.Next();
   Fill(first, qa);
   Fill(last, qb);
+  return Between(first, last, pool);
+}
+
+PathVerdict Checker::CheckPath(const double* q, int n) const {
+  const int J = body_->num_joints();
+  PathVerdict verdict;
+  // Each state placed once, its measures kept for the motions on either side of it.
+  thread_local ProbePool<Probe> states;
+  thread_local ProbePool<Probe> pool;
+  states.used = 0;
+  for (int t = 0; t < n; ++t) {
+    const double* state = q + static_cast<size_t>(t) * static_cast<size_t>(J);
+    if (!Finite(state, J)) {
+      verdict.state = t;
+      verdict.state_contact = {Contact::Kind::kObstacle, 0, -1, std::numeric_limits<double>::quiet_NaN()};
+      return verdict;
+    }
+    Probe& p = states.Next();
+    Fill(p, state);
+    const Contact contact = Scan(p, true, nullptr);
+    if (contact.found()) {
+      verdict.state = t;
+      verdict.state_contact = contact;
+      return verdict;
+    }
+  }
+  for (int t = 0; t + 1 < n; ++t) {
+    pool.used = 0;
+    const MotionVerdict motion = Between(*states.probes[static_cast<size_t>(t)],
+                                         *states.probes[static_cast<size_t>(t + 1)], pool);
+    verdict.checks += motion.checks;
+    if (!motion.valid) {
+      verdict.motion = t;
+      verdict.motion_verdict = motion;
+      return verdict;
+    }
+  }
+  return verdict;
+}
+
+MotionVerdict Checker::Between(Probe& first, Probe& last, ProbePool<Probe>& pool) const {
+  const BodyModel& b = *body_;
+  const World& w = *world_;
+  const int J = b.num_joints(), L = b.num_links(), K = w.size(), W = b.workspace_dim();
+  const int P = static_cast<int>(b.self_pairs().size());
+  const double margin = settings_.margin, resolution = settings_.resolution;
+  MotionVerdict verdict;
   struct Piece {
     Probe* a;
     Probe* b;
@@ -277,13 +341,14 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
   // Pieces are looked at coarse to fine (breadth first): a motion that is not valid is usually found so after a
   // few configurations, before its valid stretches are certified.
   thread_local std::vector<Piece> queue;
-  thread_local std::vector<double> dq, qm, link_static, link_travel;
+  thread_local std::vector<double> dq, qm, link_static, link_travel, cluster_travel;
   queue.assign(1, {&first, &last, 0.0, 1.0});
   size_t next_piece = 0;
   dq.resize(static_cast<size_t>(J));
   qm.resize(static_cast<size_t>(J));
   link_static.resize(static_cast<size_t>(L));
   link_travel.resize(static_cast<size_t>(L));
+  cluster_travel.resize(static_cast<size_t>(b.num_clusters()));
   // Along a piece, every point within link l's bounding sphere moves at most link_travel[l] (BodyModel::Travel,
   // from either end); the distance between a point of link a and one of link b changes by at most what the
   // joints that move one link and not the other move them.
@@ -292,6 +357,14 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
     const size_t at = static_cast<size_t>(l * W);
     return std::min(b.Travel(l, joints, d, A.axes.data(), A.points.data(), &A.bounds[at]),
                     b.Travel(l, joints, d, B.axes.data(), B.points.data(), &B.bounds[at]));
+  };
+  // The same bound for a cluster of link l: its bounding sphere's travel, no more than its link's `bound`.
+  auto travel_of_cluster = [&](const Probe& A, const Probe& B, int l, int c, uint64_t joints, double bound) {
+    const double* d = dq.data();
+    const size_t at = static_cast<size_t>(c * W);
+    const double r = b.cluster_radius(c);
+    return std::min({bound, b.Travel(l, joints, d, A.axes.data(), A.points.data(), &A.clusters[at], r),
+                     b.Travel(l, joints, d, B.axes.data(), B.points.data(), &B.clusters[at], r)});
   };
   while (next_piece < queue.size()) {
     const Piece piece = queue[next_piece++];
@@ -304,6 +377,7 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
       link_static[static_cast<size_t>(l)] = b.bound_radius(l) < 0 ? 0.0 : b.StaticTravel(l, b.ancestor_joints(l), dq.data());
       link_travel[static_cast<size_t>(l)] = std::numeric_limits<double>::quiet_NaN();
     }
+    std::fill(cluster_travel.begin(), cluster_travel.end(), std::numeric_limits<double>::quiet_NaN());
     auto tight = [&](int l) {
       double& t = link_travel[static_cast<size_t>(l)];
       if (std::isnan(t)) t = b.bound_radius(l) < 0 ? 0.0 : travel(A, B, l, b.ancestor_joints(l));
@@ -333,12 +407,17 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
         if (t < t_static && link_clear(l, k, need)) continue;
         for (int c = b.first_cluster(l); c < b.first_cluster(l + 1) && !halve; ++c) {
           if (ClusterClearance(A, c, k) + ClusterClearance(B, c, k) >= need) continue;
+          // The cluster's own travel: a cluster near the moving joints' axes moves less than its link's far end.
+          double& tc = cluster_travel[static_cast<size_t>(c)];
+          if (std::isnan(tc)) tc = travel_of_cluster(A, B, l, c, b.ancestor_joints(l), t);
+          const double need_c = 2.0 * margin + tc;
+          if (ClusterClearance(A, c, k) + ClusterClearance(B, c, k) >= need_c) continue;
           const int c0 = b.first_in_cluster(c), c1 = b.first_in_cluster(c + 1);
           const double* da = SphereClearances(A, c, k);
           const double* db = SphereClearances(B, c, k);
           for (int s = c0; s < c1 && !halve; ++s) {
-            if (da[s - c0] + db[s - c0] >= need) continue;
-            halve = t >= resolution;
+            if (da[s - c0] + db[s - c0] >= need_c) continue;
+            halve = tc >= resolution;
           }
         }
       }
@@ -365,15 +444,24 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
       const uint64_t only_b = b.ancestor_joints(lb) & ~b.ancestor_joints(la);
       const double gaps = PairGap(A, pair) + PairGap(B, pair);
       if (gaps >= link_static[static_cast<size_t>(la)] + link_static[static_cast<size_t>(lb)]) continue;
-      const double t = travel(A, B, la, only_a) + travel(A, B, lb, only_b);
+      const double ta = travel(A, B, la, only_a), tb = travel(A, B, lb, only_b), t = ta + tb;
       if (gaps >= t) continue;
       for (int ca = b.first_cluster(la); ca < b.first_cluster(la + 1) && !halve; ++ca) {
+        double tca = -1.0;  // cluster ca's own travel, when first needed
         for (int cb = b.first_cluster(lb); cb < b.first_cluster(lb + 1) && !halve; ++cb) {
           auto cluster_gap = [&](const Probe& Q) {
             return Gap(&Q.clusters[static_cast<size_t>(ca * W)], &Q.clusters[static_cast<size_t>(cb * W)], W) -
                    b.cluster_radius(ca) - b.cluster_radius(cb);
           };
-          if (cluster_gap(A) + cluster_gap(B) >= t) continue;
+          const double gaps_c = cluster_gap(A) + cluster_gap(B);
+          if (gaps_c >= t) continue;
+          // The two clusters' own travels: links that stay close (a wrist and its hand) stay so only near
+          // the joint between them, where their parts move least.
+          if (tca < 0.0) tca = travel_of_cluster(A, B, la, ca, only_a, ta);
+          const double tc = tca + travel_of_cluster(A, B, lb, cb, only_b, tb);
+          if (gaps_c >= tc) continue;
+          // Each end's smallest sphere gap (measured once per configuration), then sphere pair by sphere pair.
+          if (ClusterPairGap(A, pair, ca, cb) + ClusterPairGap(B, pair, ca, cb) >= tc) continue;
           Spheres(A, ca);
           Spheres(A, cb);
           Spheres(B, ca);
@@ -384,8 +472,8 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
                 return Gap(&Q.centres[static_cast<size_t>(sa * W)], &Q.centres[static_cast<size_t>(sb * W)], W) -
                        b.sphere_radius(sa) - b.sphere_radius(sb);
               };
-              if (gap(A) + gap(B) >= t) continue;
-              halve = t >= resolution;
+              if (gap(A) + gap(B) >= tc) continue;
+              halve = tc >= resolution;
             }
           }
         }

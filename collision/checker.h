@@ -61,6 +61,17 @@ struct MotionVerdict {
   int64_t checks = 0;        // configurations checked between the ends
 };
 
+/// The verdict on a path of states: the first state that is not valid, or
+/// else the first motion between consecutive states that is not.
+struct PathVerdict {
+  int state = -1;              // the first state that is not valid (-1: every state is)
+  Contact state_contact;       // its contact
+  int motion = -1;             // the first motion t -> t + 1 that is not valid, every state being (-1: none)
+  MotionVerdict motion_verdict;
+  int64_t checks = 0;          // configurations checked between the states
+  bool valid() const { return state < 0 && motion < 0; }
+};
+
 class Checker {
  public:
   /// @throws flowplan::Error if the world's dimension is not the body's.
@@ -85,12 +96,28 @@ class Checker {
   MotionVerdict CheckMotion(const double* qa, const double* qb) const;
   bool MotionValid(const double* qa, const double* qb) const { return CheckMotion(qa, qb).valid; }
 
+  /// The n states q (n × J) judged as FirstContact judges each, then the motions between consecutive states as
+  /// CheckMotion does, in order, up to the first that is not valid: the same verdicts, each state placed once.
+  PathVerdict CheckPath(const double* q, int n) const;
+
   /// One line naming what touches what: "sphere 12 (link5_c0) is -0.003 from obstacle 4 (shelf_top)",
   /// "sphere 3 (hand_c0) is 0.01 below the floor", "sphere 2 (link1_c0) overlaps sphere 30 (link6_c0) by 0.004".
   std::string Describe(const Contact& contact) const;
 
  private:
   struct Probe;
+  /// The probes of the calls on one thread, reused so that a call allocates nothing once they have grown.
+  template <class P>
+  struct ProbePool {
+    std::vector<std::unique_ptr<P>> probes;
+    size_t used = 0;
+    P& Next() {
+      if (used == probes.size()) probes.push_back(std::make_unique<P>());
+      return *probes[used++];
+    }
+  };
+  /// The motion between two placed configurations, its midpoints drawn from `pool`.
+  MotionVerdict Between(Probe& first, Probe& last, ProbePool<Probe>& pool) const;
   void Fill(Probe& probe, const double* q) const;
   Contact Scan(Probe& probe, bool first_only, double* clearance) const;
   double LinkClearance(Probe& probe, int l, int k, double need) const;
@@ -98,10 +125,12 @@ class Checker {
   double ClusterClearance(const Probe& probe, int c, int k) const;
   const double* SphereClearances(Probe& probe, int c, int k) const;
   double PairGap(Probe& probe, int pair) const;
+  double ClusterPairGap(Probe& probe, int pair, int ca, int cb) const;
 
   std::shared_ptr<const BodyModel> body_;
   std::shared_ptr<const World> world_;
   CheckSettings settings_;
+  std::vector<int> pair_clusters_;  // (P + 1) where each self pair's cluster pairs start in Probe::cluster_gap
 };
 
 }  // namespace flowplan::collision

@@ -160,27 +160,23 @@ std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const to
       }
     }
     double smallest = std::numeric_limits<double>::infinity();
-    for (int64_t t = 0; t < T; ++t) {
-      const double* state = &states[static_cast<size_t>(t * J)];
-      if (measure_clearance) smallest = std::min(smallest, checker.Clearance(state));
-      if (!v.valid()) continue;
-      const collision::Contact contact = checker.FirstContact(state);
-      if (contact.found()) {
-        const Failure failure = contact.kind == collision::Contact::Kind::kSelf    ? Failure::kSelf
-                                : contact.kind == collision::Contact::Kind::kFloor ? Failure::kFloor
-                                                                                    : Failure::kCollision;
-        fail(failure, "state " + std::to_string(t) + ": " + checker.Describe(contact));
-      }
+    for (int64_t t = 0; t < T && measure_clearance; ++t) {
+      smallest = std::min(smallest, checker.Clearance(&states[static_cast<size_t>(t * J)]));
     }
     v.clearance = measure_clearance ? smallest : std::numeric_limits<double>::quiet_NaN();
-    for (int64_t t = 0; t + 1 < T && v.valid(); ++t) {
-      const collision::MotionVerdict motion =
-          checker.CheckMotion(&states[static_cast<size_t>(t * J)], &states[static_cast<size_t>((t + 1) * J)]);
-      v.motion_checks += motion.checks;
-      if (!motion.valid) {
-        fail(Failure::kMotion, "between states " + std::to_string(t) + " and " + std::to_string(t + 1) + ": " +
-                                   checker.Describe(motion.contact));
-      }
+    if (!v.valid()) continue;
+    const collision::PathVerdict path = checker.CheckPath(states.data(), static_cast<int>(T));
+    v.motion_checks += path.checks;
+    if (path.state >= 0) {
+      const collision::Contact& contact = path.state_contact;
+      const Failure failure = contact.kind == collision::Contact::Kind::kSelf    ? Failure::kSelf
+                              : contact.kind == collision::Contact::Kind::kFloor ? Failure::kFloor
+                                                                                  : Failure::kCollision;
+      fail(failure, "state " + std::to_string(path.state) + ": " + checker.Describe(contact));
+    } else if (path.motion >= 0) {
+      fail(Failure::kMotion, "between states " + std::to_string(path.motion) + " and " +
+                                 std::to_string(path.motion + 1) + ": " +
+                                 checker.Describe(path.motion_verdict.contact));
     }
   }
   return verdicts;

@@ -176,6 +176,67 @@ TEST(BodyModelTest, TheStaticTravelBoundIsNeverBelowTheTightOneAndHoldsAlongRand
   }
 }
 
+TEST(BodyModelTest, LinkAndClusterTravelBoundsHoldFromEitherEndForAnySetOfJoints) {
+  // What the motion check certifies with: along a segment, no sphere centre of link l moves (through the joints
+  // of a mask, the others held) farther from where it is at either end than Travel of the link's bounding
+  // sphere, nor than Travel of its cluster's bounding sphere, measured at that end.
+  const BodyModel& body = *Franka();
+  const int L = body.num_links(), J = body.num_joints(), S = body.num_spheres();
+  Rng rng(61);
+  std::vector<Frame> frames(static_cast<size_t>(L));
+  std::vector<double> c(static_cast<size_t>(3 * S));
+  int tighter = 0, compared = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const std::vector<double> qa = RandomQ(rng), qb = RandomQ(rng);
+    const uint64_t mask = trial % 3 == 0 ? ~uint64_t{0} : (rng.NextU64() & ((uint64_t{1} << J) - 1));
+    std::vector<double> dq(static_cast<size_t>(J));
+    for (int j = 0; j < J; ++j) dq[static_cast<size_t>(j)] = (mask >> j & 1) ? std::abs(qb[j] - qa[j]) : 0.0;
+    // The segment moves only the mask's joints: from qa towards qb in those, qa's values in the others.
+    std::vector<double> qe = qa;
+    for (int j = 0; j < J; ++j) {
+      if (mask >> j & 1) qe[static_cast<size_t>(j)] = qb[j];
+    }
+    std::vector<std::vector<double>> samples;
+    for (int k = 0; k <= 40; ++k) {
+      std::vector<double> q(static_cast<size_t>(J));
+      for (int j = 0; j < J; ++j) q[j] = qa[j] + k / 40.0 * (qe[j] - qa[j]);
+      body.Place(q.data(), frames.data(), c.data());
+      samples.push_back(c);
+    }
+    for (const std::vector<double>* end_q : {&qa, static_cast<const std::vector<double>*>(&qe)}) {
+      const std::vector<double>& end = end_q == &qa ? samples.front() : samples.back();
+      std::vector<double> axes(static_cast<size_t>(3 * J)), points(axes.size());
+      std::vector<double> bounds(static_cast<size_t>(3 * L)), clusters(static_cast<size_t>(3 * body.num_clusters()));
+      body.Place(end_q->data(), frames.data(), c.data());
+      body.JointAxes(frames.data(), axes.data(), points.data());
+      body.PlaceBounds(end_q->data(), frames.data(), bounds.data(), clusters.data());
+      for (int l = 0; l < L; ++l) {
+        if (body.bound_radius(l) < 0) continue;
+        const uint64_t joints = mask & body.ancestor_joints(l);
+        const double link_travel =
+            body.Travel(l, joints, dq.data(), axes.data(), points.data(), &bounds[static_cast<size_t>(3 * l)]);
+        for (int cl = body.first_cluster(l); cl < body.first_cluster(l + 1); ++cl) {
+          const double cluster_travel = body.Travel(l, joints, dq.data(), axes.data(), points.data(),
+                                                    &clusters[static_cast<size_t>(3 * cl)], body.cluster_radius(cl));
+          ++compared;
+          tighter += cluster_travel < link_travel - 1e-9;
+          for (int s = body.first_in_cluster(cl); s < body.first_in_cluster(cl + 1); ++s) {
+            for (const std::vector<double>& at : samples) {
+              double moved = 0.0;
+              for (int i = 0; i < 3; ++i) moved += std::pow(at[3 * s + i] - end[3 * s + i], 2);
+              ASSERT_LE(std::sqrt(moved), link_travel + 1e-12) << "trial " << trial << ", link " << l << ", sphere " << s;
+              ASSERT_LE(std::sqrt(moved), cluster_travel + 1e-12)
+                  << "trial " << trial << ", cluster " << cl << ", sphere " << s;
+            }
+          }
+        }
+      }
+    }
+  }
+  // The cluster bound is worth having: tighter than its link's for many clusters.
+  EXPECT_GT(tighter, compared / 4) << tighter << " of " << compared;
+}
+
 TEST(WorldTest, DistancesAreTheScriptsAndTheBoundsAreBelowThem) {
   const geometry::Scene scene = Clutter();
   const geometry::SceneRows rows = geometry::Rows(scene, 3, "test");
@@ -315,6 +376,69 @@ TEST(CheckerTest, AMotionCertifiedValidHasNoContactAtAnySampleAndAnInvalidOneNam
   }
   EXPECT_GE(valid, 25);
   EXPECT_GE(invalid, 25);
+}
+
+TEST(CheckerTest, APathIsJudgedAsItsStatesAndThenItsMotionsOneByOne) {
+  // CheckPath places each state once; its verdict must be the one of FirstContact on every state in order, then
+  // CheckMotion on every consecutive pair in order: the same first failure, contact and configurations checked.
+  const geometry::SceneRows rows = geometry::Rows(Clutter(), 3, "test");
+  const Checker checker(Franka(), std::make_shared<const World>(rows, 3), {0.01, 0.001});
+  Rng rng(23);
+  int valid = 0, bad_state = 0, bad_motion = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    // 3 to 8 states along a bent line between two random configurations.
+    const std::vector<double> qa = RandomQ(rng), qb = RandomQ(rng), bend = RandomQ(rng);
+    const int n = 3 + trial % 6;
+    std::vector<double> path(static_cast<size_t>(n * 7));
+    for (int t = 0; t < n; ++t) {
+      const double s = t / (n - 1.0);
+      for (int j = 0; j < 7; ++j) {
+        path[static_cast<size_t>(t * 7 + j)] =
+            qa[j] + s * (qb[j] - qa[j]) + 0.3 * std::sin(M_PI * s) * (bend[j] - 0.5 * (qa[j] + qb[j]));
+      }
+    }
+    if (trial % 50 == 7) path[static_cast<size_t>(2 * 7 + 2)] = std::nan("");
+    const PathVerdict verdict = checker.CheckPath(path.data(), n);
+    int first_state = -1;
+    Contact state_contact;
+    for (int t = 0; t < n && first_state < 0; ++t) {
+      state_contact = checker.FirstContact(&path[static_cast<size_t>(t * 7)]);
+      if (state_contact.found()) first_state = t;
+    }
+    ASSERT_EQ(verdict.state, first_state) << "trial " << trial;
+    if (first_state >= 0) {
+      ++bad_state;
+      EXPECT_EQ(verdict.state_contact.kind, state_contact.kind);
+      EXPECT_EQ(verdict.state_contact.sphere, state_contact.sphere);
+      EXPECT_EQ(verdict.state_contact.other, state_contact.other);
+      EXPECT_EQ(verdict.motion, -1);
+      EXPECT_FALSE(verdict.valid());
+      continue;
+    }
+    int first_motion = -1;
+    int64_t checks = 0;
+    MotionVerdict motion;
+    for (int t = 0; t + 1 < n && first_motion < 0; ++t) {
+      motion = checker.CheckMotion(&path[static_cast<size_t>(t * 7)], &path[static_cast<size_t>((t + 1) * 7)]);
+      checks += motion.checks;
+      if (!motion.valid) first_motion = t;
+    }
+    ASSERT_EQ(verdict.motion, first_motion) << "trial " << trial;
+    EXPECT_EQ(verdict.checks, checks) << "trial " << trial;
+    EXPECT_EQ(verdict.valid(), first_motion < 0);
+    if (first_motion >= 0) {
+      ++bad_motion;
+      EXPECT_EQ(verdict.motion_verdict.fraction, motion.fraction);
+      EXPECT_EQ(verdict.motion_verdict.contact.sphere, motion.contact.sphere);
+      EXPECT_EQ(verdict.motion_verdict.contact.other, motion.contact.other);
+    } else {
+      ++valid;
+    }
+  }
+  // Every kind of verdict was met.
+  EXPECT_GE(valid, 10);
+  EXPECT_GE(bad_state, 10);
+  EXPECT_GE(bad_motion, 10);
 }
 
 TEST(CheckerTest, APointRobotInTwoDimensions) {
