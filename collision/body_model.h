@@ -105,8 +105,9 @@ class BodyModel {
   /// most the static bound Σ_j travel_j |Δq_j| of bound_travel.
   double Travel(int l, uint64_t joints, const double* dq, const double* axes, const double* points,
                 const double* centre) const;
-  /// Travel of any point within a sphere of `radius` about `centre` that moves with link l (a cluster's
-  /// bounding sphere): tighter than the link's for a part of the link near the joints' axes.
+  /// The same bound for the sphere centres of link l that lie within `radius` of `centre` (a cluster's
+  /// bounding sphere; the static part holds for centres within the link's bounding sphere, as every sphere
+  /// centre of the link is): tighter than the link's for a part of the link near the joints' axes.
   double Travel(int l, uint64_t joints, const double* dq, const double* axes, const double* points,
                 const double* centre, double radius) const;
 

@@ -39,7 +39,11 @@ struct Checker::Probe {
   std::vector<double> sphere;         // the measured spheres' clearances, cluster by cluster
   std::vector<double> pair_gap;       // (P) the gap between each self pair's bounding spheres (NaN: not yet)
   std::vector<double> cluster_gap;    // the smallest gap between the spheres of each cluster pair of each self
-                                      // pair (Checker::pair_clusters_ numbering; NaN: not yet)
+                                      // pair (Checker::pair_clusters_ numbering), valid where cluster_gap_fill
+                                      // is `fill`: a robot with many clusters has tens of thousands of them, too
+                                      // many to reset for every configuration placed
+  std::vector<uint32_t> cluster_gap_fill;
+  uint32_t fill = 0;                  // counts this probe's Fill calls
 };
 
 
@@ -89,7 +93,12 @@ void Checker::Fill(Probe& p, const double* q) const {
   p.slot.assign(static_cast<size_t>(b.num_clusters() * K), -1);
   p.sphere.clear();
   p.pair_gap.assign(b.self_pairs().size(), std::numeric_limits<double>::quiet_NaN());
-  p.cluster_gap.assign(static_cast<size_t>(pair_clusters_.back()), std::numeric_limits<double>::quiet_NaN());
+  const size_t cluster_pairs = static_cast<size_t>(pair_clusters_.back());
+  if (++p.fill == 0 || p.cluster_gap.size() != cluster_pairs) {  // first use, or the count wrapped around
+    p.cluster_gap.assign(cluster_pairs, 0.0);
+    p.cluster_gap_fill.assign(cluster_pairs, 0);
+    p.fill = 1;
+  }
 }
 
 /// Link l's clearance from obstacle k by its bounding sphere: the box bound, made exact when it is below `need`.
@@ -148,17 +157,20 @@ double Checker::ClusterPairGap(Probe& p, int pair, int ca, int cb) const {
   const BodyModel& b = *body_;
   const auto [la, lb] = b.self_pairs()[static_cast<size_t>(pair)];
   const int clusters_b = b.first_cluster(lb + 1) - b.first_cluster(lb);
-  double& g = p.cluster_gap[static_cast<size_t>(pair_clusters_[static_cast<size_t>(pair)] +
-                                                (ca - b.first_cluster(la)) * clusters_b + cb - b.first_cluster(lb))];
-  if (std::isnan(g)) {
+  const size_t at = static_cast<size_t>(pair_clusters_[static_cast<size_t>(pair)] +
+                                        (ca - b.first_cluster(la)) * clusters_b + cb - b.first_cluster(lb));
+  double& g = p.cluster_gap[at];
+  if (p.cluster_gap_fill[at] != p.fill) {
+    p.cluster_gap_fill[at] = p.fill;
     const int W = b.workspace_dim();
     Spheres(p, ca);
     Spheres(p, cb);
     double smallest = std::numeric_limits<double>::infinity();
     for (int sa = b.first_in_cluster(ca); sa < b.first_in_cluster(ca + 1); ++sa) {
       for (int sb = b.first_in_cluster(cb); sb < b.first_in_cluster(cb + 1); ++sb) {
-        smallest = std::min(smallest, Gap(&p.centres[static_cast<size_t>(sa * W)], &p.centres[static_cast<size_t>(sb * W)], W) -
-                                          b.sphere_radius(sa) - b.sphere_radius(sb));
+        const double gap = Gap(&p.centres[static_cast<size_t>(sa * W)], &p.centres[static_cast<size_t>(sb * W)], W) -
+                           b.sphere_radius(sa) - b.sphere_radius(sb);
+        if (std::isnan(gap) || gap < smallest) smallest = gap;  // NaN stays: no screen passes it
       }
     }
     g = smallest;
