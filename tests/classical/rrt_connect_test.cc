@@ -85,6 +85,26 @@ TEST(RrtConnectTest, SameSeedSamePlansAndEachPlanIsItsOwnSearch) {
   EXPECT_TRUE(torch::equal(a.slice(0, 0, 1), planner.Plan(first).plans));
 }
 
+/// B requests from (0.1, 0.5) to (0.9, 0.5), straight through the disc of Disc05.
+planning::PlanRequest PastTheDisc(int64_t B, uint64_t seed) {
+  planning::PlanRequest request;
+  request.start = torch::tensor({0.1f, 0.5f, 0.0f, 0.0f}).repeat({B, 1});
+  request.goal = torch::tensor({0.9f, 0.5f, 0.0f, 0.0f}).repeat({B, 1});
+  request.scene = Disc05();
+  request.seed = seed;
+  return request;
+}
+
+/// The least distance from Disc05's centre of the straight pieces between a plan's (T, 4) states, each sampled at
+/// 21 points: plain geometry.
+double DiscCentreDistance(const torch::Tensor& plan) {
+  const torch::Tensor p = plan.to(torch::kFloat64).slice(1, 0, 2);
+  const int64_t T = p.size(0);
+  const torch::Tensor s = torch::linspace(0, 1, 21, torch::kFloat64).view({1, -1, 1});
+  const torch::Tensor dense = p.slice(0, 0, T - 1).unsqueeze(1) + s * (p.slice(0, 1) - p.slice(0, 0, T - 1)).unsqueeze(1);
+  return (dense - torch::tensor({0.5, 0.5}, torch::kFloat64)).norm(2, -1).min().item<double>();
+}
+
 // With a budget too small for one search to go around the disc every time, further attempts find plans the first
 // search did not, keep the plans it did find bit for bit, and every plan found clears the disc (plain geometry).
 TEST(RrtConnectTest, FurtherAttemptsFindWhatOneSearchMissesAndKeepWhatItFound) {
@@ -93,18 +113,13 @@ TEST(RrtConnectTest, FurtherAttemptsFindWhatOneSearchMissesAndKeepWhatItFound) {
   once.max_iterations = 6;
   RrtConnectConfig thrice = once;
   thrice.attempts = 3;
-  planning::PlanRequest request;
-  request.start = torch::tensor({0.1f, 0.5f, 0.0f, 0.0f}).repeat({B, 1});
-  request.goal = torch::tensor({0.9f, 0.5f, 0.0f, 0.0f}).repeat({B, 1});
-  request.scene = Disc05();
-  request.seed = 5;
+  const planning::PlanRequest request = PastTheDisc(B, 5);
   const planning::PlanResult one = RrtConnectPlanner(Disc(32), once).Plan(request);
   const planning::PlanResult three = RrtConnectPlanner(Disc(32), thrice).Plan(request);
   const int64_t found_once = one.found.sum().item<int64_t>(), found_thrice = three.found.sum().item<int64_t>();
   ASSERT_GT(found_once, 0);
   ASSERT_LT(found_once, B) << "the budget is large enough for every search: the test shows nothing";
   EXPECT_GT(found_thrice, found_once);
-  const torch::Tensor s = torch::linspace(0, 1, 21, torch::kFloat64).view({1, -1, 1});
   for (int64_t b = 0; b < B; ++b) {
     if (one.found[b].item<bool>()) {
       EXPECT_TRUE(three.found[b].item<bool>());
@@ -115,10 +130,7 @@ TEST(RrtConnectTest, FurtherAttemptsFindWhatOneSearchMissesAndKeepWhatItFound) {
       continue;
     }
     EXPECT_EQ(three.failure[static_cast<size_t>(b)], "");
-    const torch::Tensor p = three.plans[b].to(torch::kFloat64).slice(1, 0, 2);
-    const torch::Tensor dense = p.slice(0, 0, 31).unsqueeze(1) + s * (p.slice(0, 1) - p.slice(0, 0, 31)).unsqueeze(1);
-    EXPECT_GT((dense - torch::tensor({0.5, 0.5}, torch::kFloat64)).norm(2, -1).min().item<double>(),
-              0.2 + 0.05 - 0.0005);
+    EXPECT_GT(DiscCentreDistance(three.plans[b]), 0.2 + 0.05 - 0.0005) << "plan " << b;
   }
 }
 
@@ -133,11 +145,7 @@ TEST(RrtConnectTest, APathTooLongToTimeWithinTheSpeedLimitsIsFollowedByAFurtherS
   once.simplify = false;
   RrtConnectConfig thrice = once;
   thrice.attempts = 3;
-  planning::PlanRequest request;
-  request.start = torch::tensor({0.1f, 0.5f, 0.0f, 0.0f}).repeat({B, 1});
-  request.goal = torch::tensor({0.9f, 0.5f, 0.0f, 0.0f}).repeat({B, 1});
-  request.scene = Disc05();
-  request.seed = 8;
+  const planning::PlanRequest request = PastTheDisc(B, 8);
   const planning::PlanResult one = RrtConnectPlanner(info, once).Plan(request);
   const planning::PlanResult three = RrtConnectPlanner(info, thrice).Plan(request);
   int too_long = 0, recovered = 0;
@@ -155,10 +163,7 @@ TEST(RrtConnectTest, APathTooLongToTimeWithinTheSpeedLimitsIsFollowedByAFurtherS
     const torch::Tensor p = three.plans[b].to(torch::kFloat64).slice(1, 0, 2);
     const double fastest = (p.slice(0, 1) - p.slice(0, 0, -1)).abs().max().item<double>() / kDt;
     EXPECT_LE(fastest, kSpeed * (1.0 + 1e-4)) << "plan " << b;
-    const torch::Tensor s = torch::linspace(0, 1, 21, torch::kFloat64).view({1, -1, 1});
-    const torch::Tensor dense = p.slice(0, 0, 15).unsqueeze(1) + s * (p.slice(0, 1) - p.slice(0, 0, 15)).unsqueeze(1);
-    EXPECT_GT((dense - torch::tensor({0.5, 0.5}, torch::kFloat64)).norm(2, -1).min().item<double>(),
-              0.2 + 0.05 - 0.0005);
+    EXPECT_GT(DiscCentreDistance(three.plans[b]), 0.2 + 0.05 - 0.0005) << "plan " << b;
   }
   ASSERT_GT(too_long, 0) << "every first path could be timed: the test shows nothing";
   EXPECT_GT(recovered, 0);
