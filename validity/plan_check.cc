@@ -82,6 +82,12 @@ std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const to
                                             const torch::Tensor& goal, const geometry::SceneRows& scene,
                                             const torch::Tensor& found, const collision::WorldOptions& world,
                                             bool measure_clearance) const {
+  return CheckIn(ConfigurationChecker(scene, world), plans, start, goal, found, measure_clearance);
+}
+
+std::vector<PlanVerdict> PlanChecker::CheckIn(const collision::Checker& checker, const torch::Tensor& plans,
+                                              const torch::Tensor& start, const torch::Tensor& goal,
+                                              const torch::Tensor& found, bool measure_clearance) const {
   const kinematics::RobotDescription& robot = robot_->description();
   const int64_t J = robot_->num_joints();
   if (!plans.defined() || plans.dim() != 3 || plans.size(2) < J) {
@@ -97,7 +103,6 @@ std::vector<PlanVerdict> PlanChecker::Check(const torch::Tensor& plans, const to
   const torch::Tensor goal_q = Positions(goal, N, J, D, "goal").contiguous();
   const torch::Tensor finite = torch::isfinite(plans.to(torch::kFloat64)).flatten(1).all(1);  // (N,)
   const torch::Tensor found_cpu = found.defined() ? found.to(torch::kCPU, torch::kBool).contiguous() : torch::Tensor();
-  const collision::Checker checker = ConfigurationChecker(scene, world);
   const double* qa = q.data_ptr<double>();
   const double* sa = start_q.data_ptr<double>();
   const double* ga = goal_q.data_ptr<double>();

@@ -103,6 +103,13 @@ class PlanChecker {
                                  const geometry::SceneRows& scene, const torch::Tensor& found = torch::Tensor(),
                                  const collision::WorldOptions& world = {}, bool measure_clearance = true) const;
 
+  /// As Check, in `world`, a check this checker's ConfigurationChecker made
+  /// for the scene and world options: for a planner that checks several plans
+  /// in one scene and prepares the scene once.
+  std::vector<PlanVerdict> CheckIn(const collision::Checker& world, const torch::Tensor& plans,
+                                   const torch::Tensor& start, const torch::Tensor& goal,
+                                   const torch::Tensor& found = torch::Tensor(), bool measure_clearance = true) const;
+
   /// The validity check of configurations and motions in `scene` and `world`
   /// (as in Check), with this checker's settings: what RRT-Connect and the
   /// start and goal checks use. `names` (K) name the obstacles in reasons.
