@@ -302,6 +302,7 @@ MotionVerdict Checker::CheckMotion(const double* qa, const double* qb) const {
 }
 
 PathVerdict Checker::CheckPath(const double* q, int n) const {
+  if (n < 0) throw InternalError("collision check: a path of " + std::to_string(n) + " states");
   const int J = body_->num_joints();
   PathVerdict verdict;
   // Each state placed once, its measures kept for the motions on either side of it.

@@ -98,6 +98,7 @@ class Checker {
 
   /// The n states q (n × J) judged as FirstContact judges each, then the motions between consecutive states as
   /// CheckMotion does, in order, up to the first that is not valid: the same verdicts, each state placed once.
+  /// @throws flowplan::InternalError for n < 0.
   PathVerdict CheckPath(const double* q, int n) const;
 
   /// One line naming what touches what: "sphere 12 (link5_c0) is -0.003 from obstacle 4 (shelf_top)",

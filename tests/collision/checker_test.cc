@@ -439,6 +439,9 @@ TEST(CheckerTest, APathIsJudgedAsItsStatesAndThenItsMotionsOneByOne) {
   EXPECT_GE(valid, 10);
   EXPECT_GE(bad_state, 10);
   EXPECT_GE(bad_motion, 10);
+  // No states is a valid path; a negative count is a caller's error, not a valid path.
+  EXPECT_TRUE(checker.CheckPath(nullptr, 0).valid());
+  EXPECT_THROW(checker.CheckPath(nullptr, -1), InternalError);
 }
 
 TEST(CheckerTest, APointRobotInTwoDimensions) {
