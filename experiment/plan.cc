@@ -16,20 +16,22 @@
 
 namespace flowplan::experiment {
 
-void CheckOutputsFree(const std::string& prefix, bool force) {
-  if (force) return;
-  for (const char* extension : {".json", ".h5", ".png"}) {
-    if (std::filesystem::exists(prefix + extension)) {
-      throw Error(prefix + extension + ": exists; give --force to replace it, or --out another prefix");
-    }
+namespace {
+
+/// Unless `force`: refuses `path` if it exists, pointing --out at `other`.
+void RefuseExisting(const std::string& path, bool force, const std::string& other) {
+  if (!force && std::filesystem::exists(path)) {
+    throw Error(path + ": exists; give --force to replace it, or --out another " + other);
   }
 }
 
-void CheckOutputFree(const std::string& path, bool force) {
-  if (!force && std::filesystem::exists(path)) {
-    throw Error(path + ": exists; give --force to replace it, or --out another file");
-  }
+}  // namespace
+
+void CheckOutputsFree(const std::string& prefix, bool force) {
+  for (const char* extension : {".json", ".h5", ".png"}) RefuseExisting(prefix + extension, force, "prefix");
 }
+
+void CheckOutputFree(const std::string& path, bool force) { RefuseExisting(path, force, "file"); }
 
 namespace {
 
