@@ -46,10 +46,10 @@ struct PlanResult {
   torch::Tensor plans;  // (B, T, D) raw
   torch::Tensor found;  // (B,) bool: a plan was found (sampling planners always find one)
   /// (B,) wall time of the call that made each plan, and how many plans that
-  /// call made: a learned planner makes a batch in one call, RRT-Connect one
-  /// plan per call, and counts in each plan an equal share of what its call
-  /// prepares for all of them (the scene's collision world). call_seconds /
-  /// call_plans is the time per plan.
+  /// call made: a learned planner makes a batch in one call; RRT-Connect times
+  /// each plan on its own (call_plans 1), adding to each an equal share of
+  /// what its call prepares once for all its plans (the scene's collision
+  /// world). call_seconds / call_plans is the time per plan.
   std::vector<double> call_seconds;
   std::vector<int64_t> call_plans;
   /// (B,) how each plan was made, for planners with more than one way (the
