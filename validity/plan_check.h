@@ -103,10 +103,11 @@ class PlanChecker {
                                  const geometry::SceneRows& scene, const torch::Tensor& found = torch::Tensor(),
                                  const collision::WorldOptions& world = {}, bool measure_clearance = true) const;
 
-  /// As Check, in `world`, a check this checker's ConfigurationChecker made
-  /// for the scene and world options: for a planner that checks several plans
-  /// in one scene and prepares the scene once.
-  std::vector<PlanVerdict> CheckIn(const collision::Checker& world, const torch::Tensor& plans,
+  /// As Check, with the scene and world options already prepared: `checker`
+  /// is what ConfigurationChecker(scene, world) of this PlanChecker returned.
+  /// A planner that checks plans in one scene more than once builds that
+  /// checker once and passes it to each call; the verdicts equal Check's.
+  std::vector<PlanVerdict> CheckIn(const collision::Checker& checker, const torch::Tensor& plans,
                                    const torch::Tensor& start, const torch::Tensor& goal,
                                    const torch::Tensor& found = torch::Tensor(), bool measure_clearance = true) const;
 

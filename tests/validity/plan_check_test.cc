@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <iostream>
+#include <set>
 
 #include "core/error.h"
 #include "sim/franka_model.h"
@@ -227,6 +228,54 @@ TEST(PlanCheckTest, ArmMotionsAgreeWithDenseSampling) {
   EXPECT_GT(states_in_collision, 0);
   std::cout << agree_valid << " valid, " << agree_invalid_motion << " through the board between states, "
             << states_in_collision << " with a state in it\n";
+}
+
+TEST(PlanCheckTest, CheckingInAPreparedWorldGivesCheckVerdictsForThatWorldCallAfterCall) {
+  const auto robot = Franka();
+  const PlanChecker checker(robot, 1.0, CheckConfig{});  // a second between states: within the speed limits
+  geometry::Scene board;
+  board.boxes.push_back({{0.55, 0.0, 0.45}, {0.3, 0.02, 0.5}, {1.0, 0.0, 0.0, 0.0}, NAN});
+  const geometry::SceneRows rows = geometry::Rows(board, 3, "test"), none;
+  // Plans that sweep the arm across the board: some pass it, some go through it, between states or at one.
+  torch::manual_seed(4);
+  const torch::Tensor ready = torch::tensor({0.0, -0.785398, 0.0, -2.356194, 0.0, 1.570796, 0.785398}, torch::kFloat64);
+  const int64_t N = 40, T = 4;
+  torch::Tensor plans = torch::zeros({N, T, 14}, torch::kFloat64);
+  for (int64_t n = 0; n < N; ++n) {
+    for (int64_t t = 0; t < T; ++t) {
+      torch::Tensor q = ready.clone();
+      q[0] = -1.2 + 0.8 * static_cast<double>(t) + 0.3 * (torch::rand({1}, torch::kFloat64).item<double>() - 0.5);
+      q.slice(0, 1, 7) += 0.6 * (torch::rand({6}, torch::kFloat64) - 0.5);
+      plans[n][t].slice(0, 0, 7) = q;
+    }
+  }
+  const torch::Tensor start = plans.select(1, 0), goal = plans.select(1, T - 1);
+  const collision::WorldOptions low_floor{/*floor_height=*/-0.5};
+  const collision::Checker prepared = checker.ConfigurationChecker(rows, low_floor);
+  const collision::Checker empty = checker.ConfigurationChecker(none, low_floor);
+  const std::vector<PlanVerdict> in_board = checker.Check(plans, start, goal, rows, {}, low_floor);
+  const std::vector<PlanVerdict> in_nothing = checker.Check(plans, start, goal, none, {}, low_floor);
+  std::set<Failure> seen;
+  int differ = 0;
+  for (int call = 0; call < 2; ++call) {  // a prepared world is not changed by checking in it
+    const std::vector<PlanVerdict> a = checker.CheckIn(prepared, plans, start, goal);
+    const std::vector<PlanVerdict> b = checker.CheckIn(empty, plans, start, goal);
+    for (int64_t n = 0; n < N; ++n) {
+      const auto i = static_cast<size_t>(n);
+      EXPECT_EQ(a[i].failure, in_board[i].failure) << "plan " << n;
+      EXPECT_EQ(a[i].reason, in_board[i].reason) << "plan " << n;
+      EXPECT_EQ(a[i].clearance, in_board[i].clearance) << "plan " << n;
+      EXPECT_EQ(a[i].motion_checks, in_board[i].motion_checks) << "plan " << n;
+      EXPECT_EQ(b[i].failure, in_nothing[i].failure) << "plan " << n;
+      EXPECT_EQ(b[i].reason, in_nothing[i].reason) << "plan " << n;
+      seen.insert(a[i].failure);
+      differ += a[i].failure != b[i].failure;
+    }
+  }
+  // The cases the equality covers: valid plans, plans through the board, and the world decides between them.
+  EXPECT_TRUE(seen.count(Failure::kNone));
+  EXPECT_TRUE(seen.count(Failure::kMotion) || seen.count(Failure::kCollision));
+  EXPECT_GT(differ, 0);
 }
 
 TEST(PlanQualityTest, HandValuesOfALineAndACubic) {
