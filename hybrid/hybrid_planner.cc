@@ -24,7 +24,8 @@ HybridPlanner::HybridPlanner(std::unique_ptr<planning::LearnedPlanner> proposer,
 }
 
 void HybridPlanner::RetimeTooFast(torch::Tensor& candidates, std::vector<validity::PlanVerdict>& verdicts,
-                                  std::vector<bool>& retimed, const planning::PlanRequest& one) const {
+                                  std::vector<bool>& retimed, const planning::PlanRequest& one,
+                                  const collision::Checker& world) const {
   std::vector<int64_t> too_fast;
   for (size_t n = 0; n < verdicts.size(); ++n) {
     if (verdicts[n].failure == validity::Failure::kSpeedLimit) too_fast.push_back(static_cast<int64_t>(n));
@@ -42,7 +43,7 @@ void HybridPlanner::RetimeTooFast(torch::Tensor& candidates, std::vector<validit
   }
   const torch::Tensor again = torch::stack(timed);  // (R, T, D)
   const std::vector<validity::PlanVerdict> second =
-      checker_.Check(again, one.start[0], one.goal[0], one.scene, {}, one.world);
+      checker_.CheckIn(world, again, one.start[0], one.goal[0]);
   candidates = candidates.clone();
   for (size_t r = 0; r < too_fast.size(); ++r) {
     if (!second[r].valid()) continue;  // the proposal keeps its own verdict, and its own states for a seed
@@ -55,7 +56,8 @@ void HybridPlanner::RetimeTooFast(torch::Tensor& candidates, std::vector<validit
 
 HybridPlanner::Proposals HybridPlanner::Propose(const planning::PlanRequest& one,
                                                 const planning::PlanSettings& settings,
-                                                const planning::PlanSettings& cost_settings, bool for_seed) const {
+                                                const planning::PlanSettings& cost_settings, bool for_seed,
+                                                const collision::Checker& world) const {
   const int64_t N = config_.proposals, D = state_dim();
   planning::PlanRequest request = one;
   request.start = one.start.expand({N, D}).contiguous();
@@ -64,9 +66,9 @@ HybridPlanner::Proposals HybridPlanner::Propose(const planning::PlanRequest& one
   const planning::PlanResult planned = proposer_->Plan(request);
   Proposals p;
   p.plans = planned.plans;
-  p.verdicts = checker_.Check(p.plans, one.start[0], one.goal[0], one.scene, planned.found, one.world);
+  p.verdicts = checker_.CheckIn(world, p.plans, one.start[0], one.goal[0], planned.found);
   p.retimed.assign(static_cast<size_t>(N), false);
-  RetimeTooFast(p.plans, p.verdicts, p.retimed, one);
+  RetimeTooFast(p.plans, p.verdicts, p.retimed, one, world);
   for (const auto& v : p.verdicts) p.any_valid = p.any_valid || v.valid();
   // The best candidate by guidance cost, then joint-space path length: among the valid ones, or among all the
   // finite proposals when none is valid and one seeds RRT-Connect. With one such candidate there is no choice.
@@ -134,6 +136,8 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
         continue;
       }
     }
+    // Every check from here on is in the request's scene: its collision world is built once.
+    const collision::Checker world = checker_.ConfigurationChecker(one.scene, one.world);
     // The unguided proposals first when asked (no cost gradients: a fraction of a guided plan's time), then the
     // guided ones when none of those is valid.
     Proposals proposed;
@@ -141,11 +145,11 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
     if (unguided) {
       planning::PlanSettings free = request.settings;
       free.values["guidance.scale"] = 0.0;
-      proposed = Propose(one, free, request.settings, /*for_seed=*/false);
+      proposed = Propose(one, free, request.settings, /*for_seed=*/false, world);
     }
     if (!proposed.any_valid) {
       unguided = false;
-      proposed = Propose(one, request.settings, request.settings, /*for_seed=*/true);
+      proposed = Propose(one, request.settings, request.settings, /*for_seed=*/true, world);
     }
     FLOWPLAN_DEMAND(!proposed.any_valid || proposed.best >= 0);
     const bool any_valid = proposed.any_valid;
@@ -162,13 +166,13 @@ planning::PlanResult HybridPlanner::Plan(const planning::PlanRequest& request) c
           best >= 0 ? fallback_->PlanAlong(classical, candidates.slice(0, best, best + 1)) : fallback_->Plan(classical);
       bool seeded = !fallback.route.empty() && fallback.route[0] == "seeded";
       validity::PlanVerdict verdict =
-          checker_.Check(fallback.plans, one.start[0], one.goal[0], request.scene, fallback.found, one.world)[0];
+          checker_.CheckIn(world, fallback.plans, one.start[0], one.goal[0], fallback.found)[0];
       if (seeded && !verdict.valid()) {
         // A path along the proposal can be too long to keep within the speed limits: search without it (a search
         // of its own, with RRT-Connect's whole budget). A refused seeded plan is kept if that finds nothing.
         planning::PlanResult unseeded = fallback_->Plan(classical);
         const validity::PlanVerdict second =
-            checker_.Check(unseeded.plans, one.start[0], one.goal[0], request.scene, unseeded.found, one.world)[0];
+            checker_.CheckIn(world, unseeded.plans, one.start[0], one.goal[0], unseeded.found)[0];
         if (second.valid() || unseeded.found[0].item<bool>()) {
           seeded = false;
           fallback = std::move(unseeded);

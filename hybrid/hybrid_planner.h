@@ -98,16 +98,19 @@ class HybridPlanner : public planning::Planner {
   };
 
   /// Proposes for `one` (a request of one plan) with the proposer's `settings`; costs are weighed with
-  /// `cost_settings`. With none valid, a proposal to seed RRT-Connect is chosen only when `for_seed`.
+  /// `cost_settings`. With none valid, a proposal to seed RRT-Connect is chosen only when `for_seed`. The
+  /// proposals are checked in `world`: checker_.ConfigurationChecker(one.scene, one.world).
   Proposals Propose(const planning::PlanRequest& one, const planning::PlanSettings& settings,
-                    const planning::PlanSettings& cost_settings, bool for_seed) const;
+                    const planning::PlanSettings& cost_settings, bool for_seed,
+                    const collision::Checker& world) const;
 
   /// Proposals whose first failure is a joint moving too fast (their ends and joint limits passed; the collision
   /// checks, which come later, were not run) are timed again along their own path (planning::TimeAlongPath) and
   /// checked again in full; those that then pass replace their proposal in `candidates` (N, T, D), with their
-  /// verdicts, and are marked in `retimed` (N).
+  /// verdicts, and are marked in `retimed` (N). Checked in `world`, as in Propose.
   void RetimeTooFast(torch::Tensor& candidates, std::vector<validity::PlanVerdict>& verdicts,
-                     std::vector<bool>& retimed, const planning::PlanRequest& one) const;
+                     std::vector<bool>& retimed, const planning::PlanRequest& one,
+                     const collision::Checker& world) const;
 
   std::unique_ptr<planning::LearnedPlanner> proposer_;
   std::unique_ptr<classical::RrtConnectPlanner> fallback_;
