@@ -29,7 +29,7 @@ std::string ErrorOf(const std::map<std::string, std::string>& variables) {
   return "no error";
 }
 
-TEST(WorldTest, NoLauncherOrOneProcessIsNoJob) {
+TEST(ProcessWorldTest, NoLauncherOrOneProcessIsNoJob) {
   EXPECT_FALSE(FromVariables({}).has_value());
   EXPECT_FALSE(FromVariables({{"WORLD_SIZE", "1"}, {"RANK", "0"}}).has_value());
   EXPECT_FALSE(FromVariables({{"SLURM_STEP_NUM_TASKS", "1"}, {"SLURM_PROCID", "0"}}).has_value());
@@ -37,7 +37,7 @@ TEST(WorldTest, NoLauncherOrOneProcessIsNoJob) {
   EXPECT_FALSE(FromVariables({{"SLURM_NTASKS", "8"}, {"SLURM_PROCID", "0"}, {"MASTER_ADDR", "h"}}).has_value());
 }
 
-TEST(WorldTest, ReadsTorchrunVariables) {
+TEST(ProcessWorldTest, ReadsTorchrunVariables) {
   const auto world = FromVariables({{"RANK", "3"},
                                     {"WORLD_SIZE", "4"},
                                     {"LOCAL_RANK", "1"},
@@ -56,7 +56,7 @@ TEST(WorldTest, ReadsTorchrunVariables) {
   EXPECT_EQ(world->source, "torchrun");
 }
 
-TEST(WorldTest, ReadsSlurmVariablesWithDefaults) {
+TEST(ProcessWorldTest, ReadsSlurmVariablesWithDefaults) {
   const auto world = FromVariables({{"SLURM_PROCID", "5"},
                                     {"SLURM_NTASKS", "8"},
                                     {"SLURM_STEP_NUM_TASKS", "8"},
@@ -78,7 +78,7 @@ TEST(WorldTest, ReadsSlurmVariablesWithDefaults) {
             1);
 }
 
-TEST(WorldTest, NamesTheVariableAtFault) {
+TEST(ProcessWorldTest, NamesTheVariableAtFault) {
   EXPECT_THAT(ErrorOf({{"WORLD_SIZE", "2"}, {"MASTER_ADDR", "h"}}), HasSubstr("RANK is not set"));
   EXPECT_THAT(ErrorOf({{"WORLD_SIZE", "2"}, {"RANK", "2"}, {"MASTER_ADDR", "h"}}), HasSubstr("RANK=2"));
   EXPECT_THAT(ErrorOf({{"WORLD_SIZE", "two"}}), HasSubstr("WORLD_SIZE=two"));
