@@ -250,32 +250,42 @@ TEST(PlanCheckTest, CheckingInAPreparedWorldGivesCheckVerdictsForThatWorldCallAf
     }
   }
   const torch::Tensor start = plans.select(1, 0), goal = plans.select(1, T - 1);
-  const collision::WorldOptions low_floor{/*floor_height=*/-0.5};
-  const collision::Checker prepared = checker.ConfigurationChecker(rows, low_floor);
-  const collision::Checker empty = checker.ConfigurationChecker(none, low_floor);
-  const std::vector<PlanVerdict> in_board = checker.Check(plans, start, goal, rows, {}, low_floor);
-  const std::vector<PlanVerdict> in_nothing = checker.Check(plans, start, goal, none, {}, low_floor);
-  std::set<Failure> seen;
-  int differ = 0;
-  for (int call = 0; call < 2; ++call) {  // a prepared world is not changed by checking in it
-    const std::vector<PlanVerdict> a = checker.CheckIn(prepared, plans, start, goal);
-    const std::vector<PlanVerdict> b = checker.CheckIn(empty, plans, start, goal);
-    for (int64_t n = 0; n < N; ++n) {
-      const auto i = static_cast<size_t>(n);
-      EXPECT_EQ(a[i].failure, in_board[i].failure) << "plan " << n;
-      EXPECT_EQ(a[i].reason, in_board[i].reason) << "plan " << n;
-      EXPECT_EQ(a[i].clearance, in_board[i].clearance) << "plan " << n;
-      EXPECT_EQ(a[i].motion_checks, in_board[i].motion_checks) << "plan " << n;
-      EXPECT_EQ(b[i].failure, in_nothing[i].failure) << "plan " << n;
-      EXPECT_EQ(b[i].reason, in_nothing[i].reason) << "plan " << n;
-      seen.insert(a[i].failure);
-      differ += a[i].failure != b[i].failure;
+  // Three worlds: the board over a floor out of reach, the board over a floor some states reach, and nothing.
+  collision::WorldOptions low, high;
+  low.floor_height = -0.5;
+  high.floor_height = 0.3;
+  struct World {
+    geometry::SceneRows rows;
+    collision::WorldOptions options;
+  };
+  const std::vector<World> worlds = {{rows, low}, {rows, high}, {none, low}};
+  std::vector<collision::Checker> prepared;
+  std::vector<std::vector<PlanVerdict>> checked;
+  for (const World& w : worlds) {
+    prepared.push_back(checker.ConfigurationChecker(w.rows, w.options));
+    checked.push_back(checker.Check(plans, start, goal, w.rows, {}, w.options));
+  }
+  std::vector<std::set<Failure>> seen(worlds.size());
+  for (int call = 0; call < 2; ++call) {  // a prepared world is not changed by checking in it, or in another
+    for (size_t w = 0; w < worlds.size(); ++w) {
+      const std::vector<PlanVerdict> in = checker.CheckIn(prepared[w], plans, start, goal);
+      for (int64_t n = 0; n < N; ++n) {
+        const auto i = static_cast<size_t>(n);
+        EXPECT_EQ(in[i].failure, checked[w][i].failure) << "world " << w << ", plan " << n;
+        EXPECT_EQ(in[i].reason, checked[w][i].reason) << "world " << w << ", plan " << n;
+        EXPECT_EQ(in[i].clearance, checked[w][i].clearance) << "world " << w << ", plan " << n;
+        EXPECT_EQ(in[i].motion_checks, checked[w][i].motion_checks) << "world " << w << ", plan " << n;
+        seen[w].insert(in[i].failure);
+      }
     }
   }
-  // The cases the equality covers: valid plans, plans through the board, and the world decides between them.
-  EXPECT_TRUE(seen.count(Failure::kNone));
-  EXPECT_TRUE(seen.count(Failure::kMotion) || seen.count(Failure::kCollision));
-  EXPECT_GT(differ, 0);
+  // The cases the equality covers, each world deciding: valid plans and plans through the board, plans that
+  // reach the high floor, and no collision without the board.
+  EXPECT_TRUE(seen[0].count(Failure::kNone));
+  EXPECT_TRUE(seen[0].count(Failure::kMotion) || seen[0].count(Failure::kCollision));
+  EXPECT_FALSE(seen[0].count(Failure::kFloor));
+  EXPECT_TRUE(seen[1].count(Failure::kFloor));
+  EXPECT_FALSE(seen[2].count(Failure::kMotion) || seen[2].count(Failure::kCollision));
 }
 
 TEST(PlanQualityTest, HandValuesOfALineAndACubic) {
