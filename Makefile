@@ -49,8 +49,7 @@ sanitize: deps
 	./scripts/sanitize.sh address $(ASAN_BUILD) -j $(JOBS)
 
 sanitize-thread: deps
-	cmake -S . -B $(TSAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFLOWPLAN_SANITIZE=thread \
-	  -DFLOWPLAN_TEST_EACH_CASE=ON
+	cmake -S . -B $(TSAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFLOWPLAN_SANITIZE=thread
 	cmake --build $(TSAN_BUILD) -j $(JOBS)
 	./scripts/sanitize.sh thread $(TSAN_BUILD) -j $(JOBS)
 

@@ -33,6 +33,11 @@ case "$mode" in
     # flowplan's own threads (core/parallel.h: data generation, chunked planning and evaluation, scene
     # families, sharded gradients) and the processes of a distributed job. Not the native kernels' tests
     # for several thread counts (SameBitsForAnyThreadCount): those threads are LibTorch's OpenMP pool.
+    # Cases are selected by name: the build must register each as a CTest test (a thread build does by default).
+    if ! grep -q '^FLOWPLAN_TEST_EACH_CASE:BOOL=ON$' "$build/CMakeCache.txt"; then
+      echo "sanitize.sh: $build: configured without FLOWPLAN_TEST_EACH_CASE=ON; the thread mode selects test cases by name" >&2
+      exit 2
+    fi
     threaded='ParallelTest|GeneratorTest|FrankaDatasetTest|ThreadCount|Shard|InChunks|DistributedTest|SceneFamil'
     exec ctest --test-dir "$build" -R "$threaded" -E 'SameBitsForAnyThreadCount' -LE 'bench|long|fuzz' \
       --output-on-failure "$@"

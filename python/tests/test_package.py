@@ -1,7 +1,7 @@
 """The Python package: flowplan.load_planner runs the shipped planners' weights with flowplan's native kernels,
 plans what the files plan, and says what is wrong with bad files in one line.
 
-Run by ctest (Python.package.<function>, Python.script_package) with PYTHONPATH=BUILD/python; by hand:
+Run by ctest (Python.package.<function without test_>, Python.script_package) with PYTHONPATH=BUILD/python; by hand:
     PYTHONPATH=build/python /usr/bin/python3 -m pytest -q python/tests
 """
 import os

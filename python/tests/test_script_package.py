@@ -2,7 +2,7 @@
 eagerly by PyTorch, against closed forms, against PyTorch's own TorchScript compiler, against the copies compiled
 into a shipped planner, and the hand-written collision gradient against autograd.
 
-Run by ctest (Python.package.<function>, Python.script_package) with PYTHONPATH=BUILD/python; by hand:
+Run by ctest (Python.package.<function without test_>, Python.script_package) with PYTHONPATH=BUILD/python; by hand:
     PYTHONPATH=build/python /usr/bin/python3 -m pytest -q python/tests/test_script_package.py
 """
 import builtins
