@@ -47,10 +47,7 @@ void RunPlan(const PlanArgs& args) {
     return;
   }
   const PlanInputs inputs = ResolvePlanInputs(args, subject);
-  if (args.execute && (!subject.robot->is_arm() || subject.robot->workspace_dim() != 3)) {
-    throw Error("--execute: execution in MuJoCo needs an arm in 3-D (the Franka or a robot folder); this planner's "
-                "robot is \"" + subject.robot->description().name + "\"");
-  }
+  const std::unique_ptr<RobotSimulator> simulator = ExecutionSimulator(args, subject);  // before any planning
   const std::string prefix = args.out.empty() ? "plan" : args.out;
   CheckOutputsFree(prefix, args.force);
   EnsureParentFolder(prefix);
@@ -92,7 +89,7 @@ void RunPlan(const PlanArgs& args) {
 
   const PlanScores scores = ScorePlans(result, subject, inputs);
   const std::vector<sim::ExecutionResult> executed =
-      args.execute ? ExecutePlans(result.plans, subject, inputs, threads) : std::vector<sim::ExecutionResult>{};
+      simulator ? ExecutePlans(result.plans, subject, inputs, *simulator, threads) : std::vector<sim::ExecutionResult>{};
   const PlanCounts counts =
       WritePlanFiles(h5_file.temp_path(), prefix, args, subject, inputs, result, scores, executed, wall, threads);
   h5_file.Commit();

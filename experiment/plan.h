@@ -15,13 +15,13 @@
 #include <vector>
 
 #include "experiment/experiment_config.h"
+#include "experiment/robot_kinds.h"
 #include "geometry/scene_rows.h"
 #include "kinematics/robot.h"
 #include "kinematics/trajectory_info.h"
 #include "datasets/h5.h"
 #include "planning/planner.h"
-#include "robotfiles/robot_model.h"
-#include "sim/franka_execution.h"
+#include "sim/arm_execution.h"
 #include "validity/plan_check.h"
 #include "validity/plan_quality.h"
 
@@ -122,29 +122,18 @@ PlanInputs ResolvePlanInputs(const PlanArgs& args, const PlanSubject& subject);
 /// plan_report.cc: scores the plans (N, T, D) of `result`.
 PlanScores ScorePlans(const planning::PlanResult& result, const PlanSubject& subject, const PlanInputs& inputs);
 
-/// plan_execute.cc: whether `robot` has the built-in Franka's kinematic tree and TCP (limits and collision
-/// spheres may differ).
-bool IsBuiltInFranka(const kinematics::RobotDescription& robot);
-
-/// plan_execute.cc: the robot a planner file or checkpoint carries, with the built-in Franka's collision body
-/// (spheres, held fingers, self-collision pairs) when it is the Franka.
-kinematics::RobotDescription ResolveRobot(const kinematics::RobotDescription& carried);
-
 /// The plan checker of `subject` (its robot, dt, check.* and configuration check).
 validity::PlanChecker MakePlanChecker(const PlanSubject& subject);
 
-/// plan_execute.cc: the robot folder `folder` among the obstacles of `scene`, as a MuJoCo model with its drives,
-/// for executing plans of `planned` (with the joints of `held` held at those values); execute.* and
-/// generate.robot_joint's drives from `config`.
-/// @throws flowplan::Error if `folder` is empty, or its robot does not move as `planned` does.
-robotfiles::ExecutionModel FolderExecution(const std::string& folder, const kinematics::RobotDescription& planned,
-                                           const geometry::Scene& scene, const std::map<std::string, double>& held,
-                                           const ExperimentConfig& config);
+/// plan_execute.cc: with --execute, the simulator of the subject's robot (its config's robot folder, if it is not the
+/// built-in Franka); nullptr without.
+/// @throws flowplan::Error for a robot that is not an arm in 3-D, or that no kind of RobotKinds() simulates.
+std::unique_ptr<RobotSimulator> ExecutionSimulator(const PlanArgs& args, const PlanSubject& subject);
 
-/// plan_execute.cc: tracks every plan in MuJoCo, on `threads` workers: the built-in Franka, or the robot folder of
-/// the subject's config (FolderExecution).
+/// plan_execute.cc: tracks every plan in MuJoCo, on `threads` workers, with the robot of `simulator` (RobotKinds():
+/// made once per command) among the obstacles of `inputs`, its held joints at their values.
 std::vector<sim::ExecutionResult> ExecutePlans(const torch::Tensor& plans, const PlanSubject& subject,
-                                               const PlanInputs& inputs, int threads);
+                                               const PlanInputs& inputs, const RobotSimulator& simulator, int threads);
 
 /// How many plans succeeded (passed the plan checker; executed: and then
 /// tracked in MuJoCo without contact to the goal), and how many were clear

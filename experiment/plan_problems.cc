@@ -70,10 +70,7 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
     throw Error("--problems: every problem gives its own start, goal and scene; leave out --start, --goal, "
                 "--start-tcp, --goal-tcp, --scene and the obstacle options");
   }
-  if (args.execute && (!subject.robot->is_arm() || subject.robot->workspace_dim() != 3)) {
-    throw Error("--execute: execution in MuJoCo needs an arm in 3-D (the Franka or a robot folder); this planner's "
-                "robot is \"" + subject.robot->description().name + "\"");
-  }
+  const std::unique_ptr<RobotSimulator> simulator = ExecutionSimulator(args, subject);  // before any planning
   const problems::ProblemSet set = problems::LoadProblemSet(args.problems);
   const int64_t count = args.limit > 0 ? std::min<int64_t>(args.limit, static_cast<int64_t>(set.problems.size()))
                                        : static_cast<int64_t>(set.problems.size());
@@ -142,7 +139,7 @@ void RunPlanProblems(const PlanArgs& args, const PlanSubject& subject, int threa
     const planning::PlanResult& result = results.back();
     const PlanScores scores = ScorePlans(result, subject, in);
     const std::vector<sim::ExecutionResult> executed =
-        args.execute ? ExecutePlans(result.plans, subject, in, threads) : std::vector<sim::ExecutionResult>{};
+        simulator ? ExecutePlans(result.plans, subject, in, *simulator, threads) : std::vector<sim::ExecutionResult>{};
     const std::string group = ProblemGroup(problem.name);
     file.CreateGroup(group);
     WritePlansH5(file, group + "/", subject, in, result, scores, executed);

@@ -20,10 +20,10 @@
 #include "experiment/commands.h"
 #include "experiment/experiment_config.h"
 #include "experiment/plan.h"
+#include "experiment/robot_kinds.h"
 #include "kinematics/robot.h"
 #include "render/arm_renderer.h"
 #include "render/image_files.h"
-#include "sim/franka_execution.h"
 
 namespace flowplan::experiment {
 
@@ -41,7 +41,6 @@ Rendered Render(const RenderArgs& args) {
   const kinematics::RobotDescription robot =
       ResolveRobot(kinematics::RobotFromYaml(file.GetStringAttribute("/", "robot"), args.plans + ": robot"));
   if (robot.kind != kinematics::RobotKind::kArm) throw Error(args.plans + ": robot: render draws arms, not a point robot");
-  const bool franka = IsBuiltInFranka(robot);
   const int64_t J = robot.num_joints;
   std::vector<int64_t> shape;
   const std::vector<float> plans = file.ReadFloat32(group + "plans", &shape);
@@ -83,28 +82,21 @@ Rendered Render(const RenderArgs& args) {
     camera = render::Framed(camera, scene, shown);
   }
 
-  // The built-in Franka's plans, and with its folder a robot's, are executed in MuJoCo and the execution drawn; the
-  // Franka among its MJCF's shapes, a folder's robot by its collision spheres. Without its folder, a robot other than
-  // the built-in Franka is drawn as planned.
-  const bool execute = franka || !args.robot.empty();
-  if (execute && D != 2 * J) {
+  // A robot that a kind of RobotKinds() simulates (the built-in Franka; a robot folder given by --robot) is executed
+  // in MuJoCo and the execution drawn; any other is drawn by its collision spheres as planned.
+  const std::unique_ptr<RobotSimulator> simulator = FindSimulator(robot, args.robot, config);
+  if (simulator && D != 2 * J) {
     throw Error(where + "plans: executing needs positions and velocities (" + std::to_string(2 * J) + " values a "
                 "state), got " + std::to_string(D));
   }
   const Eigen::Vector3d target(goal[0], goal[1], goal[2]);
   std::optional<sim::ExecutionResult> executed;
   std::unique_ptr<render::ArmRenderer> renderer;
-  if (franka) {
-    const sim::FrankaModel world = sim::MakeFrankaScene(scene, 1.0 / config.execute.control_hz);
-    sim::FrankaExecutor executor(world, static_cast<int>(scene.size()), config.execute);
-    executed = executor.Execute(plan, T, dt, target);
-    renderer = std::make_unique<render::ArmRenderer>(scene, camera);
+  if (simulator) {
+    const std::unique_ptr<SimulatedScene> world = simulator->Scene(scene, {});
+    executed = world->Executor()->Execute(plan, T, dt, target);
+    renderer = simulator->Renderer(scene, camera);
   } else {
-    if (execute) {
-      const robotfiles::ExecutionModel world = FolderExecution(args.robot, robot, scene, {}, config);
-      sim::ArmExecutor executor(*world.model, world.drives, static_cast<int>(scene.size()), config.execute);
-      executed = executor.Execute(plan, T, dt, target);
-    }
     renderer = std::make_unique<render::ArmRenderer>(robot, scene, camera);
   }
   // One frame a state: the executed states (T_exec, 2J) and their TCPs, or the plan's (T, D) and the planned path.
@@ -122,7 +114,7 @@ Rendered Render(const RenderArgs& args) {
   if (executed) {
     shown = fmt::format("the plan executed in MuJoCo: {} contact{}, goal {:.3g} m away", executed->contacts.size(),
                         executed->contacts.size() == 1 ? "" : "s", executed->goal_distance);
-    if (!franka) shown += "; the " + robot.name + " drawn by its collision spheres";
+    shown += "; the " + robot.name + " drawn by " + simulator->drawn_by();
   } else {
     shown = "the plan as planned, the " + robot.name + " drawn by its collision spheres (--robot DIR executes it)";
   }
