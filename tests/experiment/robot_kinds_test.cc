@@ -13,6 +13,7 @@
 #include "experiment/robot_kinds.h"
 #include "robotfiles/robot_folder.h"
 #include "sim/franka_model.h"
+#include "tests/support/smooth_move.h"
 
 namespace flowplan::experiment {
 namespace {
@@ -27,18 +28,7 @@ std::string Folder(const std::string& name) { return std::string(FLOWPLAN_SOURCE
 
 /// A plan (T, 2J) from q0 to q1 with a smooth (cosine) time profile and consistent velocities.
 std::vector<double> SmoothMove(const std::vector<double>& q0, const std::vector<double>& q1) {
-  const size_t J = q0.size();
-  std::vector<double> plan(kT * 2 * J);
-  const double duration = (kT - 1) * kDt;
-  for (int t = 0; t < kT; ++t) {
-    const double s = 0.5 - 0.5 * std::cos(M_PI * t / (kT - 1));
-    const double ds = 0.5 * M_PI / duration * std::sin(M_PI * t / (kT - 1));
-    for (size_t j = 0; j < J; ++j) {
-      plan[t * 2 * J + j] = q0[j] + s * (q1[j] - q0[j]);
-      plan[t * 2 * J + J + j] = ds * (q1[j] - q0[j]);
-    }
-  }
-  return plan;
+  return flowplan::testing::SmoothMove(q0, q1, kT, kDt);
 }
 
 /// Executes a move of `robot` from home, turning its first joint by 0.3 rad, in `simulator`'s scene without
@@ -82,7 +72,7 @@ TEST(RobotKindsTest, ARobotFolderIsSimulatedOnlyWhenItsFolderIsGiven) {
 
 TEST(RobotKindsTest, AFolderIsReadOnceForEveryScene) {
   // A copy of the UR5 folder whose robot.yaml is gone once the simulator is made: its scenes still come.
-  const fs::path copy = fs::path(testing::TempDir()) / "robot_kinds_ur5";
+  const fs::path copy = fs::path(::testing::TempDir()) / "robot_kinds_ur5";
   fs::remove_all(copy);
   fs::copy(Folder("ur5"), copy, fs::copy_options::recursive);
   const kinematics::RobotDescription ur5 = robotfiles::LoadRobot(copy.string());

@@ -19,6 +19,7 @@
 #include "core/random.h"
 #include "robotfiles/robot_model.h"
 #include "sim/arm_execution.h"
+#include "tests/support/smooth_move.h"
 
 namespace flowplan::robotfiles {
 namespace {
@@ -33,18 +34,7 @@ const std::string& Ur5Folder() {
 
 /// A plan (T, 2J) from q0 to q1 with a smooth (cosine) time profile and consistent velocities.
 std::vector<double> SmoothMove(const std::vector<double>& q0, const std::vector<double>& q1) {
-  const size_t J = q0.size();
-  std::vector<double> plan(kT * 2 * J);
-  const double duration = (kT - 1) * kDt;
-  for (int t = 0; t < kT; ++t) {
-    const double s = 0.5 - 0.5 * std::cos(M_PI * t / (kT - 1));
-    const double ds = 0.5 * M_PI / duration * std::sin(M_PI * t / (kT - 1));
-    for (size_t j = 0; j < J; ++j) {
-      plan[t * 2 * J + j] = q0[j] + s * (q1[j] - q0[j]);
-      plan[t * 2 * J + J + j] = ds * (q1[j] - q0[j]);
-    }
-  }
-  return plan;
+  return flowplan::testing::SmoothMove(q0, q1, kT, kDt);
 }
 
 /// How the collision spheres' self-collision and MuJoCo's contacts between a robot folder's collision geometry
